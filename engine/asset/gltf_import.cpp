@@ -1,0 +1,1263 @@
+// glTF 2.0 -> MeshSource importer. The contract (what is supported, which errors) is in gltf_import.h.
+//
+// Pipeline:
+//   1. loadModel(): read the file ourselves (FileNotFound / IoError), check and re-pack the GLB container,
+//      neutralise EXT_meshopt_compression fallback buffers (tinygltf 2.7 cannot load a buffer without data),
+//      then hand the bytes to tinygltf for JSON parsing and external/data-URI buffer loading.
+//   2. Importer::run(): walk the scene graph with double-precision transforms; the first time a mesh is met,
+//      decode its primitives into local-space arrays (cached, so a mesh instanced by 1000 nodes is decoded
+//      once); then transform, morph and append each primitive instance to the output MeshSource.
+//
+// Safety rule: tinygltf only parses; it does not validate ranges. Every index, offset, count and stride that
+// comes from the file is checked here with overflow-safe arithmetic before any byte is touched, and every
+// problem becomes an Error (never an assert, exception or out-of-bounds read).
+
+#include "asset/gltf_import.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <string_view>
+#include <utility>
+
+#include <glm/glm.hpp>
+#include <meshoptimizer.h>
+#include <nlohmann/json.hpp>
+
+// --- tinygltf -------------------------------------------------------------------------------------------
+// This is the one translation unit that compiles tinygltf's implementation. Debian's libtinygltf-dev ships the
+// header plus a prebuilt libtinygltf.so; do NOT also link -ltinygltf, or every symbol exists twice.
+// The header includes <nlohmann/json.hpp> (nlohmann-json3-dev, already a dependency) by default.
+// Its default image codecs would need <stb_image.h>/<stb_image_write.h> from libstb-dev, which is not installed
+// and which a geometry importer has no use for, so tinygltf is built without them (hence no
+// STB_IMAGE_IMPLEMENTATION / STB_IMAGE_WRITE_IMPLEMENTATION anywhere) and we install a no-op image loader.
+// TINYGLTF_NO_EXTERNAL_IMAGE keeps it from even reading external image files (Avocado has 8 MB of PNGs).
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wunused-variable"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wdeprecated-declarations"
+#include <tiny_gltf.h>
+#pragma GCC diagnostic pop
+
+namespace visbuf {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "glTF data is little-endian; add byte swapping");
+
+constexpr const char* kMeshoptExt = "EXT_meshopt_compression";
+constexpr const char* kQuantizationExt = "KHR_mesh_quantization";
+
+// Accessors without a bufferView are all zeros (plus sparse substitutions). Nothing in the file bounds their
+// count, so cap it to keep a hostile file from requesting terabytes.
+constexpr uint64_t kMaxViewlessAccessorCount = uint64_t{1} << 24;
+// meshopt codecs compress at most ~64:1 (vertex codec, all-zero data); refuse claims far beyond that so a
+// 30-byte stream cannot make us allocate gigabytes.
+constexpr uint64_t kMaxMeshoptExpansion = 256;
+
+// ---------------------------------------------------------------------------------------------------------
+// Small helpers
+
+// Overflow-safe arithmetic on values read from the file.
+bool checkedMul(uint64_t a, uint64_t b, uint64_t* out) { return !__builtin_mul_overflow(a, b, out); }
+bool checkedAdd(uint64_t a, uint64_t b, uint64_t* out) { return !__builtin_add_overflow(a, b, out); }
+// True when [offset, offset + size) lies within [0, limit).
+bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
+  return offset <= limit && size <= limit - offset;
+}
+
+std::string str(uint64_t v) { return std::to_string(v); }
+std::string str(int v) { return std::to_string(v); }
+
+// " 'Name'" when the object has a name, "" otherwise: "node 3 'Foo'" / "node 3".
+std::string named(const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; }
+
+Error malformed(std::string message) { return makeError(ErrorCode::MalformedInput, std::move(message)); }
+
+const char* componentTypeName(int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return "BYTE";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "UNSIGNED_BYTE";
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return "SHORT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "UNSIGNED_SHORT";
+    case TINYGLTF_COMPONENT_TYPE_INT: return "INT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "UNSIGNED_INT";
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return "FLOAT";
+    case TINYGLTF_COMPONENT_TYPE_DOUBLE: return "DOUBLE";
+  }
+  return "unknown component type";
+}
+
+// Reads one component and converts it to double. Normalized integers follow the glTF 2.0 spec
+// (signed: max(c / MAX, -1); unsigned: c / MAX). The caller has validated `type` and the bounds.
+double decodeComponent(const uint8_t* p, int type, bool normalized) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      int8_t v;
+      std::memcpy(&v, p, 1);
+      return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: {
+      uint8_t v;
+      std::memcpy(&v, p, 1);
+      return normalized ? v / 255.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      int16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      uint16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+      uint32_t v;
+      std::memcpy(&v, p, 4);
+      return normalized ? v / 4294967295.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+  }
+  return 0.0;
+}
+
+// Reads an unsigned integer of 1, 2 or 4 bytes (index data).
+uint32_t readUint(const uint8_t* p, uint64_t size) {
+  if (size == 1) return *p;
+  if (size == 2) {
+    uint16_t v;
+    std::memcpy(&v, p, 2);
+    return v;
+  }
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+
+uint64_t indexComponentSize(int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return 4;
+  }
+  return 0;
+}
+
+// What an attribute accessor may contain (glTF 2.0 core + KHR_mesh_quantization).
+enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta };
+
+// Returns "" when the accessor's type/componentType/normalized combination is allowed for `kind`, else why not.
+std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a) {
+  const int ct = a.componentType;
+  const bool isFloat = ct == TINYGLTF_COMPONENT_TYPE_FLOAT;
+  const bool is8or16 = ct == TINYGLTF_COMPONENT_TYPE_BYTE || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                       ct == TINYGLTF_COMPONENT_TYPE_SHORT || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+  const bool isSigned8or16 = ct == TINYGLTF_COMPONENT_TYPE_BYTE || ct == TINYGLTF_COMPONENT_TYPE_SHORT;
+  const bool isUnsigned8or16 =
+      ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+  bool typeOk = false;
+  bool componentOk = false;
+  const char* expected = "";
+  switch (kind) {
+    case AttributeKind::Position:
+      typeOk = a.type == TINYGLTF_TYPE_VEC3;
+      componentOk = isFloat || is8or16;
+      expected = "VEC3 of FLOAT or (normalized) BYTE/UNSIGNED_BYTE/SHORT/UNSIGNED_SHORT";
+      break;
+    case AttributeKind::Normal:
+      typeOk = a.type == TINYGLTF_TYPE_VEC3;
+      componentOk = isFloat || (isSigned8or16 && a.normalized);
+      expected = "VEC3 of FLOAT or normalized BYTE/SHORT";
+      break;
+    case AttributeKind::TexCoord:
+      typeOk = a.type == TINYGLTF_TYPE_VEC2;
+      componentOk = isFloat || is8or16;
+      expected = "VEC2 of FLOAT or (normalized) BYTE/UNSIGNED_BYTE/SHORT/UNSIGNED_SHORT";
+      break;
+    case AttributeKind::Color:
+      typeOk = a.type == TINYGLTF_TYPE_VEC3 || a.type == TINYGLTF_TYPE_VEC4;
+      componentOk = isFloat || (isUnsigned8or16 && a.normalized);
+      expected = "VEC3/VEC4 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT";
+      break;
+    case AttributeKind::MorphDelta:
+      typeOk = a.type == TINYGLTF_TYPE_VEC3;
+      componentOk = isFloat || isSigned8or16;
+      expected = "VEC3 of FLOAT or (normalized) BYTE/SHORT";
+      break;
+  }
+  if (typeOk && componentOk) return {};
+  return std::string("unsupported format (") + componentTypeName(ct) + (a.normalized ? " normalized" : "") +
+         ", " + str(tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type))) +
+         " components); expected " + expected;
+}
+
+// Packs a colour in [0,1] (clamped; NaN -> 0) as RGBA8, R in the low byte.
+uint32_t packColor(const float* c, int components) {
+  auto unorm8 = [](float v) -> uint32_t {
+    if (!(v > 0.0f)) return 0;  // also catches NaN
+    if (v >= 1.0f) return 255;
+    return static_cast<uint32_t>(std::lround(v * 255.0f));
+  };
+  const uint32_t a = components == 4 ? unorm8(c[3]) : 255u;
+  return unorm8(c[0]) | (unorm8(c[1]) << 8) | (unorm8(c[2]) << 16) | (a << 24);
+}
+
+bool isFinite(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+bool allFinite(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// File loading
+
+Result<std::vector<uint8_t>> readFile(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    return makeError(ErrorCode::FileNotFound, path + ": file not found");
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    return makeError(ErrorCode::FileNotFound, path + ": not a regular file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return makeError(ErrorCode::IoError, path + ": cannot open for reading");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) return makeError(ErrorCode::IoError, path + ": cannot determine file size");
+  // tinygltf's memory API takes an unsigned int size, and GLB cannot describe 4 GiB or more.
+  if (static_cast<uint64_t>(size) >= (uint64_t{1} << 32) - 64) {
+    return makeError(ErrorCode::Unsupported, path + ": files of 4 GiB or more are not supported");
+  }
+  std::vector<uint8_t> bytes(static_cast<size_t>(size));
+  in.seekg(0, std::ios::beg);
+  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size)) {
+    return makeError(ErrorCode::IoError, path + ": read failed");
+  }
+  return bytes;
+}
+
+uint32_t readU32(const uint8_t* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+
+constexpr uint32_t kGlbMagic = 0x46546C67;      // "glTF"
+constexpr uint32_t kGlbChunkJson = 0x4E4F534A;  // "JSON"
+constexpr uint32_t kGlbChunkBin = 0x004E4942;   // "BIN\0"
+
+struct GlbParts {
+  std::string_view json;
+  const uint8_t* bin = nullptr;  // null when there is no BIN chunk
+  uint64_t binSize = 0;
+};
+
+// Splits a GLB container into its JSON and (first) BIN chunk, checking every length against the file.
+Result<GlbParts> parseGlb(const std::vector<uint8_t>& bytes, const std::string& path) {
+  if (bytes.size() < 20) return malformed(path + ": GLB file is truncated (" + str(bytes.size()) + " bytes)");
+  const uint32_t version = readU32(bytes.data() + 4);
+  if (version != 2) {
+    return makeError(ErrorCode::Unsupported, path + ": GLB version " + str(uint64_t{version}) +
+                                                 " is not supported (only glTF 2.0)");
+  }
+  const uint64_t length = readU32(bytes.data() + 8);
+  if (length > bytes.size() || length < 20) {
+    return malformed(path + ": GLB header length " + str(length) + " does not match the file size " +
+                     str(bytes.size()));
+  }
+  GlbParts parts;
+  bool haveJson = false;
+  uint64_t offset = 12;
+  while (offset + 8 <= length) {
+    const uint64_t chunkLength = readU32(bytes.data() + offset);
+    const uint32_t chunkType = readU32(bytes.data() + offset + 4);
+    if (!rangeFits(offset + 8, chunkLength, length)) {
+      return malformed(path + ": GLB chunk at byte " + str(offset) + " (length " + str(chunkLength) +
+                       ") runs past the end of the file");
+    }
+    const uint8_t* data = bytes.data() + offset + 8;
+    if (!haveJson) {
+      if (chunkType != kGlbChunkJson) return malformed(path + ": first GLB chunk is not JSON");
+      parts.json = std::string_view(reinterpret_cast<const char*>(data), chunkLength);
+      haveJson = true;
+    } else if (chunkType == kGlbChunkBin && parts.bin == nullptr) {
+      parts.bin = data;
+      parts.binSize = chunkLength;
+    }  // other chunk types are reserved for extensions: ignore them
+    offset += 8 + chunkLength;
+  }
+  if (!haveJson) return malformed(path + ": GLB file has no JSON chunk");
+  return parts;
+}
+
+// Re-packs JSON + BIN into a canonical GLB (4-byte padded chunks, exact header length). We already validated
+// the original container; handing tinygltf a canonical one keeps its own (laxer) GLB checks out of play.
+std::vector<uint8_t> buildGlb(std::string_view json, const uint8_t* bin, uint64_t binSize) {
+  auto pad4 = [](uint64_t n) { return (n + 3) & ~uint64_t{3}; };
+  const uint64_t jsonPadded = pad4(json.size());
+  const bool hasBin = bin != nullptr && binSize > 0;  // tinygltf rejects an empty BIN chunk; omit it
+  const uint64_t binPadded = hasBin ? pad4(binSize) : 0;
+  const uint64_t total = 12 + 8 + jsonPadded + (hasBin ? 8 + binPadded : 0);
+  std::vector<uint8_t> out(total, 0);
+  auto put32 = [&](uint64_t at, uint64_t v) {
+    const uint32_t v32 = static_cast<uint32_t>(v);
+    std::memcpy(out.data() + at, &v32, 4);
+  };
+  put32(0, kGlbMagic);
+  put32(4, 2);
+  put32(8, total);
+  put32(12, jsonPadded);
+  put32(16, kGlbChunkJson);
+  std::memcpy(out.data() + 20, json.data(), json.size());
+  std::fill(out.begin() + 20 + static_cast<std::ptrdiff_t>(json.size()),
+            out.begin() + 20 + static_cast<std::ptrdiff_t>(jsonPadded), ' ');  // spec: pad JSON with spaces
+  if (hasBin) {
+    const uint64_t at = 20 + jsonPadded;
+    put32(at, binPadded);
+    put32(at + 4, kGlbChunkBin);
+    std::memcpy(out.data() + at + 8, bin, binSize);
+  }
+  return out;
+}
+
+// EXT_meshopt_compression allows a "fallback" buffer with no uri (and, in a GLB, no data): every bufferView in
+// it is meant to be decoded from a compressed buffer instead. tinygltf 2.7 insists on loading every buffer and
+// fails on those, so we give such buffers a 4-byte placeholder data URI. The buffer keeps its extension
+// object, which is how the importer later knows never to read it. Returns nullopt when nothing changes
+// (including when the JSON does not parse: tinygltf then reports the syntax error itself).
+std::optional<std::string> neutraliseMeshoptFallbackBuffers(std::string_view jsonText) {
+  if (jsonText.find(kMeshoptExt) == std::string_view::npos) return std::nullopt;
+  nlohmann::json doc = nlohmann::json::parse(jsonText.begin(), jsonText.end(), nullptr,
+                                             /*allow_exceptions=*/false);
+  if (doc.is_discarded() || !doc.is_object()) return std::nullopt;
+  auto buffers = doc.find("buffers");
+  if (buffers == doc.end() || !buffers->is_array()) return std::nullopt;
+  bool changed = false;
+  for (auto& buffer : *buffers) {
+    if (!buffer.is_object()) continue;
+    auto extensions = buffer.find("extensions");
+    if (extensions == buffer.end() || !extensions->is_object()) continue;
+    auto meshopt = extensions->find(kMeshoptExt);
+    if (meshopt == extensions->end() || !meshopt->is_object()) continue;
+    auto fallback = meshopt->find("fallback");
+    if (fallback == meshopt->end() || !fallback->is_boolean() || !fallback->get<bool>()) continue;
+    buffer["uri"] = "data:application/octet-stream;base64,AAAAAA==";
+    buffer["byteLength"] = 4;
+    changed = true;
+  }
+  if (!changed) return std::nullopt;
+  return doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+// Image loader that keeps nothing: geometry import needs no pixels, and this spares us libstb.
+bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+               void*) {
+  return true;
+}
+
+void appendLines(const std::string& text, const std::string& prefix, std::vector<std::string>* out) {
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    if (end > start) out->push_back(prefix + text.substr(start, end - start));
+    start = end + 1;
+  }
+}
+
+// Reads and parses the file into a tinygltf::Model. Parse warnings go to `warnings`.
+Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<std::string>* warnings) {
+  auto bytes = readFile(path);
+  if (!bytes) return bytes.error();
+
+  const bool isGlb = bytes->size() >= 4 && readU32(bytes->data()) == kGlbMagic;
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (!isGlb && extension == ".glb") return malformed(path + ": not a GLB file (bad magic)");
+
+  const std::string baseDir = std::filesystem::path(path).parent_path().string();
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&skipImage, nullptr);
+  std::string err;
+  std::string warn;
+  bool ok = false;
+  if (isGlb) {
+    auto parts = parseGlb(*bytes, path);
+    if (!parts) return parts.error();
+    const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(parts->json);
+    const std::vector<uint8_t> glb =
+        buildGlb(patched ? std::string_view(*patched) : parts->json, parts->bin, parts->binSize);
+    if (glb.size() > std::numeric_limits<unsigned int>::max()) {
+      return makeError(ErrorCode::Unsupported, path + ": files of 4 GiB or more are not supported");
+    }
+    ok = loader.LoadBinaryFromMemory(model, &err, &warn, glb.data(), static_cast<unsigned int>(glb.size()),
+                                     baseDir);
+  } else {
+    const std::string_view text(reinterpret_cast<const char*>(bytes->data()), bytes->size());
+    const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(text);
+    const std::string_view json = patched ? std::string_view(*patched) : text;
+    ok = loader.LoadASCIIFromString(model, &err, &warn, json.data(), static_cast<unsigned int>(json.size()),
+                                    baseDir);
+  }
+  appendLines(warn, path + ": tinygltf: ", warnings);
+  if (!ok) {
+    if (err.empty()) err = "unknown error";
+    while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+    return malformed(path + ": glTF parse failed: " + err);
+  }
+  appendLines(err, path + ": tinygltf: ", warnings);  // non-fatal notes tinygltf reports through err
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Importer
+
+struct Bytes {
+  const uint8_t* data = nullptr;
+  uint64_t size = 0;
+};
+
+// A fully validated accessor: every element read through it is in bounds.
+struct AccessorPlan {
+  int componentType = 0;
+  bool normalized = false;
+  int numComponents = 0;
+  uint64_t componentSize = 0;
+  uint64_t elementSize = 0;
+  uint64_t count = 0;
+  const uint8_t* dense = nullptr;  // first element; null: no bufferView, elements are zero
+  uint64_t stride = 0;
+  // Sparse substitution (sparseCount == 0: none). Index and value arrays are tightly packed.
+  uint64_t sparseCount = 0;
+  const uint8_t* sparseIndices = nullptr;
+  uint64_t sparseIndexSize = 0;
+  const uint8_t* sparseValues = nullptr;
+};
+
+// One primitive decoded into local space, before node transform and morph weights.
+struct DecodedPrimitive {
+  bool skipped = false;
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;  // empty: generate
+  std::vector<glm::vec2> uvs;      // empty: none
+  std::vector<uint32_t> colors;    // empty: none
+  // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
+  std::vector<std::vector<glm::vec3>> positionDeltas;
+  std::vector<std::vector<glm::vec3>> normalDeltas;
+  std::vector<uint32_t> triangles;  // 3 local indices per triangle, counter-clockwise
+};
+
+class Importer {
+ public:
+  Importer(const std::string& path, const tinygltf::Model& model, const GltfImportOptions& options,
+           std::vector<std::string>* warnings)
+      : path_(path), model_(model), options_(options), warnings_(warnings) {}
+
+  Result<MeshSource> run();
+
+  uint32_t primitivesImported = 0;
+  uint32_t primitivesSkipped = 0;
+
+ private:
+  void warn(const std::string& message) {
+    if (warned_.insert(message).second) warnings_->push_back(message);
+  }
+
+  Status checkRequiredExtensions();
+  bool isMeshoptFallbackBuffer(int buffer) const;
+  Result<Bytes> viewBytes(int view, const std::string& where);
+  Result<Bytes> plainViewBytes(int view, const std::string& where);
+  Result<Bytes> meshoptViewBytes(int view, const std::string& where);
+
+  Result<AccessorPlan> planAccessor(int accessor, const std::string& where);
+  template <typename Fn>
+  Status forEachElement(const AccessorPlan& plan, const std::string& where, Fn&& fn);
+  Status readFloats(int accessor, AttributeKind kind, const std::string& where, std::vector<float>* out,
+                    int* numComponents);
+  Status readVec3(int accessor, AttributeKind kind, const std::string& where, bool requireFinite,
+                  std::vector<glm::vec3>* out);
+  Status readIndices(int accessor, const std::string& where, std::vector<uint32_t>* out);
+
+  Result<DecodedPrimitive> decodePrimitive(int mesh, int primitive);
+  Result<const std::vector<DecodedPrimitive>*> decodedMesh(int mesh);
+
+  Result<glm::dmat4> localMatrix(int node);
+  Status emitNode(int node, const glm::dmat4& world, MeshSource* out);
+  Status emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world, const std::vector<double>& weights,
+                       const std::string& where, MeshSource* out);
+
+  const std::string& path_;
+  const tinygltf::Model& model_;
+  const GltfImportOptions& options_;
+  std::vector<std::string>* warnings_;
+  std::set<std::string> warned_;  // de-duplicates warnings of instanced meshes
+  bool meshoptRequired_ = false;
+  std::map<int, std::vector<uint8_t>> decodedViews_;  // meshopt scratch, by bufferView index
+  std::vector<std::optional<std::vector<DecodedPrimitive>>> meshCache_;
+  bool warnedZeroNormals_ = false;
+};
+
+// Required extensions that change how geometry must be read are either handled or refused; the ones that only
+// concern materials, textures or lights cannot change the triangles, so they are ignored.
+Status Importer::checkRequiredExtensions() {
+  static constexpr const char* kIgnorablePrefixes[] = {"KHR_materials_", "KHR_texture_", "EXT_texture_",
+                                                       "KHR_lights_", "MSFT_texture_", "KHR_xmp"};
+  for (const std::string& ext : model_.extensionsRequired) {
+    if (ext == kMeshoptExt) {
+      meshoptRequired_ = true;
+      continue;
+    }
+    if (ext == kQuantizationExt) continue;
+    const bool ignorable = std::any_of(std::begin(kIgnorablePrefixes), std::end(kIgnorablePrefixes),
+                                       [&](const char* prefix) { return ext.rfind(prefix, 0) == 0; });
+    if (ignorable) continue;
+    return makeError(ErrorCode::Unsupported, path_ + ": required extension '" + ext + "' is not supported");
+  }
+  return {};
+}
+
+bool Importer::isMeshoptFallbackBuffer(int buffer) const {
+  if (buffer < 0 || static_cast<size_t>(buffer) >= model_.buffers.size()) return false;
+  const auto& extensions = model_.buffers[static_cast<size_t>(buffer)].extensions;
+  auto it = extensions.find(kMeshoptExt);
+  if (it == extensions.end() || !it->second.IsObject()) return false;
+  const tinygltf::Value& fallback = it->second.Get("fallback");
+  return fallback.IsBool() && fallback.Get<bool>();
+}
+
+Result<Bytes> Importer::viewBytes(int view, const std::string& where) {
+  if (view < 0 || static_cast<size_t>(view) >= model_.bufferViews.size()) {
+    return malformed(where + ": bufferView " + str(view) + " does not exist");
+  }
+  const auto& extensions = model_.bufferViews[static_cast<size_t>(view)].extensions;
+  if (extensions.count(kMeshoptExt) != 0) return meshoptViewBytes(view, where);
+  return plainViewBytes(view, where);
+}
+
+// The bytes of an uncompressed bufferView, range-checked against its buffer.
+Result<Bytes> Importer::plainViewBytes(int viewIndex, const std::string& where) {
+  const tinygltf::BufferView& view = model_.bufferViews[static_cast<size_t>(viewIndex)];
+  const std::string vw = where + ": bufferView " + str(viewIndex);
+  if (view.buffer < 0 || static_cast<size_t>(view.buffer) >= model_.buffers.size()) {
+    return malformed(vw + " refers to missing buffer " + str(view.buffer));
+  }
+  if (isMeshoptFallbackBuffer(view.buffer)) {
+    return malformed(vw + " reads EXT_meshopt_compression fallback buffer " + str(view.buffer) +
+                     ", which holds no data");
+  }
+  const std::vector<unsigned char>& data = model_.buffers[static_cast<size_t>(view.buffer)].data;
+  if (!rangeFits(view.byteOffset, view.byteLength, data.size())) {
+    return malformed(vw + " (byteOffset " + str(uint64_t{view.byteOffset}) + ", byteLength " +
+                     str(uint64_t{view.byteLength}) + ") runs past the end of buffer " + str(view.buffer) + " (" +
+                     str(uint64_t{data.size()}) + " bytes)");
+  }
+  return Bytes{data.data() + view.byteOffset, view.byteLength};
+}
+
+// Decodes an EXT_meshopt_compression bufferView into a scratch buffer (once; cached by view index).
+Result<Bytes> Importer::meshoptViewBytes(int viewIndex, const std::string& where) {
+  if (auto it = decodedViews_.find(viewIndex); it != decodedViews_.end()) {
+    return Bytes{it->second.data(), it->second.size()};
+  }
+  const tinygltf::BufferView& view = model_.bufferViews[static_cast<size_t>(viewIndex)];
+  const tinygltf::Value& ext = view.extensions.at(kMeshoptExt);
+  const std::string vw = where + ": bufferView " + str(viewIndex) + " (" + kMeshoptExt + ")";
+
+  // Data we understand but cannot decode (unknown mode/filter, newer codec version): use the uncompressed
+  // fallback bytes when they exist and the extension is optional, else refuse as Unsupported.
+  auto cannotDecode = [&](const std::string& reason) -> Result<Bytes> {
+    if (meshoptRequired_ || isMeshoptFallbackBuffer(view.buffer)) {
+      return makeError(ErrorCode::Unsupported, vw + ": cannot decode: " + reason);
+    }
+    warn(vw + ": cannot decode (" + reason + "); using the uncompressed fallback data");
+    return plainViewBytes(viewIndex, where);
+  };
+
+  if (!ext.IsObject()) return malformed(vw + ": extension is not an object");
+  // Unsigned integer fields; JSON numbers arrive as int or double, so validate both forms.
+  auto number = [&](const char* key, bool required, uint64_t fallback, uint64_t* out) -> bool {
+    if (!ext.Has(key)) {
+      *out = fallback;
+      return !required;
+    }
+    const tinygltf::Value& v = ext.Get(key);
+    if (!v.IsNumber()) return false;
+    const double d = v.GetNumberAsDouble();
+    if (!(d >= 0.0) || d > 9007199254740992.0 || std::floor(d) != d) return false;
+    *out = static_cast<uint64_t>(d);
+    return true;
+  };
+  uint64_t buffer = 0, byteOffset = 0, byteLength = 0, byteStride = 0, count = 0;
+  for (auto [key, required, dst] : {std::tuple{"buffer", true, &buffer}, std::tuple{"byteOffset", false, &byteOffset},
+                                    std::tuple{"byteLength", true, &byteLength},
+                                    std::tuple{"byteStride", true, &byteStride}, std::tuple{"count", true, &count}}) {
+    if (!number(key, required, 0, dst)) return malformed(vw + ": missing or invalid '" + key + "'");
+  }
+  const tinygltf::Value& modeValue = ext.Get("mode");
+  const std::string mode = modeValue.IsString() ? modeValue.Get<std::string>() : std::string();
+  const tinygltf::Value& filterValue = ext.Get("filter");
+  const std::string filter = filterValue.IsString() ? filterValue.Get<std::string>() : "NONE";
+
+  // Mode / filter constraints from the extension spec (they are also the decoder's preconditions, which it
+  // asserts on, so they must be checked before calling it).
+  uint8_t expectedHeader = 0;
+  if (mode == "ATTRIBUTES") {
+    expectedHeader = 0xA0;
+    if (byteStride == 0 || byteStride > 256 || byteStride % 4 != 0) {
+      return malformed(vw + ": ATTRIBUTES byteStride " + str(byteStride) + " must be a multiple of 4 in [4, 256]");
+    }
+  } else if (mode == "TRIANGLES" || mode == "INDICES") {
+    expectedHeader = mode == "TRIANGLES" ? 0xE0 : 0xD0;
+    if (byteStride != 2 && byteStride != 4) return malformed(vw + ": " + mode + " byteStride must be 2 or 4");
+    if (mode == "TRIANGLES" && count % 3 != 0) return malformed(vw + ": TRIANGLES count must be a multiple of 3");
+  } else {
+    return cannotDecode("unknown mode '" + mode + "'");
+  }
+  if (filter != "NONE") {
+    if (mode != "ATTRIBUTES") return malformed(vw + ": filter '" + filter + "' requires mode ATTRIBUTES");
+    if (filter == "OCTAHEDRAL") {
+      if (byteStride != 4 && byteStride != 8) return malformed(vw + ": OCTAHEDRAL filter needs byteStride 4 or 8");
+    } else if (filter == "QUATERNION") {
+      if (byteStride != 8) return malformed(vw + ": QUATERNION filter needs byteStride 8");
+    } else if (filter != "EXPONENTIAL") {
+      return cannotDecode("unknown filter '" + filter + "'");
+    }
+  }
+
+  // Source range and decoded size.
+  if (buffer >= model_.buffers.size()) return malformed(vw + ": refers to missing buffer " + str(buffer));
+  if (isMeshoptFallbackBuffer(static_cast<int>(buffer))) {
+    return malformed(vw + ": compressed data lives in a fallback buffer");
+  }
+  const std::vector<unsigned char>& source = model_.buffers[buffer].data;
+  if (!rangeFits(byteOffset, byteLength, source.size())) {
+    return malformed(vw + ": compressed range (byteOffset " + str(byteOffset) + ", byteLength " + str(byteLength) +
+                     ") runs past the end of buffer " + str(buffer) + " (" + str(uint64_t{source.size()}) +
+                     " bytes)");
+  }
+  uint64_t decodedSize = 0;
+  if (!checkedMul(count, byteStride, &decodedSize) || decodedSize > view.byteLength) {
+    return malformed(vw + ": count " + str(count) + " x byteStride " + str(byteStride) +
+                     " exceeds the bufferView byteLength " + str(uint64_t{view.byteLength}));
+  }
+  if (decodedSize / kMaxMeshoptExpansion > byteLength + 1024) {
+    return malformed(vw + ": decoded size " + str(decodedSize) + " is implausibly large for " + str(byteLength) +
+                     " compressed bytes");
+  }
+
+  std::vector<uint8_t> decoded(decodedSize);
+  if (count > 0) {
+    const uint8_t* src = source.data() + byteOffset;
+    if (byteLength == 0 || (src[0] & 0xF0) != expectedHeader) {
+      return malformed(vw + ": data is not a meshopt " + mode + " stream");
+    }
+    // meshoptimizer 0.18 decodes vertex codec version 0 and index codec versions 0 and 1; newer streams are
+    // valid data that this build cannot read.
+    const int version = src[0] & 0x0F;
+    const int maxVersion = mode == "ATTRIBUTES" ? 0 : 1;
+    if (version > maxVersion) return cannotDecode(mode + " codec version " + str(version));
+    int rc = 0;
+    if (mode == "ATTRIBUTES") {
+      rc = meshopt_decodeVertexBuffer(decoded.data(), count, byteStride, src, byteLength);
+    } else if (mode == "TRIANGLES") {
+      rc = meshopt_decodeIndexBuffer(decoded.data(), count, byteStride, src, byteLength);
+    } else {
+      rc = meshopt_decodeIndexSequence(decoded.data(), count, byteStride, src, byteLength);
+    }
+    // -1: unsupported header/version (checked above, so not expected); -2/-3: truncated or corrupt data.
+    if (rc == -1) return cannotDecode(mode + " stream header not supported by meshoptimizer 0.18");
+    if (rc != 0) return malformed(vw + ": meshopt decoder rejected the data (error " + str(rc) + ")");
+    if (filter == "OCTAHEDRAL") meshopt_decodeFilterOct(decoded.data(), count, byteStride);
+    if (filter == "QUATERNION") meshopt_decodeFilterQuat(decoded.data(), count, byteStride);
+    if (filter == "EXPONENTIAL") meshopt_decodeFilterExp(decoded.data(), count, byteStride);
+  }
+  auto& stored = decodedViews_[viewIndex] = std::move(decoded);
+  return Bytes{stored.data(), stored.size()};
+}
+
+// Validates an accessor completely (type, bufferView, dense range, sparse ranges) without reading values.
+Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where) {
+  if (index < 0 || static_cast<size_t>(index) >= model_.accessors.size()) {
+    return malformed(where + ": accessor does not exist");
+  }
+  const tinygltf::Accessor& acc = model_.accessors[static_cast<size_t>(index)];
+  AccessorPlan plan;
+  plan.componentType = acc.componentType;
+  plan.normalized = acc.normalized;
+  plan.numComponents = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
+  const int componentSize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(acc.componentType));
+  if (plan.numComponents <= 0 || componentSize <= 0) return malformed(where + ": invalid type or componentType");
+  plan.componentSize = static_cast<uint64_t>(componentSize);
+  plan.elementSize = plan.componentSize * static_cast<uint64_t>(plan.numComponents);
+  plan.count = acc.count;
+
+  if (acc.bufferView >= 0) {
+    auto bytes = viewBytes(acc.bufferView, where);
+    if (!bytes) return bytes.error();
+    const uint64_t viewStride = model_.bufferViews[static_cast<size_t>(acc.bufferView)].byteStride;
+    plan.stride = viewStride != 0 ? viewStride : plan.elementSize;
+    if (plan.stride < plan.elementSize) {
+      return malformed(where + ": byteStride " + str(plan.stride) + " is smaller than the element size " +
+                       str(plan.elementSize));
+    }
+    if (plan.count > 0) {
+      uint64_t span = 0;  // bytes from the first element's start to the last element's end
+      if (!checkedMul(plan.count - 1, plan.stride, &span) || !checkedAdd(span, plan.elementSize, &span) ||
+          !rangeFits(acc.byteOffset, span, bytes->size)) {
+        return malformed(where + ": byteOffset " + str(uint64_t{acc.byteOffset}) + " + count " + str(plan.count) +
+                         " x stride " + str(plan.stride) + " runs past the end of bufferView " +
+                         str(acc.bufferView) + " (" + str(bytes->size) + " bytes)");
+      }
+      plan.dense = bytes->data + acc.byteOffset;
+    }
+  } else if (plan.count > kMaxViewlessAccessorCount) {
+    return malformed(where + ": count " + str(plan.count) + " without a bufferView exceeds the limit " +
+                     str(kMaxViewlessAccessorCount));
+  }
+
+  if (acc.sparse.isSparse) {
+    const auto& sparse = acc.sparse;
+    if (sparse.count <= 0 || static_cast<uint64_t>(sparse.count) > plan.count) {
+      return malformed(where + ": sparse count " + str(sparse.count) + " is not in [1, " + str(plan.count) + "]");
+    }
+    if (sparse.indices.byteOffset < 0 || sparse.values.byteOffset < 0) {
+      return malformed(where + ": negative sparse byteOffset");
+    }
+    plan.sparseCount = static_cast<uint64_t>(sparse.count);
+    plan.sparseIndexSize = indexComponentSize(sparse.indices.componentType);
+    if (plan.sparseIndexSize == 0) {
+      return malformed(where + ": sparse indices must be UNSIGNED_BYTE/SHORT/INT, not " +
+                       componentTypeName(sparse.indices.componentType));
+    }
+    auto indexBytes = viewBytes(sparse.indices.bufferView, where + " sparse indices");
+    if (!indexBytes) return indexBytes.error();
+    auto valueBytes = viewBytes(sparse.values.bufferView, where + " sparse values");
+    if (!valueBytes) return valueBytes.error();
+    const uint64_t indexOffset = static_cast<uint64_t>(sparse.indices.byteOffset);
+    const uint64_t valueOffset = static_cast<uint64_t>(sparse.values.byteOffset);
+    // Both products are bounded by count (<= SIZE_MAX / 16-ish from the JSON int) times <= 16: no overflow.
+    if (!rangeFits(indexOffset, plan.sparseCount * plan.sparseIndexSize, indexBytes->size)) {
+      return malformed(where + ": sparse indices (byteOffset " + str(indexOffset) + ", count " +
+                       str(plan.sparseCount) + ") run past the end of bufferView " +
+                       str(sparse.indices.bufferView) + " (" + str(indexBytes->size) + " bytes)");
+    }
+    if (!rangeFits(valueOffset, plan.sparseCount * plan.elementSize, valueBytes->size)) {
+      return malformed(where + ": sparse values (byteOffset " + str(valueOffset) + ", count " +
+                       str(plan.sparseCount) + ") run past the end of bufferView " +
+                       str(sparse.values.bufferView) + " (" + str(valueBytes->size) + " bytes)");
+    }
+    plan.sparseIndices = indexBytes->data + indexOffset;
+    plan.sparseValues = valueBytes->data + valueOffset;
+  }
+  return plan;
+}
+
+// Calls fn(elementIndex, elementBytes) for every element (elementBytes == nullptr: the element is zero), dense
+// elements first, then the sparse substitutions, so later calls overwrite earlier ones.
+template <typename Fn>
+Status Importer::forEachElement(const AccessorPlan& plan, const std::string& where, Fn&& fn) {
+  for (uint64_t i = 0; i < plan.count; ++i) fn(i, plan.dense ? plan.dense + i * plan.stride : nullptr);
+  for (uint64_t k = 0; k < plan.sparseCount; ++k) {
+    const uint32_t target = readUint(plan.sparseIndices + k * plan.sparseIndexSize, plan.sparseIndexSize);
+    if (target >= plan.count) {
+      return malformed(where + ": sparse index " + str(uint64_t{target}) + " (entry " + str(k) +
+                       ") is not below the accessor count " + str(plan.count));
+    }
+    fn(target, plan.sparseValues + k * plan.elementSize);
+  }
+  return {};
+}
+
+Status Importer::readFloats(int accessor, AttributeKind kind, const std::string& where, std::vector<float>* out,
+                            int* numComponents) {
+  auto plan = planAccessor(accessor, where);
+  if (!plan) return plan.error();
+  const std::string why = checkAttributeFormat(kind, model_.accessors[static_cast<size_t>(accessor)]);
+  if (!why.empty()) return malformed(where + ": " + why);
+  const int n = plan->numComponents;
+  *numComponents = n;
+  out->assign(plan->count * static_cast<uint64_t>(n), 0.0f);
+  const AccessorPlan& p = *plan;
+  return forEachElement(p, where, [&](uint64_t i, const uint8_t* element) {
+    float* dst = out->data() + i * static_cast<uint64_t>(n);
+    for (int c = 0; c < n; ++c) {
+      dst[c] = element ? static_cast<float>(decodeComponent(element + static_cast<uint64_t>(c) * p.componentSize,
+                                                            p.componentType, p.normalized))
+                       : 0.0f;
+    }
+  });
+}
+
+Status Importer::readVec3(int accessor, AttributeKind kind, const std::string& where, bool requireFinite,
+                          std::vector<glm::vec3>* out) {
+  std::vector<float> flat;
+  int n = 0;
+  if (Status s = readFloats(accessor, kind, where, &flat, &n); !s) return s;
+  out->resize(flat.size() / 3);
+  for (size_t i = 0; i < out->size(); ++i) {
+    const glm::vec3 v(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+    if (requireFinite && !(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z))) {
+      return malformed(where + ": non-finite value (NaN or Inf) in element " + str(uint64_t{i}));
+    }
+    (*out)[i] = v;
+  }
+  return {};
+}
+
+Status Importer::readIndices(int accessor, const std::string& where, std::vector<uint32_t>* out) {
+  auto plan = planAccessor(accessor, where);
+  if (!plan) return plan.error();
+  const uint64_t size = indexComponentSize(plan->componentType);
+  if (plan->numComponents != 1 || size == 0) {
+    return malformed(where + ": indices must be SCALAR UNSIGNED_BYTE/SHORT/INT, not " +
+                     componentTypeName(plan->componentType) + " x" + str(plan->numComponents));
+  }
+  out->assign(plan->count, 0);
+  return forEachElement(*plan, where, [&](uint64_t i, const uint8_t* element) {
+    (*out)[i] = element ? readUint(element, size) : 0;
+  });
+}
+
+Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex) {
+  const tinygltf::Mesh& mesh = model_.meshes[static_cast<size_t>(meshIndex)];
+  const tinygltf::Primitive& prim = mesh.primitives[static_cast<size_t>(primIndex)];
+  const std::string where =
+      path_ + ": mesh " + str(meshIndex) + named(mesh.name) + " primitive " + str(primIndex);
+  auto accessorWhere = [&](int accessor, const std::string& semantic) {
+    return where + " accessor " + str(accessor) + " (" + semantic + ")";
+  };
+  DecodedPrimitive out;
+
+  const int mode = prim.mode;
+  if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+    static constexpr const char* kModeNames[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"};
+    const std::string name = (mode >= 0 && mode <= 3) ? kModeNames[mode] : "unknown mode " + str(mode);
+    warn(where + ": " + name + " primitive skipped (only triangles are imported)");
+    out.skipped = true;
+    return out;
+  }
+  auto positionIt = prim.attributes.find("POSITION");
+  if (positionIt == prim.attributes.end()) {
+    warn(where + ": no POSITION attribute; primitive skipped");
+    out.skipped = true;
+    return out;
+  }
+
+  // Vertex attributes. All must have POSITION's count.
+  if (Status s = readVec3(positionIt->second, AttributeKind::Position, accessorWhere(positionIt->second, "POSITION"),
+                          true, &out.positions);
+      !s) {
+    return s.error();
+  }
+  const uint64_t vertexCount = out.positions.size();
+  auto checkCount = [&](uint64_t count, int accessor, const std::string& semantic) -> Status {
+    if (count == vertexCount) return {};
+    return malformed(accessorWhere(accessor, semantic) + ": count " + str(count) + " differs from POSITION count " +
+                     str(vertexCount));
+  };
+  if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
+    const std::string w = accessorWhere(it->second, "NORMAL");
+    if (Status s = readVec3(it->second, AttributeKind::Normal, w, true, &out.normals); !s) return s.error();
+    if (Status s = checkCount(out.normals.size(), it->second, "NORMAL"); !s) return s.error();
+  }
+  if (auto it = prim.attributes.find("TEXCOORD_0"); it != prim.attributes.end()) {
+    const std::string w = accessorWhere(it->second, "TEXCOORD_0");
+    std::vector<float> flat;
+    int n = 0;
+    if (Status s = readFloats(it->second, AttributeKind::TexCoord, w, &flat, &n); !s) return s.error();
+    if (Status s = checkCount(flat.size() / 2, it->second, "TEXCOORD_0"); !s) return s.error();
+    out.uvs.resize(vertexCount);
+    bool replaced = false;
+    for (uint64_t i = 0; i < vertexCount; ++i) {
+      glm::vec2 uv(flat[2 * i], flat[2 * i + 1]);
+      if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {  // uvs cannot corrupt geometry: repair, don't fail
+        uv = glm::vec2(0.0f);
+        replaced = true;
+      }
+      out.uvs[i] = uv;
+    }
+    if (replaced) warn(w + ": non-finite texture coordinates replaced by (0, 0)");
+  }
+  if (auto it = prim.attributes.find("COLOR_0"); it != prim.attributes.end()) {
+    const std::string w = accessorWhere(it->second, "COLOR_0");
+    std::vector<float> flat;
+    int n = 0;
+    if (Status s = readFloats(it->second, AttributeKind::Color, w, &flat, &n); !s) return s.error();
+    if (Status s = checkCount(flat.size() / static_cast<uint64_t>(n), it->second, "COLOR_0"); !s) return s.error();
+    out.colors.resize(vertexCount);
+    for (uint64_t i = 0; i < vertexCount; ++i) out.colors[i] = packColor(&flat[i * static_cast<uint64_t>(n)], n);
+  }
+
+  // Morph targets (only POSITION and NORMAL matter for a static mesh; TANGENT is ignored).
+  for (size_t t = 0; t < prim.targets.size(); ++t) {
+    std::vector<glm::vec3> positionDelta;
+    std::vector<glm::vec3> normalDelta;
+    const std::string target = " target " + str(uint64_t{t});
+    for (auto [semantic, dst] : {std::pair{"POSITION", &positionDelta}, std::pair{"NORMAL", &normalDelta}}) {
+      auto it = prim.targets[t].find(semantic);
+      if (it == prim.targets[t].end()) continue;
+      const std::string w = where + target + " accessor " + str(it->second) + " (" + semantic + ")";
+      if (Status s = readVec3(it->second, AttributeKind::MorphDelta, w, true, dst); !s) return s.error();
+      if (dst->size() != vertexCount) {
+        return malformed(w + ": count " + str(uint64_t{dst->size()}) + " differs from POSITION count " +
+                         str(vertexCount));
+      }
+    }
+    out.positionDeltas.push_back(std::move(positionDelta));
+    out.normalDeltas.push_back(std::move(normalDelta));
+  }
+
+  // Indices: explicit or sequential; then convert the topology to a triangle list.
+  std::vector<uint32_t> indices;
+  if (prim.indices >= 0) {
+    const std::string w = accessorWhere(prim.indices, "indices");
+    if (Status s = readIndices(prim.indices, w, &indices); !s) return s.error();
+    for (size_t i = 0; i < indices.size(); ++i) {
+      if (indices[i] >= vertexCount) {
+        return malformed(w + ": index value " + str(uint64_t{indices[i]}) + " at position " + str(uint64_t{i}) +
+                         " is not below the vertex count " + str(vertexCount));
+      }
+    }
+  } else {
+    if (vertexCount > std::numeric_limits<uint32_t>::max()) {
+      return makeError(ErrorCode::CapacityExceeded, where + ": more than 2^32-1 vertices");
+    }
+    indices.resize(vertexCount);
+    for (uint64_t i = 0; i < vertexCount; ++i) indices[i] = static_cast<uint32_t>(i);
+  }
+  const size_t n = indices.size();
+  if (mode == TINYGLTF_MODE_TRIANGLES) {
+    if (n % 3 != 0) warn(where + ": index count " + str(uint64_t{n}) + " is not a multiple of 3; extra ignored");
+    out.triangles.assign(indices.begin(), indices.begin() + static_cast<std::ptrdiff_t>(n - n % 3));
+  } else {
+    // Strips and fans; triangles that repeat an index are stitching artefacts (strip restarts), so drop them.
+    auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+      if (a == b || b == c || a == c) return;
+      out.triangles.insert(out.triangles.end(), {a, b, c});
+    };
+    for (size_t i = 0; i + 2 < n; ++i) {
+      if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        // Spec: odd triangles swap their first two vertices to keep a consistent winding.
+        if (i % 2 == 0) {
+          add(indices[i], indices[i + 1], indices[i + 2]);
+        } else {
+          add(indices[i + 1], indices[i], indices[i + 2]);
+        }
+      } else {
+        add(indices[i + 1], indices[i + 2], indices[0]);  // spec: fan triangle i = (p[i+1], p[i+2], p[0])
+      }
+    }
+  }
+  if (out.triangles.empty()) {
+    warn(where + ": no triangles; primitive skipped");
+    out.skipped = true;
+  }
+  return out;
+}
+
+Result<const std::vector<DecodedPrimitive>*> Importer::decodedMesh(int mesh) {
+  auto& slot = meshCache_[static_cast<size_t>(mesh)];
+  if (!slot) {
+    std::vector<DecodedPrimitive> prims;
+    const size_t count = model_.meshes[static_cast<size_t>(mesh)].primitives.size();
+    for (size_t p = 0; p < count; ++p) {
+      auto decoded = decodePrimitive(mesh, static_cast<int>(p));
+      if (!decoded) return decoded.error();
+      prims.push_back(std::move(decoded).value());
+    }
+    slot = std::move(prims);
+  }
+  return &*slot;
+}
+
+// The node's local transform: `matrix` (column-major) or T * R * S. Non-finite values are an error.
+Result<glm::dmat4> Importer::localMatrix(int nodeIndex) {
+  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+  const std::string where = path_ + ": node " + str(nodeIndex) + named(node.name);
+  if (!allFinite(node.matrix) || !allFinite(node.translation) || !allFinite(node.rotation) ||
+      !allFinite(node.scale)) {
+    return malformed(where + ": non-finite transform");
+  }
+  glm::dmat4 m(1.0);
+  if (!node.matrix.empty()) {
+    if (node.matrix.size() != 16) return malformed(where + ": matrix must have 16 elements");
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m[c][r] = node.matrix[static_cast<size_t>(c * 4 + r)];
+    return m;
+  }
+  if (!node.translation.empty() && node.translation.size() != 3) {
+    return malformed(where + ": translation must have 3 elements");
+  }
+  if (!node.rotation.empty() && node.rotation.size() != 4) return malformed(where + ": rotation must have 4 elements");
+  if (!node.scale.empty() && node.scale.size() != 3) return malformed(where + ": scale must have 3 elements");
+  glm::dmat3 rs(1.0);
+  if (!node.rotation.empty()) {
+    // glTF quaternions are (x, y, z, w). Normalise defensively: exporters write slightly non-unit values.
+    double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
+    const double len = std::sqrt(x * x + y * y + z * z + w * w);
+    if (!(len > 0.0) || !std::isfinite(len)) {
+      warn(where + ": zero-length or out-of-range rotation quaternion treated as identity");
+    } else {
+      x /= len, y /= len, z /= len, w /= len;
+      rs = glm::dmat3(1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w),   // column 0
+                      2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w),   // column 1
+                      2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y));  // column 2
+    }
+  }
+  if (!node.scale.empty()) {
+    for (int c = 0; c < 3; ++c) rs[c] *= node.scale[static_cast<size_t>(c)];
+  }
+  m = glm::dmat4(rs);
+  if (!node.translation.empty()) m[3] = glm::dvec4(node.translation[0], node.translation[1], node.translation[2], 1.0);
+  return m;
+}
+
+// Appends one primitive instance: morph, transform, winding fix-up, normals.
+Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world,
+                               const std::vector<double>& weights, const std::string& where, MeshSource* out) {
+  const size_t base = out->positions.size();
+  const size_t count = prim.positions.size();
+  if (count > std::numeric_limits<uint32_t>::max() - base) {
+    return makeError(ErrorCode::CapacityExceeded, where + ": the scene has more than 2^32-1 vertices");
+  }
+  const size_t targets = std::min(weights.size(), prim.positionDeltas.size());
+  if (weights.size() != prim.positionDeltas.size() && !weights.empty()) {
+    warn(where + ": " + str(uint64_t{weights.size()}) + " morph weights for " +
+         str(uint64_t{prim.positionDeltas.size()}) + " targets; using the first " + str(uint64_t{targets}));
+  }
+
+  // Normals go through the cofactor matrix (= det * inverse-transpose), which also exists for singular
+  // matrices; multiplying by sign(det) makes it point like the inverse-transpose.
+  const glm::dmat3 linear(world);
+  const double det = glm::determinant(linear);
+  const glm::dmat3 normalMatrix = glm::dmat3(glm::cross(linear[1], linear[2]), glm::cross(linear[2], linear[0]),
+                                             glm::cross(linear[0], linear[1])) *
+                                  (det < 0.0 ? -1.0 : 1.0);
+  const bool flip = det < 0.0;
+
+  out->positions.resize(base + count);
+  out->normals.resize(base + count);
+  std::vector<uint8_t> needsNormal(count, prim.normals.empty() ? 1 : 0);
+  size_t zeroNormals = 0;
+  for (size_t v = 0; v < count; ++v) {
+    glm::dvec3 p(prim.positions[v]);
+    for (size_t t = 0; t < targets; ++t) {
+      if (!prim.positionDeltas[t].empty()) p += weights[t] * glm::dvec3(prim.positionDeltas[t][v]);
+    }
+    const glm::dvec3 wp = glm::dvec3(world * glm::dvec4(p, 1.0));
+    const glm::vec3 fp(wp);
+    if (!std::isfinite(fp.x) || !std::isfinite(fp.y) || !std::isfinite(fp.z)) {
+      return malformed(where + ": vertex " + str(uint64_t{v}) + " is non-finite after the node transform");
+    }
+    out->positions[base + v] = fp;
+    if (!prim.normals.empty()) {
+      glm::dvec3 n(prim.normals[v]);
+      for (size_t t = 0; t < targets; ++t) {
+        if (!prim.normalDeltas[t].empty()) n += weights[t] * glm::dvec3(prim.normalDeltas[t][v]);
+      }
+      n = normalMatrix * n;
+      const double len = glm::length(n);
+      if (len > 0.0 && std::isfinite(len)) {
+        out->normals[base + v] = glm::vec3(n / len);
+      } else {
+        needsNormal[v] = 1;
+        ++zeroNormals;
+      }
+    }
+  }
+
+  const size_t firstIndex = out->indices.size();
+  out->indices.resize(firstIndex + prim.triangles.size());
+  for (size_t i = 0; i < prim.triangles.size(); i += 3) {
+    const uint32_t b = static_cast<uint32_t>(base);
+    out->indices[firstIndex + i] = b + prim.triangles[i];
+    out->indices[firstIndex + i + 1] = b + prim.triangles[flip ? i + 2 : i + 1];
+    out->indices[firstIndex + i + 2] = b + prim.triangles[flip ? i + 1 : i + 2];
+  }
+
+  // Missing (or unusable) normals: area-weighted vertex normals of this primitive instance, from the final
+  // positions and winding. The cross product's length is twice the triangle area, hence the weighting.
+  const bool anyNeeded = prim.normals.empty() || zeroNormals > 0;
+  if (anyNeeded && options_.generateNormalsIfMissing) {
+    std::vector<glm::dvec3> accum(count, glm::dvec3(0.0));
+    for (size_t i = firstIndex; i < out->indices.size(); i += 3) {
+      const uint32_t a = out->indices[i], b = out->indices[i + 1], c = out->indices[i + 2];
+      const glm::dvec3 pa(out->positions[a]), pb(out->positions[b]), pc(out->positions[c]);
+      const glm::dvec3 faceNormal = glm::cross(pb - pa, pc - pa);
+      accum[a - base] += faceNormal;
+      accum[b - base] += faceNormal;
+      accum[c - base] += faceNormal;
+    }
+    for (size_t v = 0; v < count; ++v) {
+      if (!needsNormal[v]) continue;
+      const double len = glm::length(accum[v]);
+      // Vertices used by no (non-degenerate) triangle get an arbitrary unit normal.
+      out->normals[base + v] = len > 0.0 && std::isfinite(len) ? glm::vec3(accum[v] / len) : glm::vec3(0, 0, 1);
+    }
+  } else if (anyNeeded && !warnedZeroNormals_) {
+    warnedZeroNormals_ = true;
+    warn(path_ + ": some vertices have no usable normal and generateNormalsIfMissing is off; they get (0,0,0)");
+  }
+  if (zeroNormals > 0) {
+    warn(where + ": " + str(uint64_t{zeroNormals}) + " zero-length normal(s) replaced" +
+         (options_.generateNormalsIfMissing ? " by generated normals" : " by (0,0,0)"));
+  }
+
+  // Optional attributes: pad earlier primitives with defaults when the first one that has them shows up.
+  if (!prim.uvs.empty()) {
+    out->uvs.resize(base, glm::vec2(0.0f));
+    out->uvs.insert(out->uvs.end(), prim.uvs.begin(), prim.uvs.end());
+  }
+  if (!prim.colors.empty()) {
+    out->colors.resize(base, 0xFFFFFFFFu);
+    out->colors.insert(out->colors.end(), prim.colors.begin(), prim.colors.end());
+  }
+  return {};
+}
+
+Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* out) {
+  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+  if (node.mesh < 0) return {};
+  const std::string nodeWhere = path_ + ": node " + str(nodeIndex) + named(node.name);
+  if (static_cast<size_t>(node.mesh) >= model_.meshes.size()) {
+    return malformed(nodeWhere + ": mesh " + str(node.mesh) + " does not exist");
+  }
+  const tinygltf::Mesh& mesh = model_.meshes[static_cast<size_t>(node.mesh)];
+  auto prims = decodedMesh(node.mesh);
+  if (!prims) return prims.error();
+  const std::vector<double>& weights = node.weights.empty() ? mesh.weights : node.weights;
+  if (!allFinite(weights)) return malformed(nodeWhere + ": non-finite morph weights");
+  for (size_t p = 0; p < (*prims)->size(); ++p) {
+    const DecodedPrimitive& prim = (**prims)[p];
+    if (prim.skipped) {
+      ++primitivesSkipped;
+      continue;
+    }
+    const std::string where = nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " +
+                              str(uint64_t{p});
+    if (Status s = emitPrimitive(prim, world, weights, where, out); !s) return s;
+    ++primitivesImported;
+  }
+  return {};
+}
+
+Result<MeshSource> Importer::run() {
+  if (Status s = checkRequiredExtensions(); !s) return s.error();
+  meshCache_.resize(model_.meshes.size());
+  const size_t nodeCount = model_.nodes.size();
+
+  // Root nodes: the chosen scene's, or every parentless node when the file has no scenes.
+  std::vector<int> roots;
+  std::string sceneLabel;
+  if (!model_.scenes.empty()) {
+    int scene = model_.defaultScene;
+    if (scene < 0) scene = 0;
+    if (static_cast<size_t>(scene) >= model_.scenes.size()) {
+      return malformed(path_ + ": default scene " + str(scene) + " does not exist");
+    }
+    roots = model_.scenes[static_cast<size_t>(scene)].nodes;
+    sceneLabel = "scene " + str(scene);
+  } else {
+    std::vector<uint8_t> hasParent(nodeCount, 0);
+    for (const tinygltf::Node& node : model_.nodes) {
+      for (int child : node.children) {
+        if (child >= 0 && static_cast<size_t>(child) < nodeCount) hasParent[static_cast<size_t>(child)] = 1;
+      }
+    }
+    for (size_t i = 0; i < nodeCount; ++i) {
+      if (!hasParent[i]) roots.push_back(static_cast<int>(i));
+    }
+    sceneLabel = "root nodes (file has no scenes)";
+  }
+
+  // Depth-first walk with an explicit stack (no recursion depth limit from the file). glTF node graphs are
+  // disjoint trees, so a node met twice means a cycle or a shared child: refuse rather than loop or explode.
+  MeshSource out;
+  out.name = std::filesystem::path(path_).stem().string();
+  std::vector<uint8_t> visited(nodeCount, 0);
+  std::vector<std::pair<int, glm::dmat4>> stack;
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, glm::dmat4(1.0));
+  while (!stack.empty()) {
+    auto [nodeIndex, parentWorld] = stack.back();
+    stack.pop_back();
+    if (nodeIndex < 0 || static_cast<size_t>(nodeIndex) >= nodeCount) {
+      return malformed(path_ + ": node " + str(nodeIndex) + " does not exist (referenced by " + sceneLabel +
+                       " or a parent node)");
+    }
+    const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+    if (visited[static_cast<size_t>(nodeIndex)]) {
+      return malformed(path_ + ": node " + str(nodeIndex) + named(node.name) +
+                       " is reached twice (node graph has a cycle or a node with several parents)");
+    }
+    visited[static_cast<size_t>(nodeIndex)] = 1;
+    auto local = localMatrix(nodeIndex);
+    if (!local) return local.error();
+    const glm::dmat4 world = parentWorld * *local;
+    if (!isFinite(world)) return malformed(path_ + ": node " + str(nodeIndex) + named(node.name) + ": non-finite transform");
+    if (Status s = emitNode(nodeIndex, world, &out); !s) return s.error();
+    for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
+  }
+
+  if (out.indices.empty()) {
+    return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" + str(uint64_t{primitivesSkipped}) +
+                     " primitive(s) skipped)");
+  }
+  if (!out.uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0.0f));
+  if (!out.colors.empty()) out.colors.resize(out.positions.size(), 0xFFFFFFFFu);
+  return out;
+}
+
+}  // namespace
+
+Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptions& options,
+                                  GltfImportReport* report) {
+  GltfImportReport localReport;
+  GltfImportReport& rep = report ? *report : localReport;
+  rep = GltfImportReport{};
+  // tinygltf and nlohmann may throw (allocation failure, pathological JSON); nothing may escape.
+  try {
+    tinygltf::Model model;
+    if (Status s = loadModel(path, &model, &rep.warnings); !s) return s.error();
+    Importer importer(path, model, options, &rep.warnings);
+    Result<MeshSource> result = importer.run();
+    rep.primitivesImported = importer.primitivesImported;
+    rep.primitivesSkipped = importer.primitivesSkipped;
+    return result;
+  } catch (const std::bad_alloc&) {
+    return makeError(ErrorCode::CapacityExceeded, path + ": out of memory while importing");
+  } catch (const std::exception& e) {
+    return malformed(path + ": " + e.what());
+  }
+}
+
+}  // namespace visbuf

@@ -1,0 +1,22 @@
+// Image files through OpenImageIO. Writes are atomic: a temporary file in the same folder, then rename.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/result.h"
+
+namespace visbuf {
+
+// Writes linear RGBA float pixels. .png: 8-bit sRGB-encoded; .exr/.tif: 16/32-bit float linear.
+Status writeColorImage(const std::string& path, uint32_t width, uint32_t height, const std::vector<float>& rgba);
+// Writes a two-channel 32-bit unsigned TIFF (object ID + 1, triangle index).
+Status writeIdImage(const std::string& path, uint32_t width, uint32_t height, const std::vector<uint32_t>& ids);
+// Reads a two-channel uint32 TIFF written by writeIdImage.
+Status readIdImage(const std::string& path, uint32_t& width, uint32_t& height, std::vector<uint32_t>& ids);
+
+// Renames `tmp` onto `path` (same filesystem); removes tmp on failure.
+Status commitFile(const std::string& tmp, const std::string& path);
+
+}  // namespace visbuf

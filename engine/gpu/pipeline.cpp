@@ -1,0 +1,178 @@
+#include "gpu/pipeline.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <utility>
+
+#include "gpu/check.h"
+
+// Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
+#include "cull.comp.h"
+#include "forward.frag.h"
+#include "forward.vert.h"
+#include "shade.comp.h"
+#include "visibility.frag.h"
+#include "visibility.vert.h"
+#include "visibility_wide.frag.h"
+
+namespace visbuf::gpu {
+
+std::span<const uint32_t> shaderCode(const std::string& name) {
+#define VB_SHADER(file, sym) \
+  if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
+  VB_SHADER("cull.comp", spv_cull_comp)
+  VB_SHADER("visibility.vert", spv_visibility_vert)
+  VB_SHADER("visibility.frag", spv_visibility_frag)
+  VB_SHADER("visibility_wide.frag", spv_visibility_wide_frag)
+  VB_SHADER("shade.comp", spv_shade_comp)
+  VB_SHADER("forward.vert", spv_forward_vert)
+  VB_SHADER("forward.frag", spv_forward_frag)
+#undef VB_SHADER
+  std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
+  std::abort();
+}
+
+namespace {
+VkShaderModule createModule(Device& device, const std::string& name) {
+  auto code = shaderCode(name);
+  VkShaderModuleCreateInfo ci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  ci.codeSize = code.size_bytes();
+  ci.pCode = code.data();
+  VkShaderModule module;
+  VK_CHECK(vkCreateShaderModule(device.device(), &ci, nullptr, &module));
+  return module;
+}
+}  // namespace
+
+Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
+  if (this != &o) {
+    reset();
+    device_ = std::exchange(o.device_, VK_NULL_HANDLE);
+    pipeline_ = std::exchange(o.pipeline_, VK_NULL_HANDLE);
+  }
+  return *this;
+}
+
+void Pipeline::reset() {
+  if (pipeline_) vkDestroyPipeline(device_, pipeline_, nullptr);
+  pipeline_ = VK_NULL_HANDLE;
+}
+
+Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader) {
+  VkShaderModule module = createModule(device, shader);
+  VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  ci.stage.module = module;
+  ci.stage.pName = "main";
+  ci.layout = layout;
+  VkPipeline pipeline;
+  VK_CHECK(vkCreateComputePipelines(device.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
+  vkDestroyShaderModule(device.device(), module, nullptr);
+  return Pipeline(device.device(), pipeline);
+}
+
+Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc) {
+  VkShaderModule vs = createModule(device, desc.vertexShader);
+  VkShaderModule fs = createModule(device, desc.fragmentShader);
+  VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
+                                               {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
+  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+  stages[0].module = vs;
+  stages[0].pName = "main";
+  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  stages[1].module = fs;
+  stages[1].pName = "main";
+
+  VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};  // pulled
+  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  vp.viewportCount = 1;
+  vp.scissorCount = 1;
+  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  rs.polygonMode = VK_POLYGON_MODE_FILL;
+  rs.cullMode = desc.cullMode;
+  rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  rs.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  ds.depthTestEnable = VK_TRUE;
+  ds.depthWriteEnable = VK_TRUE;
+  ds.depthCompareOp = desc.depthCompare;
+  std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorFormats.size());
+  for (auto& b : blends) b.colorWriteMask = 0xF;
+  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  cb.attachmentCount = static_cast<uint32_t>(blends.size());
+  cb.pAttachments = blends.data();
+  VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  dy.dynamicStateCount = 2;
+  dy.pDynamicStates = dyn;
+  VkPipelineRenderingCreateInfo ri{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+  ri.colorAttachmentCount = static_cast<uint32_t>(desc.colorFormats.size());
+  ri.pColorAttachmentFormats = desc.colorFormats.data();
+  ri.depthAttachmentFormat = desc.depthFormat;
+
+  VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+  ci.pNext = &ri;
+  ci.stageCount = 2;
+  ci.pStages = stages;
+  ci.pVertexInputState = &vi;
+  ci.pInputAssemblyState = &ia;
+  ci.pViewportState = &vp;
+  ci.pRasterizationState = &rs;
+  ci.pMultisampleState = &ms;
+  ci.pDepthStencilState = &ds;
+  ci.pColorBlendState = &cb;
+  ci.pDynamicState = &dy;
+  ci.layout = layout;
+  VkPipeline pipeline;
+  VK_CHECK(vkCreateGraphicsPipelines(device.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
+  vkDestroyShaderModule(device.device(), vs, nullptr);
+  vkDestroyShaderModule(device.device(), fs, nullptr);
+  return Pipeline(device.device(), pipeline);
+}
+
+TimestampPool::TimestampPool(Device& device, uint32_t maxPasses) : device_(device), max_(maxPasses) {
+  VkQueryPoolCreateInfo ci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  ci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  ci.queryCount = maxPasses * 2;
+  VK_CHECK(vkCreateQueryPool(device.device(), &ci, nullptr, &pool_));
+}
+
+TimestampPool::~TimestampPool() { vkDestroyQueryPool(device_.device(), pool_, nullptr); }
+
+void TimestampPool::reset(VkCommandBuffer cmd) {
+  vkCmdResetQueryPool(cmd, pool_, 0, max_ * 2);
+  names_.clear();
+}
+
+uint32_t TimestampPool::begin(VkCommandBuffer cmd, const std::string& name) {
+  uint32_t slot = static_cast<uint32_t>(names_.size());
+  if (slot >= max_) vkCheckFailed("TimestampPool::begin (too many passes)", VK_ERROR_TOO_MANY_OBJECTS, __FILE__, __LINE__);
+  names_.push_back(name);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, slot * 2);
+  return slot;
+}
+
+void TimestampPool::end(VkCommandBuffer cmd, uint32_t slot) {
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, slot * 2 + 1);
+}
+
+std::vector<std::pair<std::string, double>> TimestampPool::read() {
+  std::vector<std::pair<std::string, double>> out;
+  if (names_.empty()) return out;
+  std::vector<uint64_t> ticks(names_.size() * 2);
+  VK_CHECK(vkGetQueryPoolResults(device_.device(), pool_, 0, static_cast<uint32_t>(ticks.size()),
+                                 ticks.size() * sizeof(uint64_t), ticks.data(), sizeof(uint64_t),
+                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  for (size_t i = 0; i < names_.size(); ++i) {
+    double ms = double(ticks[2 * i + 1] - ticks[2 * i]) * device_.timestampPeriodNs() * 1e-6;
+    out.emplace_back(names_[i], ms);
+  }
+  return out;
+}
+
+}  // namespace visbuf::gpu

@@ -1,0 +1,71 @@
+// Shader modules (SPIR-V compiled at build time and embedded), pipelines, descriptor sets and
+// timestamp queries.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "gpu/device.h"
+
+namespace visbuf::gpu {
+
+// Embedded SPIR-V by file name ("cull.comp", "visibility.vert", ...). Aborts on an unknown name
+// (a build error, not user input).
+std::span<const uint32_t> shaderCode(const std::string& name);
+
+// Move-only pipeline owner.
+class Pipeline {
+ public:
+  Pipeline() = default;
+  Pipeline(VkDevice device, VkPipeline pipeline) : device_(device), pipeline_(pipeline) {}
+  ~Pipeline() { reset(); }
+  Pipeline(Pipeline&& o) noexcept { *this = std::move(o); }
+  Pipeline& operator=(Pipeline&& o) noexcept;
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+  void reset();
+  VkPipeline handle() const { return pipeline_; }
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkPipeline pipeline_ = VK_NULL_HANDLE;
+};
+
+Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader);
+
+struct GraphicsPipelineDesc {
+  std::string vertexShader;
+  std::string fragmentShader;
+  std::vector<VkFormat> colorFormats;  // dynamic rendering attachments
+  VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;
+  VkCullModeFlags cullMode = VK_CULL_MODE_BACK_BIT;
+  VkCompareOp depthCompare = VK_COMPARE_OP_GREATER;  // reverse-Z
+};
+Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
+
+// GPU timestamps: two per named pass, read back after the frame's fence.
+class TimestampPool {
+ public:
+  TimestampPool(Device& device, uint32_t maxPasses);
+  ~TimestampPool();
+  TimestampPool(const TimestampPool&) = delete;
+  TimestampPool& operator=(const TimestampPool&) = delete;
+  void reset(VkCommandBuffer cmd);  // at the start of the frame (before any begin)
+  // Returns the pass slot; write begin before and end after the pass's commands.
+  uint32_t begin(VkCommandBuffer cmd, const std::string& name);
+  void end(VkCommandBuffer cmd, uint32_t slot);
+  // Milliseconds per pass, in recording order. Call after the frame completed.
+  std::vector<std::pair<std::string, double>> read();
+
+ private:
+  Device& device_;
+  VkQueryPool pool_ = VK_NULL_HANDLE;
+  uint32_t max_;
+  std::vector<std::string> names_;
+};
+
+}  // namespace visbuf::gpu

@@ -1,0 +1,168 @@
+#include "gpu/resources.h"
+
+#include <cstring>
+#include <utility>
+
+#include "gpu/check.h"
+
+namespace visbuf::gpu {
+
+Buffer::Buffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use)
+    : device_(device.device()), size_(size) {
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = size;
+  bci.usage = usage;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VK_CHECK(vkCreateBuffer(device_, &bci, nullptr, &buffer_));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(device_, buffer_, &req);
+  VkMemoryPropertyFlags flags = use == MemoryUse::HostVisible
+                                    ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+                                    : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  uint32_t type = device.findMemoryType(req.memoryTypeBits, flags);
+  if (type == UINT32_MAX && use == MemoryUse::DeviceLocal) type = device.findMemoryType(req.memoryTypeBits, 0);
+  if (type == UINT32_MAX) vkCheckFailed("findMemoryType(buffer)", VK_ERROR_OUT_OF_DEVICE_MEMORY, __FILE__, __LINE__);
+  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex = type;
+  VK_CHECK(vkAllocateMemory(device_, &ai, nullptr, &memory_));
+  VK_CHECK(vkBindBufferMemory(device_, buffer_, memory_, 0));
+  if (use == MemoryUse::HostVisible) VK_CHECK(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+}
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+  if (this != &o) {
+    reset();
+    device_ = std::exchange(o.device_, VK_NULL_HANDLE);
+    buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    size_ = std::exchange(o.size_, 0);
+    mapped_ = std::exchange(o.mapped_, nullptr);
+  }
+  return *this;
+}
+
+void Buffer::reset() {
+  if (buffer_) vkDestroyBuffer(device_, buffer_, nullptr);
+  if (memory_) vkFreeMemory(device_, memory_, nullptr);
+  buffer_ = VK_NULL_HANDLE;
+  memory_ = VK_NULL_HANDLE;
+  mapped_ = nullptr;
+  size_ = 0;
+}
+
+Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
+             VkImageAspectFlags aspect)
+    : device_(device.device()), format_(format), width_(width), height_(height), aspect_(aspect) {
+  VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  ici.imageType = VK_IMAGE_TYPE_2D;
+  ici.format = format;
+  ici.extent = {width, height, 1};
+  ici.mipLevels = 1;
+  ici.arrayLayers = 1;
+  ici.samples = VK_SAMPLE_COUNT_1_BIT;
+  ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ici.usage = usage;
+  ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VK_CHECK(vkCreateImage(device_, &ici, nullptr, &image_));
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(device_, image_, &req);
+  uint32_t type = device.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  if (type == UINT32_MAX) type = device.findMemoryType(req.memoryTypeBits, 0);
+  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex = type;
+  VK_CHECK(vkAllocateMemory(device_, &ai, nullptr, &memory_));
+  VK_CHECK(vkBindImageMemory(device_, image_, memory_, 0));
+  VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  vci.image = image_;
+  vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  vci.format = format;
+  vci.subresourceRange = {aspect, 0, 1, 0, 1};
+  VK_CHECK(vkCreateImageView(device_, &vci, nullptr, &view_));
+}
+
+Image& Image::operator=(Image&& o) noexcept {
+  if (this != &o) {
+    reset();
+    device_ = std::exchange(o.device_, VK_NULL_HANDLE);
+    image_ = std::exchange(o.image_, VK_NULL_HANDLE);
+    view_ = std::exchange(o.view_, VK_NULL_HANDLE);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    format_ = o.format_;
+    width_ = o.width_;
+    height_ = o.height_;
+    aspect_ = o.aspect_;
+  }
+  return *this;
+}
+
+void Image::reset() {
+  if (view_) vkDestroyImageView(device_, view_, nullptr);
+  if (image_) vkDestroyImage(device_, image_, nullptr);
+  if (memory_) vkFreeMemory(device_, memory_, nullptr);
+  view_ = VK_NULL_HANDLE;
+  image_ = VK_NULL_HANDLE;
+  memory_ = VK_NULL_HANDLE;
+}
+
+Buffer uploadBuffer(Device& device, const void* data, size_t bytes, VkBufferUsageFlags usage) {
+  size_t size = (bytes + 3) & ~size_t(3);
+  if (size < 16) size = 16;
+  Buffer staging(device, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::HostVisible);
+  std::memset(staging.mapped(), 0, size);
+  if (bytes) std::memcpy(staging.mapped(), data, bytes);
+  Buffer buffer(device, size, usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::DeviceLocal);
+  VkCommandBuffer cmd = device.beginOneShot();
+  VkBufferCopy region{0, 0, size};
+  vkCmdCopyBuffer(cmd, staging.handle(), buffer.handle(), 1, &region);
+  device.submitOneShot(cmd);
+  return buffer;
+}
+
+void imageBarrier(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
+                  VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                  VkAccessFlags2 dstAccess) {
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = srcStage;
+  b.srcAccessMask = srcAccess;
+  b.dstStageMask = dstStage;
+  b.dstAccessMask = dstAccess;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image.handle();
+  b.subresourceRange = {image.aspect(), 0, 1, 0, 1};
+  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  di.imageMemoryBarrierCount = 1;
+  di.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &di);
+}
+
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                   VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+  VkMemoryBarrier2 b{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  b.srcStageMask = srcStage;
+  b.srcAccessMask = srcAccess;
+  b.dstStageMask = dstStage;
+  b.dstAccessMask = dstAccess;
+  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  di.memoryBarrierCount = 1;
+  di.pMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &di);
+}
+
+uint32_t formatBytes(VkFormat format) {
+  switch (format) {
+    case VK_FORMAT_R32_UINT: return 4;
+    case VK_FORMAT_R32G32_UINT: return 8;
+    case VK_FORMAT_R16G16B16A16_SFLOAT: return 8;
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
+    case VK_FORMAT_D32_SFLOAT: return 4;
+    case VK_FORMAT_R8G8B8A8_UNORM: return 4;
+    default: return 0;
+  }
+}
+
+}  // namespace visbuf::gpu

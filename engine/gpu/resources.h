@@ -1,0 +1,90 @@
+// Move-only owners of buffers and images (one allocation each: the frame uses a handful of large
+// resources, so a sub-allocator would buy nothing yet), plus staging upload and readback.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "gpu/device.h"
+
+namespace visbuf::gpu {
+
+enum class MemoryUse { DeviceLocal, HostVisible };
+
+class Buffer {
+ public:
+  Buffer() = default;
+  Buffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use);
+  ~Buffer() { reset(); }
+  Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+  Buffer& operator=(Buffer&& o) noexcept;
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+
+  void reset();
+  VkBuffer handle() const { return buffer_; }
+  VkDeviceSize size() const { return size_; }
+  void* mapped() const { return mapped_; }  // non-null for MemoryUse::HostVisible
+  explicit operator bool() const { return buffer_ != VK_NULL_HANDLE; }
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkBuffer buffer_ = VK_NULL_HANDLE;
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  VkDeviceSize size_ = 0;
+  void* mapped_ = nullptr;
+};
+
+class Image {
+ public:
+  Image() = default;
+  Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
+        VkImageAspectFlags aspect);
+  ~Image() { reset(); }
+  Image(Image&& o) noexcept { *this = std::move(o); }
+  Image& operator=(Image&& o) noexcept;
+  Image(const Image&) = delete;
+  Image& operator=(const Image&) = delete;
+
+  void reset();
+  VkImage handle() const { return image_; }
+  VkImageView view() const { return view_; }
+  VkFormat format() const { return format_; }
+  uint32_t width() const { return width_; }
+  uint32_t height() const { return height_; }
+  VkImageAspectFlags aspect() const { return aspect_; }
+  explicit operator bool() const { return image_ != VK_NULL_HANDLE; }
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkImage image_ = VK_NULL_HANDLE;
+  VkImageView view_ = VK_NULL_HANDLE;
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  VkFormat format_ = VK_FORMAT_UNDEFINED;
+  uint32_t width_ = 0, height_ = 0;
+  VkImageAspectFlags aspect_ = 0;
+};
+
+// Creates a device-local buffer holding `bytes` (size rounded up to 4, at least 16 bytes) via staging.
+Buffer uploadBuffer(Device& device, const void* data, size_t bytes, VkBufferUsageFlags usage);
+
+template <typename T>
+Buffer uploadVector(Device& device, const std::vector<T>& v, VkBufferUsageFlags usage) {
+  return uploadBuffer(device, v.data(), v.size() * sizeof(T), usage);
+}
+
+// Image layout transition (synchronization2), whole image, all previous work to all later work of the
+// given stages. Used by the frame script only.
+void imageBarrier(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
+                  VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                  VkAccessFlags2 dstAccess);
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                   VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess);
+
+// Bytes per texel for the formats we read back.
+uint32_t formatBytes(VkFormat format);
+
+}  // namespace visbuf::gpu

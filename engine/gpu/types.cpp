@@ -1,0 +1,24 @@
+// Pins the sizes of the shared GPU structs (shaders/shared/types.h). A mismatch with the GLSL std430 /
+// std140 layout would silently corrupt every pass, so it fails the build instead; the unit tests also
+// compare member offsets with the ones glslang reflects.
+#include <cstddef>
+
+#include "shared/types.h"
+
+namespace visbuf::gpu {
+
+static_assert(sizeof(Vertex) == 32);
+static_assert(sizeof(LodData) == 16);
+static_assert(sizeof(MeshData) == 32 + 16 * MAX_LODS);
+static_assert(sizeof(ObjectData) == 64, "per-object GPU data stays at 64 bytes");
+static_assert(sizeof(MaterialData) == 32);
+static_assert(sizeof(DrawCommand) == 20, "VkDrawIndexedIndirectCommand layout");
+static_assert(sizeof(FrameData) == 224);
+static_assert(offsetof(FrameData, cameraOffset) == 64);
+static_assert(offsetof(FrameData, frustum) == 80);
+static_assert(offsetof(FrameData, lightDir) == 160);
+static_assert(offsetof(FrameData, lodScale) == 192);
+static_assert(offsetof(ObjectData, meshIndex) == 48);
+static_assert(offsetof(MeshData, lods) == 32);
+
+}  // namespace visbuf::gpu

@@ -1,0 +1,17 @@
+#include "passes/cull_pass.h"
+
+#include "shared/config.h"
+
+namespace visbuf::passes {
+
+CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout) {
+  return CullPass{gpu::createComputePipeline(device, layout, "cull.comp")};
+}
+
+void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
+}
+
+}  // namespace visbuf::passes

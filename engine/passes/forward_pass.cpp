@@ -1,0 +1,26 @@
+#include "passes/forward_pass.h"
+
+#include "passes/visibility_pass.h"
+
+namespace visbuf::passes {
+
+ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout) {
+  gpu::GraphicsPipelineDesc d;
+  d.vertexShader = "forward.vert";
+  d.fragmentShader = "forward.frag";
+  d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
+  return ForwardPass{gpu::createGraphicsPipeline(device, layout, d)};
+}
+
+void ForwardPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+                         VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
+                         const std::vector<ForwardDraw>& draws) const {
+  beginRendering(cmd, color, background, depth);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
+  for (const ForwardDraw& d : draws) vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.objectId);
+  vkCmdEndRendering(cmd);
+}
+
+}  // namespace visbuf::passes

@@ -1,0 +1,62 @@
+#include "passes/visibility_pass.h"
+
+#include "shared/types.h"
+
+namespace visbuf::passes {
+
+VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout) {
+  VisibilityPass p;
+  gpu::GraphicsPipelineDesc d;
+  d.vertexShader = "visibility.vert";
+  d.fragmentShader = "visibility.frag";
+  d.colorFormats = {VK_FORMAT_R32_UINT};
+  p.narrow = gpu::createGraphicsPipeline(device, layout, d);
+  d.fragmentShader = "visibility_wide.frag";
+  d.colorFormats = {VK_FORMAT_R32G32_UINT};
+  p.wide = gpu::createGraphicsPipeline(device, layout, d);
+  return p;
+}
+
+void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth) {
+  VkRenderingAttachmentInfo ca{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  ca.imageView = color.view();
+  ca.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  ca.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  ca.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  ca.clearValue.color = clear;
+  VkRenderingAttachmentInfo da{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  da.imageView = depth.view();
+  da.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+  da.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  da.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  da.clearValue.depthStencil = {0.0f, 0};  // reverse-Z: 0 is infinitely far
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, {color.width(), color.height()}};
+  ri.layerCount = 1;
+  ri.colorAttachmentCount = 1;
+  ri.pColorAttachments = &ca;
+  ri.pDepthAttachment = &da;
+  vkCmdBeginRendering(cmd, &ri);
+  VkViewport vp{0.0f, 0.0f, float(color.width()), float(color.height()), 0.0f, 1.0f};
+  VkRect2D sc{{0, 0}, {color.width(), color.height()}};
+  vkCmdSetViewport(cmd, 0, 1, &vp);
+  vkCmdSetScissor(cmd, 0, 1, &sc);
+}
+
+void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+                            const VisibilityInputs& in) const {
+  VkClearColorValue nothing{};
+  nothing.uint32[0] = VIS_NOTHING;
+  nothing.uint32[1] = VIS_NOTHING;
+  beginRendering(cmd, *in.ids, nothing, *in.depth);
+  const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, (isWide ? wide : narrow).handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
+  if (in.maxDraws > 0)
+    vkCmdDrawIndexedIndirectCount(cmd, in.draws, 0, in.drawCount, in.drawCountOffset, in.maxDraws,
+                                  sizeof(gpu::DrawCommand));
+  vkCmdEndRendering(cmd);
+}
+
+}  // namespace visbuf::passes

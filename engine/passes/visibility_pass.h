@@ -1,0 +1,31 @@
+// Visibility pass (shaders/visibility.{vert,frag}.glsl): vkCmdDrawIndexedIndirectCount over the cull
+// pass's commands into the ID target (r32ui or rg32ui) and reverse-Z D32 depth (cleared to 0).
+// Reads: frame, objects, vertices, index buffer, draws + draw count. Writes: ID target, depth.
+#pragma once
+
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+
+namespace visbuf::passes {
+
+struct VisibilityInputs {
+  const gpu::Image* ids = nullptr;
+  const gpu::Image* depth = nullptr;
+  VkBuffer indexBuffer = VK_NULL_HANDLE;
+  VkBuffer draws = VK_NULL_HANDLE;
+  VkBuffer drawCount = VK_NULL_HANDLE;
+  VkDeviceSize drawCountOffset = 0;
+  uint32_t maxDraws = 0;
+};
+
+struct VisibilityPass {
+  gpu::Pipeline narrow;  // r32ui
+  gpu::Pipeline wide;    // rg32ui
+  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout);
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
+};
+
+// Begins dynamic rendering on colour + depth with clears; shared by the visibility and forward passes.
+void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth);
+
+}  // namespace visbuf::passes

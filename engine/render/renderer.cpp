@@ -1,0 +1,536 @@
+// The frame script: the only place that knows the pass order and inserts the barriers between them.
+//
+//   setup ─► cull.comp ─► visibility.{vert,frag} ─► shade.comp ─► readback      (visbuf path)
+//   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
+//
+// Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
+// crashed on a dispatch + barrier + timestamps in one command buffer).
+#include "render/renderer.h"
+
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include <fmt/format.h>
+#include <glm/gtc/packing.hpp>
+
+#include "gpu/check.h"
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+#include "passes/cull_pass.h"
+#include "passes/forward_pass.h"
+#include "passes/shade_pass.h"
+#include "passes/visibility_pass.h"
+#include "render/frame_math.h"
+#include "scene/gpu_scene.h"
+
+namespace visbuf {
+
+const char* renderPathName(RenderPath path) { return path == RenderPath::Visbuf ? "visbuf" : "forward"; }
+const char* cullModeName(CullMode mode) { return mode == CullMode::None ? "none" : "frustum"; }
+
+std::string IdEncoding::describe() const {
+  if (wide) return fmt::format("64-bit rg32ui (x: draw slot + 1, {} bits used; y: triangle, {} bits used)", slotBits, triangleBits);
+  return fmt::format("32-bit r32ui (draw slot {} bits | triangle {} bits, +1; 0 = nothing)", slotBits, triangleBits);
+}
+
+IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw, bool forceWide) {
+  IdEncoding e;
+  auto bitsFor = [](uint64_t n) { return n <= 1 ? 1u : uint32_t(std::bit_width(n - 1)); };
+  e.triangleBits = bitsFor(maxTrianglesPerDraw);
+  e.slotBits = bitsFor(drawCapacity);
+  // Narrow only if the largest encoded value, ((cap-1) << triBits | (2^triBits - 1)) + 1, fits in 32 bits.
+  const uint64_t largest = ((uint64_t(drawCapacity) - 1) << e.triangleBits | ((1ull << e.triangleBits) - 1)) + 1;
+  e.wide = forceWide || e.slotBits + e.triangleBits > 32 || largest > 0xFFFFFFFFull;
+  return e;
+}
+
+namespace {
+
+constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
+constexpr uint32_t kCommandBuffers = 5;
+
+}  // namespace
+
+struct Renderer::Impl {
+  gpu::Device& device;
+  const Scene& scene;
+  RendererConfig config;
+  GpuScene gpuScene;
+  IdEncoding encoding;
+  uint32_t capacity = 0;
+
+  VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
+  VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  VkSampler sampler = VK_NULL_HANDLE;
+  VkFence fence = VK_NULL_HANDLE;
+  std::array<VkCommandBuffer, kCommandBuffers> cmds{};
+
+  passes::CullPass cull;
+  passes::VisibilityPass visibility;
+  passes::ShadePass shade;
+  passes::ForwardPass forward;
+
+  gpu::Buffer frameBuffer;  // FrameData, host visible
+  gpu::Buffer draws;        // DrawCommand[capacity]
+  gpu::Buffer stats;        // uint[STAT_COUNT]
+  gpu::Buffer statsReadback;
+  gpu::Image ids, depth, color;
+  gpu::Buffer colorReadback, idsReadback, drawsReadback;
+  std::unique_ptr<gpu::TimestampPool> timestamps;
+
+  Impl(gpu::Device& d, const Scene& s) : device(d), scene(s) {}
+  ~Impl() {
+    VkDevice dev = device.device();
+    vkDeviceWaitIdle(dev);
+    vkFreeCommandBuffers(dev, device.commandPool(), kCommandBuffers, cmds.data());
+    vkDestroyFence(dev, fence, nullptr);
+    vkDestroySampler(dev, sampler, nullptr);
+    vkDestroyDescriptorPool(dev, pool, nullptr);
+    vkDestroyPipelineLayout(dev, pipelineLayout, nullptr);
+    vkDestroyDescriptorSetLayout(dev, setLayout, nullptr);
+  }
+
+  void createLayouts() {
+    VkDevice dev = device.device();
+    const VkShaderStageFlags all = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    std::vector<VkDescriptorSetLayoutBinding> b = {
+        {BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, all, nullptr},
+        {BINDING_OBJECTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_MESHES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_DRAWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_STATS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_MATERIALS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+    };
+    VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    lci.bindingCount = uint32_t(b.size());
+    lci.pBindings = b.data();
+    VK_CHECK(vkCreateDescriptorSetLayout(dev, &lci, nullptr, &setLayout));
+    VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pci.setLayoutCount = 1;
+    pci.pSetLayouts = &setLayout;
+    VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
+    VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7},
+                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1}};
+    VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    dpci.maxSets = 1;
+    dpci.poolSizeCount = 4;
+    dpci.pPoolSizes = sizes;
+    VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
+    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorPool = pool;
+    ai.descriptorSetCount = 1;
+    ai.pSetLayouts = &setLayout;
+    VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &set));
+    VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
+    sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler));
+    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VK_CHECK(vkCreateFence(dev, &fci, nullptr, &fence));
+    VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    cai.commandPool = device.commandPool();
+    cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    cai.commandBufferCount = kCommandBuffers;
+    VK_CHECK(vkAllocateCommandBuffers(dev, &cai, cmds.data()));
+  }
+
+  void createTargets(uint32_t width, uint32_t height) {
+    vkDeviceWaitIdle(device.device());
+    const VkFormat idFormat = encoding.wide ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32_UINT;
+    ids = gpu::Image(device, idFormat, width, height,
+                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                     VK_IMAGE_ASPECT_COLOR_BIT);
+    depth = gpu::Image(device, VK_FORMAT_D32_SFLOAT, width, height, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                       VK_IMAGE_ASPECT_DEPTH_BIT);
+    color = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, width, height,
+                       VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                           VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                       VK_IMAGE_ASPECT_COLOR_BIT);
+    const VkDeviceSize pixels = VkDeviceSize(width) * height;
+    colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+    idsReadback = gpu::Buffer(device, pixels * gpu::formatBytes(idFormat), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                              gpu::MemoryUse::HostVisible);
+    config.width = width;
+    config.height = height;
+    writeDescriptors();
+  }
+
+  void writeDescriptors() {
+    VkDescriptorBufferInfo bufs[8] = {
+        {frameBuffer.handle(), 0, VK_WHOLE_SIZE},        {gpuScene.objects.handle(), 0, VK_WHOLE_SIZE},
+        {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    {gpuScene.vertices.handle(), 0, VK_WHOLE_SIZE},
+        {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
+        {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[8] = {BINDING_FRAME,   BINDING_OBJECTS, BINDING_MESHES, BINDING_VERTICES,
+                                     BINDING_INDICES, BINDING_DRAWS,   BINDING_STATS,  BINDING_MATERIALS};
+    std::vector<VkWriteDescriptorSet> w;
+    for (int i = 0; i < 8; ++i) {
+      VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      x.dstSet = set;
+      x.dstBinding = bufBindings[i];
+      x.descriptorCount = 1;
+      x.descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      x.pBufferInfo = &bufs[i];
+      w.push_back(x);
+    }
+    VkDescriptorImageInfo idInfo{sampler, ids.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkDescriptorImageInfo colorInfo{VK_NULL_HANDLE, color.view(), VK_IMAGE_LAYOUT_GENERAL};
+    VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    x.dstSet = set;
+    x.descriptorCount = 1;
+    x.dstBinding = BINDING_VISIBILITY;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    x.pImageInfo = &idInfo;
+    w.push_back(x);
+    x.dstBinding = BINDING_COLOR;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    x.pImageInfo = &colorInfo;
+    w.push_back(x);
+    vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
+  }
+
+  void beginCmd(VkCommandBuffer cmd) {
+    VK_CHECK(vkResetCommandBuffer(cmd, 0));
+    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VK_CHECK(vkBeginCommandBuffer(cmd, &bi));
+  }
+
+  void copyImageToBuffer(VkCommandBuffer cmd, const gpu::Image& image, const gpu::Buffer& buffer) {
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {image.width(), image.height(), 1};
+    vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1, &region);
+  }
+
+  gpu::FrameData frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options) const {
+    gpu::FrameData f{};
+    f.viewProj = glm::mat4(math.viewProj);
+    f.cameraOffset = glm::vec4(glm::vec3(scene.anchor - camera.position), 0.0f);
+    for (int i = 0; i < 5; ++i) f.frustum[i] = glm::vec4(math.planes[size_t(i)]);
+    f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), 0.85f);
+    f.viewport = glm::vec4(float(config.width), float(config.height), 1.0f / config.width, 1.0f / config.height);
+    f.lodScale = float(math.lodScale);
+    f.lodErrorPixels = options.lodErrorPixels;
+    f.nearPlane = float(camera.nearPlane);
+    f.objectCount = gpuScene.objectCount;
+    f.drawCapacity = capacity;
+    f.cullMode = options.cull == CullMode::None ? CULL_NONE : CULL_FRUSTUM;
+    f.triangleBits = encoding.triangleBits;
+    f.wideIds = encoding.wide ? 1u : 0u;
+    return f;
+  }
+
+  Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
+  void recordVisbuf(const FrameOptions& options, uint32_t& used);
+  std::vector<passes::ForwardDraw> forwardCull(const Camera& camera, const FrameMath& math,
+                                               const FrameOptions& options, FrameStats& stats) const;
+};
+
+std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camera, const FrameMath& math,
+                                                             const FrameOptions& options, FrameStats& st) const {
+  // The "what a user does without us" baseline: per-object CPU frustum culling (double precision)
+  // and the same LOD rule, then one draw per object.
+  std::vector<passes::ForwardDraw> out;
+  st.lodHistogram.assign(MAX_LODS, 0);
+  for (uint32_t i = 0; i < scene.objects.size(); ++i) {
+    const Object& o = scene.objects[i];
+    const Mesh& mesh = scene.meshes[o.mesh];
+    glm::dvec4 s = objectBoundsWorld(scene, o);
+    if (options.cull != CullMode::None && !sphereInFrustum(math, camera, glm::dvec3(s), s.w)) {
+      ++st.frustumCulled;
+      continue;
+    }
+    double dist = glm::length(glm::dvec3(s) - camera.position) - s.w;
+    uint32_t lod = selectLod(mesh, maxScaleOf(o.transform), dist, math, camera.nearPlane, options.lodErrorPixels);
+    const gpu::MeshData& md = gpuScene.meshTable[o.mesh];
+    out.push_back({md.lods[lod].indexCount, md.lods[lod].firstIndex, int32_t(md.vertexOffset), i});
+    st.trianglesDrawn += md.lods[lod].indexCount / 3;
+    st.lodHistogram[lod]++;
+  }
+  st.objectsTested = uint32_t(scene.objects.size());
+  st.drawsAppended = st.drawsRendered = uint32_t(out.size());
+  return out;
+}
+
+void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
+  const uint32_t w = config.width, h = config.height;
+  // cull
+  VkCommandBuffer cmd = cmds[used++];
+  beginCmd(cmd);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  uint32_t t = timestamps->begin(cmd, "cull");
+  cull.record(cmd, pipelineLayout, set, gpuScene.objectCount);
+  timestamps->end(cmd, t);
+  VK_CHECK(vkEndCommandBuffer(cmd));
+
+  // visibility
+  cmd = cmds[used++];
+  beginCmd(cmd);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
+                VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+  gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
+                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+  t = timestamps->begin(cmd, "visibility");
+  passes::VisibilityInputs in;
+  in.ids = &ids;
+  in.depth = &depth;
+  in.indexBuffer = gpuScene.indices.handle();
+  in.draws = draws.handle();
+  in.drawCount = stats.handle();
+  in.drawCountOffset = STAT_DRAW_COUNT * sizeof(uint32_t);
+  in.maxDraws = capacity;
+  visibility.record(cmd, pipelineLayout, set, in);
+  timestamps->end(cmd, t);
+  VK_CHECK(vkEndCommandBuffer(cmd));
+
+  // shade
+  cmd = cmds[used++];
+  beginCmd(cmd);
+  gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                    VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  t = timestamps->begin(cmd, "shade");
+  VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
+  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  shade.record(cmd, pipelineLayout, set, w, h);
+  timestamps->end(cmd, t);
+  VK_CHECK(vkEndCommandBuffer(cmd));
+  (void)options;
+}
+
+Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  for (double v : {camera.position.x, camera.position.y, camera.position.z, camera.target.x, camera.target.y,
+                   camera.target.z, camera.fovY, camera.nearPlane})
+    if (!std::isfinite(v)) return makeError(ErrorCode::InvalidArgument, "camera has a non-finite component");
+  if (glm::length(camera.target - camera.position) <= 0.0 || camera.nearPlane <= 0.0 || camera.fovY <= 0.0 ||
+      camera.fovY >= M_PI)
+    return makeError(ErrorCode::InvalidArgument, "camera: target must differ from position, near > 0, 0 < fov < 180 deg");
+  if (glm::length(glm::cross(glm::normalize(camera.target - camera.position), glm::normalize(camera.up))) < 1e-9)
+    return makeError(ErrorCode::InvalidArgument, "camera: view direction is parallel to the up vector");
+
+  const auto t0 = Clock::now();
+  const uint32_t w = config.width, h = config.height;
+  FrameMath math = computeFrameMath(camera, w, h);
+  gpu::FrameData fd = frameData(camera, math, options);
+  std::memcpy(frameBuffer.mapped(), &fd, sizeof(fd));
+
+  FrameResult result;
+  FrameStats& st = result.stats;
+  st.device = device.name();
+  st.path = options.path;
+  st.width = w;
+  st.height = h;
+  st.objects = gpuScene.objectCount;
+  st.drawCapacity = capacity;
+  st.ids = encoding;
+  st.sceneBytes = gpuScene.bytes;
+
+  uint32_t used = 0;
+  // setup: queries, counters
+  VkCommandBuffer cmd = cmds[used++];
+  beginCmd(cmd);
+  timestamps->reset(cmd);
+  vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);
+  VK_CHECK(vkEndCommandBuffer(cmd));
+
+  const gpu::Image* colorSource = &color;
+  if (options.path == RenderPath::Visbuf) {
+    recordVisbuf(options, used);
+    st.targetBytesPerPixel = gpu::formatBytes(ids.format()) + 4 /*depth*/ + 8 /*colour*/;
+  } else {
+    std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
+    if (options.readDraws)
+      for (const auto& d : fdraws) result.drawnObjects.push_back(d.objectId);
+    cmd = cmds[used++];
+    beginCmd(cmd);
+    gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                      VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    uint32_t t = timestamps->begin(cmd, "forward");
+    forward.record(cmd, pipelineLayout, set, color, kBackground, depth, gpuScene.indices.handle(), fdraws);
+    timestamps->end(cmd, t);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+    st.targetBytesPerPixel = 4 /*depth*/ + 8 /*colour*/;
+  }
+
+  // readback
+  cmd = cmds[used++];
+  beginCmd(cmd);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                VK_ACCESS_2_TRANSFER_READ_BIT);
+  VkBufferCopy statsCopy{0, 0, STAT_COUNT * sizeof(uint32_t)};
+  vkCmdCopyBuffer(cmd, stats.handle(), statsReadback.handle(), 1, &statsCopy);
+  if (options.readColor) {
+    VkImageLayout from = options.path == RenderPath::Visbuf ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    gpu::imageBarrier(cmd, *colorSource, from, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                      VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, *colorSource, colorReadback);
+  }
+  const bool readIds = options.readIds && options.path == RenderPath::Visbuf;
+  const bool readDraws = (readIds || options.readDraws) && options.path == RenderPath::Visbuf;
+  if (readDraws) {
+    if (!drawsReadback)
+      drawsReadback = gpu::Buffer(device, draws.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+    VkBufferCopy dc{0, 0, draws.size()};
+    vkCmdCopyBuffer(cmd, draws.handle(), drawsReadback.handle(), 1, &dc);
+  }
+  if (readIds) {
+    gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                      VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, ids, idsReadback);
+  }
+  VK_CHECK(vkEndCommandBuffer(cmd));
+
+  const auto t1 = Clock::now();
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.commandBufferCount = used;
+  si.pCommandBuffers = cmds.data();
+  VK_CHECK(vkResetFences(device.device(), 1, &fence));
+  VK_CHECK(vkQueueSubmit(device.queue(), 1, &si, fence));
+  VK_CHECK(vkWaitForFences(device.device(), 1, &fence, VK_TRUE, UINT64_MAX));
+  const auto t2 = Clock::now();
+
+  st.passMs = timestamps->read();
+  for (auto& p : st.passMs) st.gpuMs += p.second;
+  if (options.path == RenderPath::Visbuf) {
+    const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
+    st.objectsTested = gpuScene.objectCount;
+    st.frustumCulled = s[STAT_FRUSTUM_CULLED];
+    st.drawsAppended = s[STAT_DRAW_COUNT];
+    st.drawsRendered = std::min(st.drawsAppended, capacity);
+    st.drawOverflow = s[STAT_DRAW_OVERFLOW];
+    st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
+    st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
+  }
+  while (!st.lodHistogram.empty() && st.lodHistogram.back() == 0) st.lodHistogram.pop_back();
+
+  result.width = w;
+  result.height = h;
+  const size_t pixels = size_t(w) * h;
+  if (options.readColor) {
+    result.color.resize(pixels * 4);
+    const uint16_t* half = static_cast<const uint16_t*>(colorReadback.mapped());
+    for (size_t i = 0; i < pixels * 4; ++i) result.color[i] = glm::unpackHalf1x16(half[i]);
+  }
+  if (readDraws) {
+    const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
+    for (uint32_t i = 0; i < st.drawsRendered; ++i) result.drawnObjects.push_back(dr[i].firstInstance);
+  }
+  if (readIds) {
+    result.ids.assign(pixels * 2, 0);
+    const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
+    const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
+    for (size_t i = 0; i < pixels; ++i) {
+      uint32_t slot, tri;
+      if (encoding.wide) {
+        if (raw[2 * i] == VIS_NOTHING) continue;
+        slot = raw[2 * i] - 1;
+        tri = raw[2 * i + 1];
+      } else {
+        if (raw[i] == VIS_NOTHING) continue;
+        uint32_t v = raw[i] - 1;
+        slot = v >> encoding.triangleBits;
+        tri = v & ((1u << encoding.triangleBits) - 1u);
+      }
+      if (slot >= st.drawsRendered) {  // cannot happen unless the GPU misbehaved: make it loud
+        result.ids[2 * i] = 0xFFFFFFFFu;
+        continue;
+      }
+      result.ids[2 * i] = dr[slot].firstInstance + 1;
+      result.ids[2 * i + 1] = tri;
+    }
+  }
+  const auto t3 = Clock::now();
+  st.cpuRecordMs = std::chrono::duration<double, std::milli>(t1 - t0).count();
+  st.wallMs = std::chrono::duration<double, std::milli>(t3 - t1).count();
+  (void)t2;
+  return result;
+}
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Renderer::~Renderer() = default;
+
+Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Scene& scene,
+                                                   const RendererConfig& config) {
+  if (config.width == 0 || config.height == 0 || config.width > 16384 || config.height > 16384)
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("image size {}x{} outside 1..16384", config.width, config.height));
+  auto impl = std::make_unique<Impl>(device, scene);
+  impl->config = config;
+  Result<GpuScene> g = uploadScene(device, scene);
+  if (!g) return g.error();
+  impl->gpuScene = std::move(g.value());
+  impl->capacity = config.drawCapacity ? config.drawCapacity : std::max<uint32_t>(1, impl->gpuScene.objectCount);
+  const uint64_t drawBytes = uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
+  if (drawBytes > device.properties().limits.maxStorageBufferRange)
+    return makeError(ErrorCode::CapacityExceeded,
+                     fmt::format("draw capacity {} needs {:.1f} MiB, over maxStorageBufferRange", impl->capacity,
+                                 drawBytes / 1048576.0));
+  impl->encoding = chooseIdEncoding(impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
+  impl->createLayouts();
+  impl->cull = passes::CullPass::create(device, impl->pipelineLayout);
+  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout);
+  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout);
+  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout);
+  impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                  gpu::MemoryUse::HostVisible);
+  impl->draws = gpu::Buffer(device, drawBytes,
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                            gpu::MemoryUse::DeviceLocal);
+  impl->stats = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t),
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            gpu::MemoryUse::DeviceLocal);
+  impl->statsReadback = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                    gpu::MemoryUse::HostVisible);
+  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 8);
+  impl->createTargets(config.width, config.height);
+  return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+Status Renderer::resize(uint32_t width, uint32_t height) {
+  if (width == 0 || height == 0 || width > 16384 || height > 16384)
+    return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
+  impl_->createTargets(width, height);
+  return {};
+}
+
+Result<FrameResult> Renderer::renderFrame(const Camera& camera, const FrameOptions& options) {
+  return impl_->render(camera, options);
+}
+
+const IdEncoding& Renderer::idEncoding() const { return impl_->encoding; }
+
+}  // namespace visbuf

@@ -1,0 +1,106 @@
+// The public API of the visbuf module, used by tools/visbuf exactly as a host engine would:
+//
+//   auto device = gpu::Device::create({});          // or gpu::Device::adopt(hostHandles)
+//   auto renderer = Renderer::create(**device, scene, {.width = 1920, .height = 1080});
+//   auto frame = (*renderer)->renderFrame(camera, {});  // colour, IDs, per-pass GPU times, stats
+//
+// The renderer owns the GPU mirror of the scene, the frame's targets and pipelines. One frame is in
+// flight at a time: renderFrame records, submits and waits, then reads back what was asked for.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/result.h"
+#include "gpu/device.h"
+#include "scene/scene.h"
+
+namespace visbuf {
+
+enum class RenderPath { Visbuf, Forward };
+enum class CullMode { None, Frustum };
+
+const char* renderPathName(RenderPath path);
+const char* cullModeName(CullMode mode);
+
+struct RendererConfig {
+  uint32_t width = 1920;
+  uint32_t height = 1080;
+  uint32_t drawCapacity = 0;  // max draw commands per frame; 0 = one per object (never overflows)
+  bool forceWideIds = false;  // use the 64-bit ID target even when 32 bits fit
+};
+
+struct FrameOptions {
+  RenderPath path = RenderPath::Visbuf;
+  CullMode cull = CullMode::Frustum;
+  float lodErrorPixels = 1.0f;  // <= 0: LOD off (always the full mesh)
+  bool readColor = true;        // read the colour image back (RGBA float, linear)
+  bool readIds = false;         // visbuf path: decode IDs per pixel (object + 1, triangle in its LOD)
+  bool readDraws = false;       // return the IDs of the objects drawn (visbuf: from the GPU's commands)
+};
+
+// How the visibility target's bits are split (DESIGN.md property 4).
+struct IdEncoding {
+  bool wide = false;            // rg32ui (64 bits) instead of r32ui
+  uint32_t triangleBits = 0;    // narrow: low bits hold the triangle index
+  uint32_t slotBits = 0;        // bits needed for a draw slot (capacity)
+  std::string describe() const;
+};
+
+struct FrameStats {
+  std::string device;
+  RenderPath path = RenderPath::Visbuf;
+  uint32_t width = 0, height = 0;
+  uint32_t objects = 0;
+  uint32_t objectsTested = 0;
+  uint32_t frustumCulled = 0;
+  uint32_t drawsAppended = 0;   // draws the cull pass produced (visible objects)
+  uint32_t drawsRendered = 0;   // min(appended, capacity)
+  uint32_t drawCapacity = 0;
+  uint32_t drawOverflow = 0;    // visible objects dropped for lack of capacity (reported, never silent)
+  uint64_t trianglesDrawn = 0;
+  std::vector<uint32_t> lodHistogram;  // draws per LOD level
+  IdEncoding ids;
+  std::vector<std::pair<std::string, double>> passMs;  // GPU time per pass, recording order
+  double gpuMs = 0.0;           // sum of pass times
+  double cpuRecordMs = 0.0;     // CPU time to cull (forward) and record
+  double wallMs = 0.0;          // submit to fence, plus readback conversion
+  uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
+  uint64_t targetBytesPerPixel = 0;
+};
+
+struct FrameResult {
+  uint32_t width = 0, height = 0;
+  std::vector<float> color;     // RGBA, linear, row-major, top row first
+  std::vector<uint32_t> ids;    // 2 per pixel: object ID + 1 (0 = nothing), triangle index in its LOD
+  std::vector<uint32_t> drawnObjects;  // with readDraws: object IDs drawn this frame (any order)
+  FrameStats stats;
+};
+
+class Renderer {
+ public:
+  static Result<std::unique_ptr<Renderer>> create(gpu::Device& device, const Scene& scene,
+                                                  const RendererConfig& config);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Recreates the screen targets (the ID encoding may change with the capacity, not the size).
+  Status resize(uint32_t width, uint32_t height);
+  Result<FrameResult> renderFrame(const Camera& camera, const FrameOptions& options);
+  const IdEncoding& idEncoding() const;
+
+  struct Impl;
+
+ private:
+  explicit Renderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Chooses the ID split for a draw capacity and the largest triangle count of one draw.
+IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw, bool forceWide);
+
+}  // namespace visbuf

@@ -1,0 +1,181 @@
+#include "scene/generate.h"
+
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace visbuf {
+
+uint64_t Rng::next() {
+  uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+MeshSource makeTorusKnot(uint32_t segments, uint32_t sides) {
+  MeshSource m;
+  m.name = "torus-knot";
+  const double p = 2.0, q = 3.0, tube = 0.12, scale = 1.0 / 1.45;
+  auto curve = [&](double t) {
+    double r = 2.0 + std::cos(q * t);
+    return glm::dvec3(r * std::cos(p * t), r * std::sin(p * t), -std::sin(q * t)) * 0.5;
+  };
+  for (uint32_t i = 0; i < segments; ++i) {
+    double t = 2.0 * M_PI * i / segments;
+    glm::dvec3 c = curve(t);
+    glm::dvec3 tangent = glm::normalize(curve(t + 1e-4) - curve(t - 1e-4));
+    glm::dvec3 normal = glm::normalize(curve(t + 1e-4) + curve(t - 1e-4) - 2.0 * c);
+    glm::dvec3 binormal = glm::normalize(glm::cross(tangent, normal));
+    normal = glm::cross(binormal, tangent);
+    for (uint32_t j = 0; j < sides; ++j) {
+      double a = 2.0 * M_PI * j / sides;
+      glm::dvec3 dir = std::cos(a) * normal + std::sin(a) * binormal;
+      m.positions.push_back(glm::vec3((c + tube * dir) * scale));
+      m.normals.push_back(glm::vec3(dir));
+      m.uvs.push_back(glm::vec2(float(i) / segments, float(j) / sides));
+    }
+  }
+  for (uint32_t i = 0; i < segments; ++i)
+    for (uint32_t j = 0; j < sides; ++j) {
+      uint32_t a = i * sides + j, b = ((i + 1) % segments) * sides + j;
+      uint32_t c = ((i + 1) % segments) * sides + (j + 1) % sides, d = i * sides + (j + 1) % sides;
+      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    }
+  return m;
+}
+
+namespace {
+// Adds an n x n grid on the plane origin + u*s + v*t (s,t in [0,1]), facing cross(u, v).
+void addQuadGrid(MeshSource& m, glm::vec3 origin, glm::vec3 u, glm::vec3 v, uint32_t n) {
+  glm::vec3 normal = glm::normalize(glm::cross(u, v));
+  uint32_t base = uint32_t(m.positions.size());
+  for (uint32_t y = 0; y <= n; ++y)
+    for (uint32_t x = 0; x <= n; ++x) {
+      float s = float(x) / n, t = float(y) / n;
+      m.positions.push_back(origin + u * s + v * t);
+      m.normals.push_back(normal);
+      m.uvs.push_back({s, t});
+    }
+  for (uint32_t y = 0; y < n; ++y)
+    for (uint32_t x = 0; x < n; ++x) {
+      uint32_t a = base + y * (n + 1) + x, b = a + 1, c = a + n + 2, d = a + n + 1;
+      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    }
+}
+}  // namespace
+
+MeshSource makeBox(uint32_t n) {
+  MeshSource m;
+  m.name = "box";
+  const float h = 0.5f;
+  addQuadGrid(m, {-h, -h, h}, {1, 0, 0}, {0, 1, 0}, n);    // +Z
+  addQuadGrid(m, {h, -h, -h}, {-1, 0, 0}, {0, 1, 0}, n);   // -Z
+  addQuadGrid(m, {h, -h, h}, {0, 0, -1}, {0, 1, 0}, n);    // +X
+  addQuadGrid(m, {-h, -h, -h}, {0, 0, 1}, {0, 1, 0}, n);   // -X
+  addQuadGrid(m, {-h, h, h}, {1, 0, 0}, {0, 0, -1}, n);    // +Y
+  addQuadGrid(m, {-h, -h, -h}, {1, 0, 0}, {0, 0, 1}, n);   // -Y
+  return m;
+}
+
+MeshSource makeGround(uint32_t n) {
+  MeshSource m;
+  m.name = "ground";
+  addQuadGrid(m, {-0.5f, 0.0f, 0.5f}, {1, 0, 0}, {0, 0, -1}, n);
+  return m;
+}
+
+namespace {
+std::vector<Material> palette() {
+  return {{"clay", {0.80f, 0.45f, 0.30f, 1.0f}}, {"sage", {0.45f, 0.65f, 0.40f, 1.0f}},
+          {"slate", {0.35f, 0.45f, 0.70f, 1.0f}}, {"sand", {0.85f, 0.78f, 0.55f, 1.0f}},
+          {"plum", {0.60f, 0.35f, 0.60f, 1.0f}}, {"ash", {0.70f, 0.70f, 0.72f, 1.0f}}};
+}
+}  // namespace
+
+Result<Scene> makeFieldScene(const FieldParams& params) {
+  if (params.objects == 0) return makeError(ErrorCode::InvalidArgument, "field: --objects must be at least 1");
+  Scene scene;
+  scene.name = "field";
+  Result<Mesh> mesh = buildMesh(params.mesh ? *params.mesh : makeTorusKnot());
+  if (!mesh) return mesh.error();
+  // Normalise the instanced mesh to unit bounding radius so scale [2,4) means the same for any mesh.
+  glm::vec4 s = mesh->boundsSphere;
+  const double unit = 1.0 / std::max(double(s.w), 1e-12);
+  scene.meshes.push_back(std::move(mesh.value()));
+  scene.materials = palette();
+  Rng rng(params.seed);
+  scene.objects.reserve(params.objects);
+  for (uint32_t i = 0; i < params.objects; ++i) {
+    glm::dvec3 pos(rng.uniform(-params.extent, params.extent), rng.uniform(-params.extent, params.extent),
+                   rng.uniform(-params.extent, params.extent));
+    double scale = rng.uniform(2.0, 4.0);
+    glm::dvec3 axis(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    if (glm::length(axis) < 1e-6) axis = {0, 1, 0};
+    double angle = glm::radians(rng.uniform(0.0, 90.0));
+    glm::dmat4 t = glm::translate(glm::dmat4(1.0), pos) * glm::rotate(glm::dmat4(1.0), angle, glm::normalize(axis)) *
+                   glm::scale(glm::dmat4(1.0), glm::dvec3(scale * unit)) *
+                   glm::translate(glm::dmat4(1.0), -glm::dvec3(glm::vec3(s)));
+    scene.objects.push_back({t, 0, uint32_t(i % scene.materials.size())});
+  }
+  scene.defaultCamera.position = {0.0, 0.0, params.extent * 1.6};
+  scene.defaultCamera.target = {0.0, 0.0, 0.0};
+  scene.defaultCamera.nearPlane = 0.1;
+  return scene;
+}
+
+Result<Scene> makeCityScene(const CityParams& params) {
+  if (params.objects < 16) return makeError(ErrorCode::InvalidArgument, "city: --objects must be at least 16");
+  Scene scene;
+  scene.name = "city";
+  for (MeshSource src : {makeBox(8), makeGround(64), makeTorusKnot(48, 12)}) {
+    Result<Mesh> m = buildMesh(src);
+    if (!m) return m.error();
+    scene.meshes.push_back(std::move(m.value()));
+  }
+  scene.materials = palette();
+  scene.materials.push_back({"asphalt", {0.25f, 0.25f, 0.27f, 1.0f}});
+  const uint32_t asphalt = uint32_t(scene.materials.size() - 1);
+  // Each block: one building and ~8 clutter objects along its kerb.
+  const uint32_t perBlock = 9;
+  const uint32_t blocks = std::max<uint32_t>(1, (params.objects - 1) / perBlock);
+  const uint32_t grid = std::max<uint32_t>(2, uint32_t(std::ceil(std::sqrt(double(blocks)))));
+  const double pitch = 40.0, street = 12.0;
+  const double half = grid * pitch * 0.5;
+  Rng rng(params.seed);
+  // Ground sits at y = 0; buildings start below it so no surfaces are coplanar (no depth ties).
+  scene.objects.push_back({glm::scale(glm::dmat4(1.0), glm::dvec3(grid * pitch + 200.0, 1.0, grid * pitch + 200.0)),
+                           1, asphalt});
+  uint32_t placed = 0;
+  for (uint32_t gz = 0; gz < grid && placed < blocks; ++gz)
+    for (uint32_t gx = 0; gx < grid && placed < blocks; ++gx, ++placed) {
+      double cx = -half + (gx + 0.5) * pitch, cz = -half + (gz + 0.5) * pitch;
+      double w = pitch - street - rng.uniform(0.0, 6.0), d = pitch - street - rng.uniform(0.0, 6.0);
+      double h = rng.uniform(8.0, 60.0);
+      glm::dmat4 t = glm::translate(glm::dmat4(1.0), glm::dvec3(cx, h * 0.5 - 0.5, cz)) *
+                     glm::scale(glm::dmat4(1.0), glm::dvec3(w, h + 1.0, d));
+      scene.objects.push_back({t, 0, uint32_t(rng.next() % 6)});
+      for (uint32_t k = 0; k < perBlock - 1; ++k) {
+        // Clutter on the pavement ring around the building.
+        double side = double(k % 4);
+        double along = rng.uniform(-0.45, 0.45) * (pitch - street);
+        double off = (pitch - street) * 0.5 + 2.5;
+        glm::dvec3 p = side == 0 ? glm::dvec3(along, 0, off) : side == 1 ? glm::dvec3(along, 0, -off)
+                     : side == 2 ? glm::dvec3(off, 0, along) : glm::dvec3(-off, 0, along);
+        double sc = rng.uniform(0.8, 1.6);
+        glm::dmat4 c = glm::translate(glm::dmat4(1.0), glm::dvec3(cx, sc * 1.05, cz) + p) *
+                       glm::rotate(glm::dmat4(1.0), rng.uniform(0.0, 6.28), glm::dvec3(0, 1, 0)) *
+                       glm::scale(glm::dmat4(1.0), glm::dvec3(sc));
+        scene.objects.push_back({c, 2, uint32_t(rng.next() % 6)});
+      }
+    }
+  // Street level, looking down the avenue between the first two columns of blocks.
+  double streetX = -half + pitch;
+  scene.defaultCamera.position = {streetX, 1.7, half - 5.0};
+  scene.defaultCamera.target = {streetX + 8.0, 3.0, -half};
+  scene.defaultCamera.nearPlane = 0.05;
+  scene.lightDirection = glm::normalize(glm::vec3(0.5f, 0.8f, 0.3f));
+  return scene;
+}
+
+}  // namespace visbuf

@@ -1,0 +1,49 @@
+// Seeded, deterministic built-in scenes and procedural meshes (no external files needed).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "core/result.h"
+#include "scene/scene.h"
+
+namespace visbuf {
+
+// A (2,3) torus knot, closed, ~28,800 triangles by default (similar to the peer's 28,944-triangle
+// kitten), fitting in a unit-radius sphere.
+MeshSource makeTorusKnot(uint32_t segments = 240, uint32_t sides = 60);
+// Axis-aligned unit cube [-0.5,0.5]^3 with flat normals, each face split into n x n quads.
+MeshSource makeBox(uint32_t subdivisions = 1);
+// Flat square [-0.5,0.5]^2 in the XZ plane, facing +Y, split into n x n quads.
+MeshSource makeGround(uint32_t subdivisions = 1);
+
+struct FieldParams {
+  uint32_t objects = 10000;
+  uint64_t seed = 1;
+  double extent = 300.0;  // positions uniform in [-extent, extent]^3
+  std::optional<MeshSource> mesh;  // instanced mesh; the torus knot when empty
+};
+// The peer stress layout: N instances, positions uniform in the cube, scale in [2,4), random unit
+// axis, angle in [0,90) degrees.
+Result<Scene> makeFieldScene(const FieldParams& params);
+
+struct CityParams {
+  uint32_t objects = 20000;  // approximate total (buildings + clutter + ground)
+  uint64_t seed = 1;
+};
+// A grid of buildings with street clutter and a street-level camera: heavy occlusion.
+Result<Scene> makeCityScene(const CityParams& params);
+
+// Deterministic generator (splitmix64), identical on every platform.
+class Rng {
+ public:
+  explicit Rng(uint64_t seed) : state_(seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull) {}
+  uint64_t next();
+  double uniform() { return double(next() >> 11) * 0x1.0p-53; }  // [0,1)
+  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+
+ private:
+  uint64_t state_;
+};
+
+}  // namespace visbuf

@@ -1,0 +1,71 @@
+#include "scene/gpu_scene.h"
+
+#include <fmt/format.h>
+
+namespace visbuf {
+
+gpu::ObjectData packObject(const Object& object, const Scene& scene) {
+  gpu::ObjectData d{};
+  const glm::dmat4& m = object.transform;
+  const glm::dvec3 t = glm::dvec3(m[3]) - scene.anchor;
+  d.row0 = glm::vec4(float(m[0][0]), float(m[1][0]), float(m[2][0]), float(t.x));
+  d.row1 = glm::vec4(float(m[0][1]), float(m[1][1]), float(m[2][1]), float(t.y));
+  d.row2 = glm::vec4(float(m[0][2]), float(m[1][2]), float(m[2][2]), float(t.z));
+  d.meshIndex = object.mesh;
+  d.materialIndex = object.material;
+  d.maxScale = float(maxScaleOf(m) * (1.0 + 1e-6));
+  d.flags = 0;
+  return d;
+}
+
+Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
+  Status valid = validateScene(scene);
+  if (!valid) return valid.error();
+  GpuScene g;
+  std::vector<gpu::Vertex> vertices;
+  std::vector<uint32_t> indices;
+  for (const Mesh& mesh : scene.meshes) {
+    gpu::MeshData md{};
+    md.boundsSphere = mesh.boundsSphere;
+    md.vertexOffset = uint32_t(vertices.size());
+    md.vertexCount = uint32_t(mesh.vertices.size());
+    md.lodCount = uint32_t(mesh.lods.size());
+    for (size_t l = 0; l < mesh.lods.size(); ++l)
+      md.lods[l] = {uint32_t(indices.size()) + mesh.lods[l].firstIndex, mesh.lods[l].indexCount, mesh.lods[l].error, 0};
+    g.maxTrianglesPerDraw = std::max(g.maxTrianglesPerDraw, mesh.triangleCount(0));
+    vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
+    indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
+    g.meshTable.push_back(md);
+  }
+  std::vector<gpu::ObjectData> objects;
+  objects.reserve(scene.objects.size());
+  for (const Object& o : scene.objects) objects.push_back(packObject(o, scene));
+  std::vector<gpu::MaterialData> materials;
+  for (const Material& m : scene.materials) materials.push_back({m.baseColor, glm::vec4(0.0f)});
+
+  const uint64_t limit = device.properties().limits.maxStorageBufferRange;
+  auto check = [&](const char* what, uint64_t bytes) -> Status {
+    if (bytes > limit)
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("{} buffer needs {:.1f} MiB, over this device's maxStorageBufferRange of "
+                                   "{:.1f} MiB", what, bytes / 1048576.0, limit / 1048576.0));
+    return {};
+  };
+  for (auto [what, bytes] : {std::pair{"vertex", vertices.size() * sizeof(gpu::Vertex)},
+                             std::pair{"index", indices.size() * sizeof(uint32_t)},
+                             std::pair{"object", objects.size() * sizeof(gpu::ObjectData)}}) {
+    Status s = check(what, bytes);
+    if (!s) return s.error();
+  }
+  const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  g.vertices = gpu::uploadVector(device, vertices, ssbo);
+  g.indices = gpu::uploadVector(device, indices, ssbo | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+  g.meshes = gpu::uploadVector(device, g.meshTable, ssbo);
+  g.objects = gpu::uploadVector(device, objects, ssbo);
+  g.materials = gpu::uploadVector(device, materials, ssbo);
+  g.objectCount = uint32_t(objects.size());
+  g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size();
+  return g;
+}
+
+}  // namespace visbuf

@@ -1,0 +1,22 @@
+// CPU truth for one mesh: indexed triangle list plus its LOD chain.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace visbuf {
+
+// Geometry as imported or generated, before optimisation. Triangle list, counter-clockwise front faces.
+struct MeshSource {
+  std::string name;
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;  // same count as positions (generated when absent)
+  std::vector<glm::vec2> uvs;      // empty or same count as positions
+  std::vector<uint32_t> colors;    // empty or same count as positions, RGBA8 (R in low byte)
+  std::vector<uint32_t> indices;   // 3 per triangle, each < positions.size()
+};
+
+}  // namespace visbuf

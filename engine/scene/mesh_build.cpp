@@ -1,0 +1,140 @@
+// Mesh optimisation and LOD chain (meshoptimizer 0.18): remap/dedup, vertex cache, overdraw, fetch,
+// then simplification levels, each simplified from the full mesh so the recorded error is measured
+// against the original surface, not accumulated guesswork.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <meshoptimizer.h>
+
+#include "scene/scene.h"
+
+namespace visbuf {
+
+namespace {
+
+uint32_t packColor(glm::vec4 c) {
+  auto q = [](float v) { return uint32_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
+  return q(c.r) | (q(c.g) << 8) | (q(c.b) << 16) | (q(c.a) << 24);
+}
+
+}  // namespace
+
+uint32_t octEncode(glm::vec3 n) {
+  float l1 = std::abs(n.x) + std::abs(n.y) + std::abs(n.z);
+  if (!(l1 > 0.0f)) return octEncode({0.0f, 0.0f, 1.0f});
+  glm::vec2 p(n.x / l1, n.y / l1);
+  if (n.z < 0.0f) {
+    glm::vec2 s(p.x >= 0.0f ? 1.0f : -1.0f, p.y >= 0.0f ? 1.0f : -1.0f);
+    p = (1.0f - glm::abs(glm::vec2(p.y, p.x))) * s;
+  }
+  auto q = [](float v) { return uint32_t(uint16_t(int16_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f)))); };
+  return q(p.x) | (q(p.y) << 16);
+}
+
+glm::vec3 octDecode(uint32_t packed) {
+  auto s = [](uint32_t v) { return std::max(float(int16_t(uint16_t(v))) / 32767.0f, -1.0f); };
+  glm::vec2 f(s(packed & 0xFFFF), s(packed >> 16));
+  glm::vec3 n(f.x, f.y, 1.0f - std::abs(f.x) - std::abs(f.y));
+  float t = std::max(-n.z, 0.0f);
+  n.x += n.x >= 0.0f ? -t : t;
+  n.y += n.y >= 0.0f ? -t : t;
+  return glm::normalize(n);
+}
+
+Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options) {
+  const size_t vertexCount = source.positions.size();
+  if (vertexCount == 0 || source.indices.empty() || source.indices.size() % 3 != 0)
+    return makeError(ErrorCode::MalformedInput,
+                     fmt::format("mesh '{}': needs vertices and a multiple of 3 indices (has {} / {})",
+                                 source.name, vertexCount, source.indices.size()));
+  if (source.normals.size() != vertexCount || (!source.uvs.empty() && source.uvs.size() != vertexCount) ||
+      (!source.colors.empty() && source.colors.size() != vertexCount))
+    return makeError(ErrorCode::MalformedInput, fmt::format("mesh '{}': attribute counts differ", source.name));
+  for (uint32_t i : source.indices)
+    if (i >= vertexCount)
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("mesh '{}': index {} out of range ({} vertices)", source.name, i, vertexCount));
+  for (size_t i = 0; i < vertexCount; ++i) {
+    const glm::vec3& p = source.positions[i];
+    const glm::vec3& n = source.normals[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(n.x) ||
+        !std::isfinite(n.y) || !std::isfinite(n.z))
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("mesh '{}': vertex {} has a non-finite position or normal", source.name, i));
+  }
+
+  // Interleave into the GPU vertex format, then deduplicate identical vertices.
+  std::vector<gpu::Vertex> raw(vertexCount);
+  for (size_t i = 0; i < vertexCount; ++i) {
+    gpu::Vertex& v = raw[i];
+    v.px = source.positions[i].x;
+    v.py = source.positions[i].y;
+    v.pz = source.positions[i].z;
+    v.normal = octEncode(glm::normalize(source.normals[i]));
+    v.u = source.uvs.empty() ? 0.0f : source.uvs[i].x;
+    v.v = source.uvs.empty() ? 0.0f : source.uvs[i].y;
+    v.color = source.colors.empty() ? packColor(glm::vec4(1.0f)) : source.colors[i];
+    v.pad = 0;
+  }
+  const size_t indexCount = source.indices.size();
+  std::vector<uint32_t> remap(vertexCount);
+  size_t unique = meshopt_generateVertexRemap(remap.data(), source.indices.data(), indexCount, raw.data(),
+                                              vertexCount, sizeof(gpu::Vertex));
+  Mesh mesh;
+  mesh.name = source.name;
+  mesh.vertices.resize(unique);
+  meshopt_remapVertexBuffer(mesh.vertices.data(), raw.data(), vertexCount, sizeof(gpu::Vertex), remap.data());
+  std::vector<uint32_t> lod0(indexCount);
+  meshopt_remapIndexBuffer(lod0.data(), source.indices.data(), indexCount, remap.data());
+
+  const float* pos = &mesh.vertices[0].px;
+  const size_t stride = sizeof(gpu::Vertex);
+  meshopt_optimizeVertexCache(lod0.data(), lod0.data(), indexCount, unique);
+  meshopt_optimizeOverdraw(lod0.data(), lod0.data(), indexCount, pos, unique, stride, 1.05f);
+  // Fetch order follows LOD0; coarser levels index a subset of the same vertices.
+  meshopt_optimizeVertexFetch(mesh.vertices.data(), lod0.data(), indexCount, mesh.vertices.data(), unique,
+                              stride);
+  pos = &mesh.vertices[0].px;
+
+  mesh.indices = lod0;
+  mesh.lods.push_back({0, uint32_t(indexCount), 0.0f});
+
+  const float scale = meshopt_simplifyScale(pos, unique, stride);
+  std::vector<uint32_t> scratch(indexCount);
+  size_t previous = indexCount;
+  float previousError = 0.0f;
+  while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
+    size_t target = std::max<size_t>((previous / 2) / 3 * 3, size_t(options.minTriangles) * 3);
+    float err = 0.0f;
+    size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
+                                    &err);
+    if (count > previous * options.minReduction) {
+      // Topology-preserving simplification stalled (seams, small islands): fall back to sloppy.
+      count = meshopt_simplifySloppy(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f,
+                                     &err);
+    }
+    if (count == 0 || count > previous * options.minReduction) break;  // no real reduction: chain ends
+    meshopt_optimizeVertexCache(scratch.data(), scratch.data(), count, unique);
+    float error = std::max(err * scale, previousError);  // non-decreasing, object-space units
+    mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
+    mesh.indices.insert(mesh.indices.end(), scratch.begin(), scratch.begin() + std::ptrdiff_t(count));
+    previous = count;
+    previousError = error;
+  }
+
+  // Bounding sphere: AABB centre, radius to the farthest vertex, padded by a relative epsilon so the
+  // float sphere contains every vertex after rounding.
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (size_t i = 0; i < unique; ++i) {
+    lo = glm::min(lo, mesh.position(uint32_t(i)));
+    hi = glm::max(hi, mesh.position(uint32_t(i)));
+  }
+  glm::dvec3 c = (glm::dvec3(lo) + glm::dvec3(hi)) * 0.5;
+  double r = 0.0;
+  for (size_t i = 0; i < unique; ++i) r = std::max(r, glm::length(glm::dvec3(mesh.position(uint32_t(i))) - c));
+  mesh.boundsSphere = glm::vec4(glm::vec3(c), float(r * (1.0 + 1e-5) + 1e-6));
+  return mesh;
+}
+
+}  // namespace visbuf

@@ -1,0 +1,90 @@
+// CPU truth of a scene: optimised meshes with LOD chains, materials, object instances, camera.
+// Positions are double on the CPU; the GPU mirror stores them relative to `anchor` in float.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/result.h"
+#include "scene/mesh.h"
+#include "shared/types.h"
+
+namespace visbuf {
+
+struct Lod {
+  uint32_t firstIndex = 0;  // relative to Mesh::indices
+  uint32_t indexCount = 0;
+  float error = 0.0f;       // object-space simplification error vs the full mesh (mesh units)
+};
+
+// A mesh ready for the geometry pool: deduplicated, cache/fetch-optimised, with its LOD chain.
+struct Mesh {
+  std::string name;
+  std::vector<gpu::Vertex> vertices;
+  std::vector<uint32_t> indices;  // every LOD, concatenated; indices are mesh-local
+  std::vector<Lod> lods;          // lods[0] = full mesh; error non-decreasing
+  glm::vec4 boundsSphere{0.0f};   // contains every vertex
+  uint32_t triangleCount(size_t lod = 0) const { return lods[lod].indexCount / 3; }
+  glm::vec3 position(uint32_t vertex) const {
+    const auto& v = vertices[vertex];
+    return {v.px, v.py, v.pz};
+  }
+};
+
+struct MeshBuildOptions {
+  uint32_t maxLods = MAX_LODS;     // including the full mesh
+  uint32_t minTriangles = 16;      // stop the chain once a level reaches this
+  float minReduction = 0.85f;      // a level must keep at most this fraction of the previous one
+};
+
+// Optimises a source mesh and builds its LOD chain with meshoptimizer. Errors on empty or invalid
+// input (indices out of range, non-finite positions).
+Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options = {});
+
+struct Material {
+  std::string name;
+  glm::vec4 baseColor{1.0f};  // linear
+};
+
+struct Object {
+  glm::dmat4 transform{1.0};  // object -> world (affine)
+  uint32_t mesh = 0;
+  uint32_t material = 0;
+};
+
+struct Camera {
+  glm::dvec3 position{0.0, 0.0, 5.0};
+  glm::dvec3 target{0.0};
+  glm::dvec3 up{0.0, 1.0, 0.0};
+  double fovY = glm::radians(60.0);  // vertical field of view, radians
+  double nearPlane = 0.1;            // reverse-Z, infinite far plane
+};
+
+struct Scene {
+  std::string name;
+  std::vector<Mesh> meshes;
+  std::vector<Material> materials;
+  std::vector<Object> objects;
+  glm::dvec3 anchor{0.0};  // GPU positions are relative to this point
+  Camera defaultCamera;
+  glm::vec3 lightDirection = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));  // towards the light
+
+  uint64_t totalTriangles() const;  // full-detail triangles over all objects
+};
+
+// Checks a scene before upload: indices, finite transforms, mesh/material references.
+Status validateScene(const Scene& scene);
+
+// World-space bounding sphere of an object (double precision, conservative: uses the largest
+// column norm of the 3x3 part as the scale).
+glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object);
+double maxScaleOf(const glm::dmat4& m);
+
+// Octahedral encoding of a unit normal into 2 x snorm16 (matches octDecode in shaders/common.glsl).
+uint32_t octEncode(glm::vec3 n);
+glm::vec3 octDecode(uint32_t packed);
+
+}  // namespace visbuf

@@ -1,0 +1,61 @@
+// Shared declarations of every pass: bindings, the object transform (the one definition of the raster
+// math, used by the visibility, shading and forward shaders alike), normal decode and lighting.
+#ifndef VISBUF_COMMON_GLSL
+#define VISBUF_COMMON_GLSL
+
+#include "shared/types.h"
+
+layout(set = 0, binding = BINDING_FRAME) uniform FrameBlock { FrameData frame; };
+layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
+layout(std430, set = 0, binding = BINDING_MESHES) readonly buffer MeshBlock { MeshData meshes[]; };
+layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer VertexBlock { Vertex vertices[]; };
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
+
+// Object space -> camera-relative world space. The translation is made camera-relative first
+// (anchor-relative translation + (anchor - camera)), so large coordinates cancel before the
+// rotation/scale part is added.
+vec3 objectToCamera(ObjectData o, vec3 p) {
+  precise vec3 t = vec3(o.row0.w, o.row1.w, o.row2.w) + frame.cameraOffset.xyz;
+  precise vec3 r = vec3(dot(o.row0.xyz, p), dot(o.row1.xyz, p), dot(o.row2.xyz, p));
+  precise vec3 w = r + t;
+  return w;
+}
+
+// The clip position, computed identically by the visibility vertex shader, the shading pass and the
+// forward vertex shader.
+vec4 clipPosition(ObjectData o, vec3 p) {
+  precise vec4 clip = frame.viewProj * vec4(objectToCamera(o, p), 1.0);
+  return clip;
+}
+
+vec3 vertexPosition(Vertex v) { return vec3(v.px, v.py, v.pz); }
+
+// Octahedral unit-vector decode (Cigolle et al. 2014, "A Survey of Efficient Representations for
+// Independent Unit Vectors").
+vec3 octDecode(uint packed) {
+  vec2 f = unpackSnorm2x16(packed);
+  vec3 n = vec3(f, 1.0 - abs(f.x) - abs(f.y));
+  float t = max(-n.z, 0.0);
+  n.x += n.x >= 0.0 ? -t : t;
+  n.y += n.y >= 0.0 ? -t : t;
+  return normalize(n);
+}
+
+// Normal to world space with the inverse transpose of the 3x3 part (its cofactor matrix, scaled by
+// sign(det)); not normalised, so that it commutes with interpolation.
+vec3 normalToWorld(ObjectData o, vec3 n) {
+  vec3 a = o.row0.xyz, b = o.row1.xyz, c = o.row2.xyz;
+  vec3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
+  float s = dot(a, bc) < 0.0 ? -1.0 : 1.0;
+  return s * vec3(dot(bc, n), dot(ca, n), dot(ab, n));
+}
+
+vec4 unpackColor(uint c) { return unpackUnorm4x8(c); }
+
+// The one lighting function of both paths: ambient + Lambert from one directional light.
+vec3 shadeSurface(vec3 normal, vec3 baseColor) {
+  float ndotl = max(dot(normal, frame.lightDir.xyz), 0.0);
+  return baseColor * (0.15 + frame.lightDir.w * ndotl);
+}
+
+#endif

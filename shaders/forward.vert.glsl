@@ -1,0 +1,18 @@
+#version 460
+// Forward reference path, vertex stage: same pulled vertex and same clip math as the visibility
+// pass; attributes are interpolated by the hardware (the accuracy reference for the shading pass).
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+
+layout(location = 0) out vec3 outNormal;  // world, not normalised (interpolation commutes with it)
+layout(location = 1) out vec4 outColor;
+layout(location = 2) flat out uint outMaterial;
+
+void main() {
+  ObjectData o = objects[gl_InstanceIndex];
+  Vertex v = vertices[gl_VertexIndex];
+  gl_Position = clipPosition(o, vertexPosition(v));
+  outNormal = normalToWorld(o, octDecode(v.normal));
+  outColor = unpackColor(v.color);
+  outMaterial = o.materialIndex;
+}

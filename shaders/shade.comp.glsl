@@ -1,0 +1,48 @@
+#version 460
+// Shading pass: one thread per pixel. ID -> draw -> object -> mesh level -> 3 indices -> 3 vertices,
+// the same clip math as the visibility vertex shader, perspective-correct barycentrics with
+// analytic derivatives, attribute interpolation, lighting. Background pixels are skipped (the
+// colour image was cleared to the background before).
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "shared/barycentrics.h"
+
+layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
+layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
+layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
+layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
+layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
+  uvec2 raw = texelFetch(visibility, p, 0).xy;
+  if (raw.x == VIS_NOTHING) return;
+  uint slot, tri;
+  if (frame.wideIds != 0u) {
+    slot = raw.x - 1u;
+    tri = raw.y;
+  } else {
+    uint v = raw.x - 1u;
+    slot = v >> frame.triangleBits;
+    tri = v & ((1u << frame.triangleBits) - 1u);
+  }
+  DrawCommand d = draws[slot];
+  ObjectData o = objects[d.firstInstance];
+  uint base = d.firstIndex + 3u * tri;
+  Vertex v0 = vertices[indices[base + 0u] + uint(d.vertexOffset)];
+  Vertex v1 = vertices[indices[base + 1u] + uint(d.vertexOffset)];
+  Vertex v2 = vertices[indices[base + 2u] + uint(d.vertexOffset)];
+  vec4 c0 = clipPosition(o, vertexPosition(v0));
+  vec4 c1 = clipPosition(o, vertexPosition(v1));
+  vec4 c2 = clipPosition(o, vertexPosition(v2));
+  vec2 ndc = (vec2(p) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+  Barycentrics b = computeBarycentrics(c0, c1, c2, ndc, 2.0 * frame.viewport.zw);
+  vec3 l = b.lambda;
+
+  vec3 n = l.x * octDecode(v0.normal) + l.y * octDecode(v1.normal) + l.z * octDecode(v2.normal);
+  vec3 normal = normalize(normalToWorld(o, n));
+  vec4 vc = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
+  vec4 baseColor = materials[o.materialIndex].baseColor * vc;
+  imageStore(colorOut, p, vec4(shadeSurface(normal, baseColor.rgb), 1.0));
+}

@@ -1,0 +1,95 @@
+// GPU structs, defined once for C++ and GLSL (std430 / std140-compatible layouts: only vec4, mat4,
+// uint, float members; no vec3 or bool). Sizes are pinned by static_asserts in engine/gpu/types.cpp.
+#ifndef VISBUF_TYPES_H
+#define VISBUF_TYPES_H
+
+#include "config.h"
+
+#ifdef __cplusplus
+#include <cstdint>
+#include <glm/glm.hpp>
+namespace visbuf::gpu {
+using uint = uint32_t;
+using vec4 = glm::vec4;
+using mat4 = glm::mat4;
+#endif
+
+// One vertex of the unified pool: 32 bytes.
+struct Vertex {
+  float px, py, pz;  // object-space position
+  uint normal;       // octahedral-encoded unit normal, 2 x snorm16 (x in low half)
+  float u, v;        // TEXCOORD_0
+  uint color;        // RGBA8, R in the low byte
+  uint pad;
+};
+
+// One LOD level: a range of the unified index pool. 16 bytes.
+struct LodData {
+  uint firstIndex;  // into the unified index buffer
+  uint indexCount;  // 3 per triangle
+  float error;      // object-space simplification error (units of the mesh), 0 for the full mesh
+  uint pad;
+};
+
+// A mesh of the pool. 32 + 16 * MAX_LODS bytes.
+struct MeshData {
+  vec4 boundsSphere;  // object space: xyz centre, w radius (contains every vertex of every LOD)
+  uint vertexOffset;  // added to every index (vertexOffset of the draw)
+  uint vertexCount;
+  uint lodCount;      // >= 1; lods[0] is the full mesh
+  uint pad;
+  LodData lods[MAX_LODS];
+};
+
+// One object instance: 64 bytes. The 3x4 affine transform maps object space to world space,
+// world relative to the scene anchor (see Scene::anchor); stored as rows.
+struct ObjectData {
+  vec4 row0;
+  vec4 row1;
+  vec4 row2;
+  uint meshIndex;
+  uint materialIndex;
+  float maxScale;  // largest singular value bound of the 3x3 part, scales the bounding radius and LOD error
+  uint flags;      // OBJECT_FLAG_*
+};
+#define OBJECT_FLAG_FLIP_WINDING 1u  // negative determinant: front faces are clockwise
+
+// Material: 32 bytes.
+struct MaterialData {
+  vec4 baseColor;  // linear RGBA
+  vec4 params;     // x: ambient occlusion-free ambient term, yzw reserved
+};
+
+// The indirect draw written by the cull pass: VkDrawIndexedIndirectCommand plus nothing else,
+// so the same buffer is the indirect argument buffer (stride 20 bytes).
+struct DrawCommand {
+  uint indexCount;
+  uint instanceCount;
+  uint firstIndex;
+  int vertexOffset;
+  uint firstInstance;  // object ID
+};
+
+// Per-frame constants (uniform buffer, std140 compatible). All positions are camera-relative:
+// the CPU computes (anchor - camera) in double and hands the rounded offset in cameraOffset.
+struct FrameData {
+  mat4 viewProj;        // rotation-only view (camera at origin) x reverse-Z infinite projection
+  vec4 cameraOffset;    // xyz: scene anchor minus camera position (double -> float), w unused
+  vec4 frustum[5];      // camera-relative planes (left, right, bottom, top, near): dot(n,p)+w >= 0 inside
+  vec4 lightDir;        // xyz: unit direction towards the light (world), w: intensity
+  vec4 viewport;        // x: width, y: height, z: 1/width, w: 1/height
+  float lodScale;       // pixels per world unit at distance 1: height / (2 tan(fovY/2))
+  float lodErrorPixels; // LOD threshold in pixels; <= 0 disables LOD (always level 0)
+  float nearPlane;
+  uint objectCount;
+  uint drawCapacity;
+  uint cullMode;        // CULL_NONE / CULL_FRUSTUM
+  uint triangleBits;    // ID split: low bits = triangle index within the draw's LOD
+  uint wideIds;         // 1: visibility target is rg32ui (x: slot+1, y: triangle); 0: r32ui packed
+};
+
+#ifdef __cplusplus
+}  // namespace visbuf::gpu
+#endif
+
+#endif

@@ -1,0 +1,160 @@
+// Culling is conservative: against a double-precision CPU reference over random cameras, and pixel for
+// pixel (IDs) against no culling at all along camera paths.
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "gpu_test_util.h"
+#include "render/frame_math.h"
+#include "scene/generate.h"
+
+using namespace visbuf;
+
+namespace {
+
+Scene fieldScene(uint32_t objects, bool lowPoly) {
+  FieldParams p;
+  p.objects = objects;
+  p.seed = 5;
+  if (lowPoly) p.mesh = makeTorusKnot(48, 12);  // 1,152 triangles: keeps "cull none" frames affordable
+  return makeFieldScene(p).value();
+}
+
+Scene cityScene(uint32_t objects) {
+  CityParams p;
+  p.objects = objects;
+  p.seed = 3;
+  return makeCityScene(p).value();
+}
+
+Camera randomCamera(std::mt19937& rng, const Scene& scene) {
+  // Cameras inside and around the scene's bounds, looking anywhere, various fields of view.
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (const Object& o : scene.objects) {
+    glm::dvec3 t(o.transform[3]);
+    lo = glm::min(lo, t);
+    hi = glm::max(hi, t);
+  }
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Camera c;
+  glm::dvec3 ext = hi - lo;
+  c.position = lo - 0.2 * ext + glm::dvec3(u(rng), u(rng), u(rng)) * ext * 1.4;
+  glm::dvec3 dir = glm::normalize(glm::dvec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) + glm::dvec3(1e-3));
+  c.target = c.position + dir * 10.0;
+  c.up = std::abs(dir.y) > 0.99 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+  c.fovY = glm::radians(20.0 + 90.0 * u(rng));
+  c.nearPlane = 0.05 + u(rng);
+  return c;
+}
+
+void checkConservative(const Scene& scene, const char* label) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  auto renderer = Renderer::create(dev, scene, {.width = 320, .height = 200});
+  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+  std::mt19937 rng(1234);
+  FrameOptions fo;
+  fo.cull = CullMode::Frustum;
+  fo.lodErrorPixels = 0.0f;
+  fo.readColor = false;
+  fo.readDraws = true;
+  size_t totalKept = 0, totalExtra = 0;
+  double worstExtra = 0.0;
+  for (int i = 0; i < 100; ++i) {
+    Camera cam = randomCamera(rng, scene);
+    auto frame = (*renderer)->renderFrame(cam, fo);
+    ASSERT_TRUE(frame.ok()) << frame.error().message;
+    std::vector<char> gpuKept(scene.objects.size(), 0);
+    for (uint32_t id : frame->drawnObjects) {
+      ASSERT_LT(id, scene.objects.size());
+      ASSERT_EQ(gpuKept[id], 0) << "object drawn twice";
+      gpuKept[id] = 1;
+    }
+    FrameMath fm = computeFrameMath(cam, 320, 200);
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+      glm::dvec4 s = objectBoundsWorld(scene, scene.objects[o]);
+      double dist = sphereFrustumDistance(fm, cam, glm::dvec3(s), s.w);  // <= 0: the reference keeps it
+      if (dist <= 0.0) {
+        ++totalKept;
+        ASSERT_TRUE(gpuKept[o]) << label << ": camera " << i << " dropped object " << o << " that the double "
+                                << "reference keeps (distance " << dist << ")";
+      } else if (gpuKept[o]) {
+        // Allowed only within the stated tolerance of a plane: 2e-5 x (|centre - camera|_1 + r) + 1e-5.
+        glm::dvec3 c = glm::dvec3(s) - cam.position;
+        double tol = 2e-5 * (std::abs(c.x) + std::abs(c.y) + std::abs(c.z) + s.w) + 1e-5;
+        ++totalExtra;
+        worstExtra = std::max(worstExtra, dist / tol);
+        EXPECT_LE(dist, tol) << label << ": camera " << i << " kept object " << o << " " << dist << " outside";
+      }
+    }
+  }
+  std::printf("%s: 100 cameras, %zu object-frames kept by the reference, %zu extra kept by the GPU "
+              "(worst at %.3f of the tolerance)\n", label, totalKept, totalExtra, worstExtra);
+  EXPECT_GT(totalKept, 0u);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// A camera path: orbit, fly-through, a cut, grazing views.
+std::vector<Camera> cameraPath(const Scene& scene, int frames, bool city) {
+  std::vector<Camera> path;
+  for (int i = 0; i < frames; ++i) {
+    double t = double(i) / frames;
+    Camera c = scene.defaultCamera;
+    if (city) {
+      c.position = scene.defaultCamera.position + glm::dvec3(0.0, 0.5 * std::sin(t * 6.28), -t * 150.0);
+      double yaw = std::sin(t * 12.0) * 1.2;
+      c.target = c.position + glm::dvec3(std::sin(yaw), -0.05, -std::cos(yaw));
+      if (i == frames / 2) c.position += glm::dvec3(30.0, 20.0, 10.0);  // a cut
+    } else {
+      double r = 420.0 * (1.0 - 0.9 * t);  // from outside into the field
+      c.position = {r * std::sin(t * 5.0), 80.0 * std::sin(t * 3.0), r * std::cos(t * 5.0)};
+      c.target = c.position + glm::dvec3(-std::sin(t * 5.0 + 0.3), -0.1, -std::cos(t * 5.0 + 0.3));
+      c.nearPlane = 0.1;
+    }
+    path.push_back(c);
+  }
+  return path;
+}
+
+void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint32_t h) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
+  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+  FrameOptions on, off;
+  on.lodErrorPixels = off.lodErrorPixels = 0.0f;  // LOD off: both draw the same triangles
+  on.readColor = off.readColor = false;
+  on.readIds = off.readIds = true;
+  on.cull = CullMode::Frustum;
+  off.cull = CullMode::None;
+  size_t covered = 0, culledTotal = 0;
+  int index = 0;
+  for (const Camera& cam : cameraPath(scene, frames, city)) {
+    auto a = (*renderer)->renderFrame(cam, on);
+    auto b = (*renderer)->renderFrame(cam, off);
+    ASSERT_TRUE(a.ok() && b.ok());
+    culledTotal += a->stats.frustumCulled;
+    size_t mismatches = 0;
+    for (size_t p = 0; p < a->ids.size(); p += 2) {
+      if (a->ids[p] != b->ids[p] || a->ids[p + 1] != b->ids[p + 1]) ++mismatches;
+      covered += a->ids[p] != 0;
+    }
+    ASSERT_EQ(mismatches, 0u) << "frame " << index << ": culling changed " << mismatches << " pixels";
+    ++index;
+  }
+  std::printf("%s %ux%u: %d frames identical with culling on/off (%zu covered pixels, %zu objects culled)\n",
+              city ? "city" : "field", w, h, frames, covered, culledTotal);
+  EXPECT_GT(covered, 0u);
+  EXPECT_GT(culledTotal, 0u) << "the path must exercise culling";
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+}  // namespace
+
+TEST(Culling, ConservativeVsDoubleReferenceField) { checkConservative(fieldScene(4000, true), "field"); }
+TEST(Culling, ConservativeVsDoubleReferenceCity) { checkConservative(cityScene(4000), "city"); }
+
+TEST(Culling, IdImageUnchangedByCullingField) { checkIdEquality(fieldScene(1500, true), false, 50, 317, 229); }
+TEST(Culling, IdImageUnchangedByCullingCity) { checkIdEquality(cityScene(1200), true, 50, 317, 229); }

@@ -1,0 +1,884 @@
+// Tests for importGltfMesh (engine/asset/gltf_import.h).
+//
+// Most tests write a tiny .gltf into a temporary folder: JSON built with nlohmann::json and one buffer embedded as a
+// base64 data URI, so every byte of the input is visible in the test. The tests at the end read the third-party
+// sample assets from VISBUF_SHARED_ASSETS_DIR (set by the build to <repo>/../shared/assets) and skip when that is
+// not defined or the file is missing.
+#include "asset/gltf_import.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <gtest/gtest.h>
+#include <meshoptimizer.h>
+#include <nlohmann/json.hpp>
+
+namespace visbuf {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+constexpr int kByte = 5120;
+constexpr int kUByte = 5121;
+constexpr int kShort = 5122;
+constexpr int kUShort = 5123;
+constexpr int kUInt = 5125;
+constexpr int kFloat = 5126;
+
+std::string base64(const std::vector<uint8_t>& data) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < data.size(); i += 3) {
+    const uint32_t b0 = data[i];
+    const uint32_t b1 = i + 1 < data.size() ? data[i + 1] : 0;
+    const uint32_t b2 = i + 2 < data.size() ? data[i + 2] : 0;
+    const uint32_t triple = (b0 << 16) | (b1 << 8) | b2;
+    out += kAlphabet[(triple >> 18) & 63];
+    out += kAlphabet[(triple >> 12) & 63];
+    out += i + 1 < data.size() ? kAlphabet[(triple >> 6) & 63] : '=';
+    out += i + 2 < data.size() ? kAlphabet[triple & 63] : '=';
+  }
+  return out;
+}
+
+// Builds a glTF document around one binary buffer: each add*() call appends raw data (4-byte aligned), a
+// bufferView over it and an accessor, and returns the accessor index.
+class DocBuilder {
+ public:
+  // Appends raw bytes and a bufferView over them; returns the bufferView index.
+  template <typename T>
+  int addView(const std::vector<T>& values, std::optional<int> byteStride = std::nullopt) {
+    while (bytes_.size() % 4 != 0) bytes_.push_back(0);
+    const size_t offset = bytes_.size();
+    bytes_.resize(offset + values.size() * sizeof(T));
+    if (!values.empty()) std::memcpy(bytes_.data() + offset, values.data(), values.size() * sizeof(T));
+    json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * sizeof(T)}};
+    if (byteStride) view["byteStride"] = *byteStride;
+    views_.push_back(view);
+    return static_cast<int>(views_.size()) - 1;
+  }
+
+  int addAccessor(json accessor) {
+    accessors_.push_back(std::move(accessor));
+    return static_cast<int>(accessors_.size()) - 1;
+  }
+
+  int addFloats(const std::vector<float>& values, const char* type, int components) {
+    const int view = addView(values);
+    return addAccessor({{"bufferView", view},
+                        {"componentType", kFloat},
+                        {"count", values.size() / static_cast<size_t>(components)},
+                        {"type", type}});
+  }
+  int addVec3(const std::vector<glm::vec3>& v) {
+    std::vector<float> flat;
+    for (const glm::vec3& p : v) flat.insert(flat.end(), {p.x, p.y, p.z});
+    return addFloats(flat, "VEC3", 3);
+  }
+  int addIndices16(const std::vector<uint16_t>& indices) {
+    const int view = addView(indices);
+    return addAccessor({{"bufferView", view}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}});
+  }
+
+  json& accessor(int index) { return accessors_[static_cast<size_t>(index)]; }
+  json& view(int index) { return views_[static_cast<size_t>(index)]; }
+  std::vector<uint8_t>& bytes() { return bytes_; }
+
+  // The complete document with the buffer embedded as a data URI. `meshes` / `nodes` / `scenes` as glTF JSON.
+  json build(json meshes, json nodes, json scenes = json::array({{{"nodes", {0}}}})) const {
+    json doc = {{"asset", {{"version", "2.0"}}},
+                {"buffers",
+                 {{{"byteLength", bytes_.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes_)}}}},
+                {"bufferViews", views_},
+                {"accessors", accessors_},
+                {"meshes", std::move(meshes)},
+                {"nodes", std::move(nodes)}};
+    if (!scenes.is_null()) {
+      doc["scenes"] = std::move(scenes);
+      doc["scene"] = 0;
+    }
+    return doc;
+  }
+
+ private:
+  std::vector<uint8_t> bytes_;
+  json views_ = json::array();
+  json accessors_ = json::array();
+};
+
+json triangleMesh(int position, std::optional<int> indices = std::nullopt, int mode = 4,
+                  std::optional<int> normal = std::nullopt) {
+  json prim = {{"attributes", {{"POSITION", position}}}, {"mode", mode}};
+  if (indices) prim["indices"] = *indices;
+  if (normal) prim["attributes"]["NORMAL"] = *normal;
+  return json::array({{{"name", "tri"}, {"primitives", {prim}}}});
+}
+
+const std::vector<glm::vec3> kTriangle = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};  // counter-clockwise seen from +Z
+
+class GltfImportTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::random_device rd;
+    dir_ = fs::temp_directory_path() /
+           ("visbuf_gltf_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(rd()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  std::string writeText(const std::string& name, const std::string& text) {
+    const fs::path path = dir_ / name;
+    std::ofstream(path, std::ios::binary) << text;
+    return path.string();
+  }
+  std::string writeBytes(const std::string& name, const std::vector<uint8_t>& bytes) {
+    const fs::path path = dir_ / name;
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                                 static_cast<std::streamsize>(bytes.size()));
+    return path.string();
+  }
+  std::string write(const std::string& name, const json& doc) { return writeText(name, doc.dump(1)); }
+
+  fs::path dir_;
+};
+
+glm::vec3 geometricNormal(const MeshSource& m, size_t triangle) {
+  const glm::vec3 a = m.positions[m.indices[3 * triangle]];
+  const glm::vec3 b = m.positions[m.indices[3 * triangle + 1]];
+  const glm::vec3 c = m.positions[m.indices[3 * triangle + 2]];
+  return glm::normalize(glm::cross(b - a, c - a));
+}
+
+void expectVec3Near(const glm::vec3& actual, const glm::vec3& expected, float tolerance = 1e-5f) {
+  EXPECT_NEAR(actual.x, expected.x, tolerance);
+  EXPECT_NEAR(actual.y, expected.y, tolerance);
+  EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+// Invariants every successful import must satisfy (the MeshSource contract).
+void expectValidMesh(const MeshSource& m) {
+  ASSERT_EQ(m.normals.size(), m.positions.size());
+  ASSERT_TRUE(m.uvs.empty() || m.uvs.size() == m.positions.size());
+  ASSERT_TRUE(m.colors.empty() || m.colors.size() == m.positions.size());
+  ASSERT_EQ(m.indices.size() % 3, 0u);
+  ASSERT_FALSE(m.indices.empty());
+  for (uint32_t index : m.indices) ASSERT_LT(index, m.positions.size());
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(m.positions[i].x) && std::isfinite(m.positions[i].y) && std::isfinite(m.positions[i].z));
+    ASSERT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-4f) << "vertex " << i;
+  }
+}
+
+// ----------------------------------------------------------------------------------------------------------------
+// Topology
+
+TEST_F(GltfImportTest, TriangleStripBecomesListAndDropsDegenerates) {
+  DocBuilder b;
+  const int pos = b.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 2, 0}, {1, 2, 0}});
+  // The repeated 3 stitches two strips: triangles (2,3,3) and (3,3,4) are degenerate and must go.
+  const int idx = b.addIndices16({0, 1, 2, 3, 3, 4, 5});
+  GltfImportReport report;
+  auto mesh = importGltfMesh(write("strip.gltf", b.build(triangleMesh(pos, idx, 5), {{{"mesh", 0}}})), {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  // Even triangles keep their order, odd ones swap the first two vertices (glTF spec).
+  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>{0, 1, 2, 2, 1, 3, 3, 4, 5}));
+  EXPECT_EQ(report.primitivesImported, 1u);
+  EXPECT_EQ(mesh->name, "strip");
+}
+
+TEST_F(GltfImportTest, NonIndexedTriangleFanBecomesList) {
+  DocBuilder b;
+  const int pos = b.addVec3({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 1, 0}});
+  auto mesh = importGltfMesh(write("fan.gltf", b.build(triangleMesh(pos, std::nullopt, 6), {{{"mesh", 0}}})));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>{1, 2, 0, 2, 3, 0, 3, 4, 0}));
+  for (size_t t = 0; t < 3; ++t) expectVec3Near(geometricNormal(*mesh, t), {0, 0, 1});
+  for (const glm::vec3& n : mesh->normals) expectVec3Near(n, {0, 0, 1});  // generated, counter-clockwise
+}
+
+TEST_F(GltfImportTest, NonIndexedTriangleGetsSequentialIndicesAndGeneratedNormals) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  GltfImportReport report;
+  auto mesh = importGltfMesh(write("tri.gltf", b.build(triangleMesh(pos), {{{"mesh", 0}}})), {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>{0, 1, 2}));
+  ASSERT_EQ(mesh->normals.size(), 3u);
+  for (const glm::vec3& n : mesh->normals) expectVec3Near(n, {0, 0, 1});
+  EXPECT_TRUE(mesh->uvs.empty());
+  EXPECT_TRUE(mesh->colors.empty());
+  EXPECT_TRUE(report.warnings.empty());
+}
+
+TEST_F(GltfImportTest, PointsAndLinesAreSkippedWithWarning) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  json meshes = json::array({{{"primitives",
+                               {{{"attributes", {{"POSITION", pos}}}, {"mode", 0}},
+                                {{"attributes", {{"POSITION", pos}}}, {"mode", 1}},
+                                {{"attributes", {{"POSITION", pos}}}}}}}});
+  GltfImportReport report;
+  auto mesh = importGltfMesh(write("mixed.gltf", b.build(meshes, {{{"mesh", 0}}})), {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_EQ(mesh->indices.size(), 3u);
+  EXPECT_EQ(report.primitivesImported, 1u);
+  EXPECT_EQ(report.primitivesSkipped, 2u);
+  ASSERT_EQ(report.warnings.size(), 2u);
+  EXPECT_NE(report.warnings[0].find("POINTS"), std::string::npos) << report.warnings[0];
+  EXPECT_NE(report.warnings[1].find("LINES"), std::string::npos) << report.warnings[1];
+}
+
+TEST_F(GltfImportTest, LinesOnlyIsNoTriangleGeometry) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  auto mesh = importGltfMesh(write("lines.gltf", b.build(triangleMesh(pos, std::nullopt, 3), {{{"mesh", 0}}})));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh.error().message.find("no triangle geometry"), std::string::npos) << mesh.error().message;
+}
+
+TEST_F(GltfImportTest, PrimitiveWithoutPositionIsSkipped) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  const int normal = b.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+  json meshes = json::array(
+      {{{"primitives", {{{"attributes", {{"NORMAL", normal}}}}, {{"attributes", {{"POSITION", pos}}}}}}}});
+  GltfImportReport report;
+  auto mesh = importGltfMesh(write("nopos.gltf", b.build(meshes, {{{"mesh", 0}}})), {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_EQ(report.primitivesSkipped, 1u);
+  ASSERT_FALSE(report.warnings.empty());
+  EXPECT_NE(report.warnings[0].find("POSITION"), std::string::npos);
+}
+
+// ----------------------------------------------------------------------------------------------------------------
+// Transforms
+
+TEST_F(GltfImportTest, MatrixParentAndTrsChildInstanceOneMeshTwice) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  const int normal = b.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+  const double s = std::sqrt(0.5);
+  json nodes = {
+      // Uniform scale 2, then translate by (10, 0, 0); column-major.
+      {{"name", "parent"},
+       {"mesh", 0},
+       {"matrix", {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 10, 0, 0, 1}},
+       {"children", {1}}},
+      // T(0,1,0) * R(90 degrees about +Z) * S(3).
+      {{"name", "child"}, {"mesh", 0}, {"translation", {0, 1, 0}}, {"rotation", {0, 0, s, s}}, {"scale", {3, 3, 3}}}};
+  GltfImportReport report;
+  auto mesh =
+      importGltfMesh(write("nodes.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes)), {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  EXPECT_EQ(report.primitivesImported, 2u);
+  ASSERT_EQ(mesh->positions.size(), 6u);
+  // Parent: p -> 2p + (10,0,0).
+  expectVec3Near(mesh->positions[0], {10, 0, 0});
+  expectVec3Near(mesh->positions[1], {12, 0, 0});
+  expectVec3Near(mesh->positions[2], {10, 2, 0});
+  // Child: p -> parent(R(3p) + (0,1,0)), with R(x,y,z) = (-y,x,z).
+  //   (0,0,0) -> (0,1,0) -> (10,2,0); (1,0,0) -> (0,4,0) -> (10,8,0); (0,1,0) -> (-3,1,0) -> (4,2,0).
+  expectVec3Near(mesh->positions[3], {10, 2, 0});
+  expectVec3Near(mesh->positions[4], {10, 8, 0});
+  expectVec3Near(mesh->positions[5], {4, 2, 0});
+  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>{0, 1, 2, 3, 4, 5}));
+  for (const glm::vec3& n : mesh->normals) expectVec3Near(n, {0, 0, 1});
+}
+
+TEST_F(GltfImportTest, NonUniformScaleTransformsNormalsByInverseTranspose) {
+  DocBuilder b;
+  // Triangle in the plane y + z = 0, counter-clockwise around (0,1,1).
+  const int pos = b.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, -1}});
+  const glm::vec3 n = glm::normalize(glm::vec3(0, 1, 1));
+  const int normal = b.addVec3({n, n, n});
+  json nodes = {{{"mesh", 0}, {"scale", {1, 4, 1}}}};
+  auto mesh = importGltfMesh(write("scale.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes)));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  // inverse-transpose(diag(1,4,1)) * (0,1,1) ~ (0, 1/4, 1) ~ (0, 1, 4): the scaled triangle's true normal.
+  const glm::vec3 expected = glm::normalize(glm::vec3(0, 1, 4));
+  for (const glm::vec3& v : mesh->normals) expectVec3Near(v, expected);
+  expectVec3Near(geometricNormal(*mesh, 0), expected);
+}
+
+TEST_F(GltfImportTest, NegativeDeterminantFlipsWinding) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  const int normal = b.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+  json nodes = {{{"name", "mirrorX"}, {"mesh", 0}, {"scale", {-1, 1, 1}}, {"children", {1}}},
+                // Mirror in Z relative to the parent: det(parent * child) = +1, no flip for this one.
+                {{"name", "mirrorXZ"}, {"mesh", 0}, {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1}}},
+                {{"name", "mirrorZ"}, {"mesh", 0}, {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1}}}};
+  json scenes = {{{"nodes", {0, 2}}}};
+  auto mesh = importGltfMesh(write("mirror.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes, scenes)));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  ASSERT_EQ(mesh->indices.size(), 9u);
+  EXPECT_EQ((std::vector<uint32_t>(mesh->indices.begin(), mesh->indices.begin() + 3)),
+            (std::vector<uint32_t>{0, 2, 1}));  // mirrored: winding flipped
+  EXPECT_EQ((std::vector<uint32_t>(mesh->indices.begin() + 3, mesh->indices.begin() + 6)),
+            (std::vector<uint32_t>{3, 4, 5}));  // mirrored twice: unchanged
+  // In every instance the counter-clockwise geometric normal agrees with the stored (transformed) normal.
+  for (size_t t = 0; t < 3; ++t) {
+    const glm::vec3 stored = mesh->normals[mesh->indices[3 * t]];
+    EXPECT_GT(glm::dot(geometricNormal(*mesh, t), stored), 0.999f) << "triangle " << t;
+  }
+  expectVec3Near(mesh->normals[0], {0, 0, 1});   // X mirror keeps a +Z normal
+  expectVec3Near(mesh->normals[6], {0, 0, -1});  // Z mirror turns it around
+}
+
+TEST_F(GltfImportTest, NonFiniteNodeTransformIsMalformed) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  // JSON cannot spell NaN, but composing finite matrices can produce one: world(0,0) = 1e308 * 1e308 +
+  // 1e308 * -1e308 = inf - inf = NaN.
+  json nodes = {{{"name", "parent"},
+                 {"matrix", {1e308, 0, 0, 0, 1e308, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
+                 {"children", {1}}},
+                {{"name", "Foo"}, {"mesh", 0}, {"matrix", {1e308, -1e308, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}}};
+  auto mesh = importGltfMesh(write("nan.gltf", b.build(triangleMesh(pos), nodes)));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh.error().message.find("node 1 'Foo': non-finite transform"), std::string::npos)
+      << mesh.error().message;
+
+  // A literal that overflows double is rejected while parsing.
+  std::string text = b.build(triangleMesh(pos), {{{"mesh", 0}, {"translation", {0, 0, 0}}}}).dump();
+  const size_t at = text.find("\"translation\":[0,0,0]");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 21, "\"translation\":[1e400,0,0]");
+  auto overflow = importGltfMesh(writeText("overflow.gltf", text));
+  ASSERT_FALSE(overflow.ok());
+  EXPECT_EQ(overflow.error().code, ErrorCode::MalformedInput);
+}
+
+TEST_F(GltfImportTest, NaNPositionIsMalformed) {
+  DocBuilder b;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const int pos = b.addFloats({0, 0, 0, 1, 0, 0, 0, nan, 0}, "VEC3", 3);
+  auto mesh = importGltfMesh(write("nanpos.gltf", b.build(triangleMesh(pos), {{{"mesh", 0}}})));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh.error().message.find("(POSITION): non-finite"), std::string::npos) << mesh.error().message;
+}
+
+TEST_F(GltfImportTest, NodeCycleIsMalformed) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  json nodes = {{{"mesh", 0}, {"children", {1}}}, {{"children", {0}}}};
+  auto mesh = importGltfMesh(write("cycle.gltf", b.build(triangleMesh(pos), nodes)));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+}
+
+TEST_F(GltfImportTest, NoScenesImportsAllRootNodes) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  json nodes = {{{"mesh", 0}, {"children", {1}}}, {{"mesh", 0}, {"translation", {0, 0, 5}}}, {{"mesh", 0}}};
+  GltfImportReport report;
+  auto mesh = importGltfMesh(write("noscene.gltf", b.build(triangleMesh(pos), nodes, json())), {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_EQ(report.primitivesImported, 3u);  // roots 0 and 2, plus child 1 once
+  EXPECT_EQ(mesh->indices.size(), 9u);
+  expectVec3Near(mesh->positions[3], {0, 0, 5});
+}
+
+// ----------------------------------------------------------------------------------------------------------------
+// Accessors
+
+TEST_F(GltfImportTest, AccessorCountPastBufferIsMalformed) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  b.accessor(pos)["count"] = 4;  // the bufferView holds 3 vertices
+  auto mesh = importGltfMesh(write("overrun.gltf", b.build(triangleMesh(pos), {{{"mesh", 0}}})));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  const std::string& message = mesh.error().message;
+  EXPECT_NE(message.find("overrun.gltf: mesh 0 'tri' primitive 0 accessor 0 (POSITION)"), std::string::npos)
+      << message;
+
+  // A bufferView that claims more bytes than its buffer has.
+  DocBuilder c;
+  const int pos2 = c.addVec3(kTriangle);
+  c.view(0)["byteLength"] = 400;
+  auto mesh2 = importGltfMesh(write("overrun2.gltf", c.build(triangleMesh(pos2), {{{"mesh", 0}}})));
+  ASSERT_FALSE(mesh2.ok());
+  EXPECT_EQ(mesh2.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh2.error().message.find("bufferView 0"), std::string::npos) << mesh2.error().message;
+}
+
+TEST_F(GltfImportTest, IndexOutOfRangeIsMalformed) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  const int idx = b.addIndices16({0, 1, 3});
+  auto mesh = importGltfMesh(write("badindex.gltf", b.build(triangleMesh(pos, idx), {{{"mesh", 0}}})));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh.error().message.find("(indices)"), std::string::npos) << mesh.error().message;
+}
+
+TEST_F(GltfImportTest, MissingFileIsFileNotFound) {
+  auto mesh = importGltfMesh((dir_ / "does_not_exist.gltf").string());
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::FileNotFound);
+}
+
+TEST_F(GltfImportTest, InvalidJsonReportsParseError) {
+  auto mesh = importGltfMesh(writeText("broken.gltf", "{ \"asset\": { \"version\": \"2.0\" }, "));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh.error().message.find("parse failed"), std::string::npos) << mesh.error().message;
+}
+
+TEST_F(GltfImportTest, InterleavedByteStride) {
+  DocBuilder b;
+  // position (12 bytes) + normal (12 bytes) + uv (8 bytes) per vertex: stride 32.
+  std::vector<float> interleaved = {0, 0, 0, 0, 0, 1, 0.0f, 0.0f,  //
+                                    1, 0, 0, 0, 0, 1, 1.0f, 0.0f,  //
+                                    0, 1, 0, 0, 0, 1, 0.0f, 1.0f};
+  const int view = b.addView(interleaved, 32);
+  const int pos = b.addAccessor({{"bufferView", view}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
+  const int nrm = b.addAccessor(
+      {{"bufferView", view}, {"byteOffset", 12}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
+  const int uv = b.addAccessor(
+      {{"bufferView", view}, {"byteOffset", 24}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC2"}});
+  json meshes = json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}}}}}}}});
+  auto mesh = importGltfMesh(write("interleaved.gltf", b.build(meshes, {{{"mesh", 0}}})));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  ASSERT_EQ(mesh->positions.size(), 3u);
+  expectVec3Near(mesh->positions[1], {1, 0, 0});
+  expectVec3Near(mesh->positions[2], {0, 1, 0});
+  for (const glm::vec3& n : mesh->normals) expectVec3Near(n, {0, 0, 1});
+  ASSERT_EQ(mesh->uvs.size(), 3u);
+  EXPECT_EQ(mesh->uvs[1], glm::vec2(1, 0));
+  EXPECT_EQ(mesh->uvs[2], glm::vec2(0, 1));
+
+  // The last element ends exactly at the end of the view; one more byte of offset runs past it.
+  DocBuilder c;
+  const int view2 = c.addView(interleaved, 32);
+  c.addAccessor({{"bufferView", view2}, {"byteOffset", 25}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC2"}});
+  const int pos2 = c.addAccessor({{"bufferView", view2}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
+  json meshes2 = json::array({{{"primitives", {{{"attributes", {{"POSITION", pos2}, {"TEXCOORD_0", 0}}}}}}}});
+  auto bad = importGltfMesh(write("interleaved_bad.gltf", c.build(meshes2, {{{"mesh", 0}}})));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(bad.error().message.find("accessor 0 (TEXCOORD_0)"), std::string::npos) << bad.error().message;
+}
+
+TEST_F(GltfImportTest, SparseAccessorSubstitutesValues) {
+  DocBuilder b;
+  const int pos = b.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}});
+  const int idx = b.addIndices16({0, 1, 2, 2, 1, 3});
+  const int sparseIndices = b.addView(std::vector<uint8_t>{1, 3});
+  const int sparseValues = b.addView(std::vector<float>{5, 0, 0, 5, 5, 0});
+  b.accessor(pos)["sparse"] = {{"count", 2},
+                               {"indices", {{"bufferView", sparseIndices}, {"componentType", kUByte}}},
+                               {"values", {{"bufferView", sparseValues}}}};
+  auto mesh = importGltfMesh(write("sparse.gltf", b.build(triangleMesh(pos, idx), {{{"mesh", 0}}})));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  ASSERT_EQ(mesh->positions.size(), 4u);
+  expectVec3Near(mesh->positions[0], {0, 0, 0});
+  expectVec3Near(mesh->positions[1], {5, 0, 0});
+  expectVec3Near(mesh->positions[2], {0, 1, 0});
+  expectVec3Near(mesh->positions[3], {5, 5, 0});
+
+  // A sparse index that is not below the accessor count is rejected.
+  DocBuilder c;
+  const int pos2 = c.addVec3(kTriangle);
+  const int badIndices = c.addView(std::vector<uint8_t>{7});
+  const int values2 = c.addView(std::vector<float>{1, 1, 1});
+  c.accessor(pos2)["sparse"] = {{"count", 1},
+                                {"indices", {{"bufferView", badIndices}, {"componentType", kUByte}}},
+                                {"values", {{"bufferView", values2}}}};
+  auto bad = importGltfMesh(write("sparse_bad.gltf", c.build(triangleMesh(pos2), {{{"mesh", 0}}})));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::MalformedInput);
+}
+
+TEST_F(GltfImportTest, MorphTargetsUseDefaultWeightsAndSparseOnlyAccessors) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  // Target 0: a sparse accessor without a bufferView (zeros) that moves vertex 2 by (0,0,2).
+  const int sparseIndices = b.addView(std::vector<uint16_t>{2});
+  const int sparseValues = b.addView(std::vector<float>{0, 0, 2});
+  const int delta = b.addAccessor({{"componentType", kFloat},
+                                   {"count", 3},
+                                   {"type", "VEC3"},
+                                   {"sparse",
+                                    {{"count", 1},
+                                     {"indices", {{"bufferView", sparseIndices}, {"componentType", kUShort}}},
+                                     {"values", {{"bufferView", sparseValues}}}}}});
+  json meshes = json::array(
+      {{{"weights", {0.5}}, {"primitives", {{{"attributes", {{"POSITION", pos}}}, {"targets", {{{"POSITION", delta}}}}}}}}});
+  json nodes = {{{"mesh", 0}, {"children", {1}}}, {{"mesh", 0}, {"weights", {1.0}}}};
+  auto mesh = importGltfMesh(write("morph.gltf", b.build(meshes, nodes)));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  ASSERT_EQ(mesh->positions.size(), 6u);
+  expectVec3Near(mesh->positions[2], {0, 1, 1});  // mesh.weights = 0.5
+  expectVec3Near(mesh->positions[5], {0, 1, 2});  // node.weights = 1.0 overrides
+  expectVec3Near(mesh->positions[1], {1, 0, 0});
+}
+
+TEST_F(GltfImportTest, QuantizedAttributes) {
+  DocBuilder b;
+  // KHR_mesh_quantization: SHORT positions (not normalized, 4-byte aligned via byteStride 8), BYTE normalized
+  // normals, UNSIGNED_SHORT normalized uvs and UNSIGNED_BYTE normalized RGBA colours.
+  const int posView = b.addView(std::vector<int16_t>{0, 0, 0, 0, 100, 0, 0, 0, 0, 100, 0, 0}, 8);
+  const int pos = b.addAccessor({{"bufferView", posView}, {"componentType", kShort}, {"count", 3}, {"type", "VEC3"}});
+  const int nrmView = b.addView(std::vector<int8_t>{0, 0, 127, 0, 0, 0, 127, 0, 0, 0, -128, 0}, 4);
+  const int nrm = b.addAccessor(
+      {{"bufferView", nrmView}, {"componentType", kByte}, {"normalized", true}, {"count", 3}, {"type", "VEC3"}});
+  const int uvView = b.addView(std::vector<uint16_t>{0, 0, 65535, 0, 0, 65535});
+  const int uv = b.addAccessor(
+      {{"bufferView", uvView}, {"componentType", kUShort}, {"normalized", true}, {"count", 3}, {"type", "VEC2"}});
+  const int colorView = b.addView(std::vector<uint8_t>{255, 0, 0, 128, 0, 255, 0, 255, 0, 0, 255, 0});
+  const int color = b.addAccessor(
+      {{"bufferView", colorView}, {"componentType", kUByte}, {"normalized", true}, {"count", 3}, {"type", "VEC4"}});
+  json meshes = json::array(
+      {{{"primitives",
+         {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}, {"COLOR_0", color}}}}}}}});
+  json doc = b.build(meshes, {{{"mesh", 0}, {"scale", {0.01, 0.01, 0.01}}}});
+  doc["extensionsUsed"] = {"KHR_mesh_quantization"};
+  doc["extensionsRequired"] = {"KHR_mesh_quantization"};
+  auto mesh = importGltfMesh(write("quantized.gltf", doc));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectVec3Near(mesh->positions[1], {1, 0, 0});
+  expectVec3Near(mesh->positions[2], {0, 1, 0});
+  expectVec3Near(mesh->normals[0], {0, 0, 1});
+  expectVec3Near(mesh->normals[2], {0, 0, -1});  // -128 clamps to -1
+  EXPECT_EQ(mesh->uvs[1], glm::vec2(1, 0));
+  EXPECT_EQ(mesh->colors[0], 0x800000FFu);  // R in the low byte, A = 128
+  EXPECT_EQ(mesh->colors[1], 0xFF00FF00u);
+  EXPECT_EQ(mesh->colors[2], 0x00FF0000u);
+}
+
+TEST_F(GltfImportTest, MissingUvsAndColorsAreFilledWithDefaults) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  const int uv = b.addFloats({0.25f, 0.5f, 0.25f, 0.5f, 0.25f, 0.5f}, "VEC2", 2);
+  const int color = b.addFloats({1, 0, 0, 1, 0, 0, 1, 0, 0}, "VEC3", 3);
+  json meshes = json::array({{{"primitives",
+                               {{{"attributes", {{"POSITION", pos}}}},
+                                {{"attributes", {{"POSITION", pos}, {"TEXCOORD_0", uv}, {"COLOR_0", color}}}},
+                                {{"attributes", {{"POSITION", pos}}}}}}}});
+  auto mesh = importGltfMesh(write("defaults.gltf", b.build(meshes, {{{"mesh", 0}}})));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  ASSERT_EQ(mesh->uvs.size(), 9u);
+  ASSERT_EQ(mesh->colors.size(), 9u);
+  for (size_t i = 0; i < 9; ++i) {
+    const bool has = i >= 3 && i < 6;
+    EXPECT_EQ(mesh->uvs[i], has ? glm::vec2(0.25f, 0.5f) : glm::vec2(0, 0)) << i;
+    EXPECT_EQ(mesh->colors[i], has ? 0xFF0000FFu : 0xFFFFFFFFu) << i;
+  }
+}
+
+TEST_F(GltfImportTest, NormalGenerationCanBeDisabled) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  GltfImportOptions options;
+  options.generateNormalsIfMissing = false;
+  GltfImportReport report;
+  auto mesh = importGltfMesh(write("nonormals.gltf", b.build(triangleMesh(pos), {{{"mesh", 0}}})), options, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  ASSERT_EQ(mesh->normals.size(), 3u);
+  for (const glm::vec3& n : mesh->normals) EXPECT_EQ(n, glm::vec3(0));
+  EXPECT_FALSE(report.warnings.empty());
+}
+
+TEST_F(GltfImportTest, UnsupportedRequiredExtension) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  json doc = b.build(triangleMesh(pos), {{{"mesh", 0}}});
+  doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+  doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  auto mesh = importGltfMesh(write("draco.gltf", doc));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::Unsupported);
+}
+
+// ----------------------------------------------------------------------------------------------------------------
+// Containers and compression
+
+std::vector<uint8_t> makeGlb(const std::string& jsonText, const std::vector<uint8_t>& bin) {
+  std::string jsonChunk = jsonText;
+  while (jsonChunk.size() % 4 != 0) jsonChunk += ' ';
+  std::vector<uint8_t> binChunk = bin;
+  while (binChunk.size() % 4 != 0) binChunk.push_back(0);
+  std::vector<uint8_t> out;
+  auto put32 = [&](uint32_t v) {
+    for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  };
+  put32(0x46546C67);
+  put32(2);
+  put32(static_cast<uint32_t>(12 + 8 + jsonChunk.size() + 8 + binChunk.size()));
+  put32(static_cast<uint32_t>(jsonChunk.size()));
+  put32(0x4E4F534A);
+  out.insert(out.end(), jsonChunk.begin(), jsonChunk.end());
+  put32(static_cast<uint32_t>(binChunk.size()));
+  put32(0x004E4942);
+  out.insert(out.end(), binChunk.begin(), binChunk.end());
+  return out;
+}
+
+TEST_F(GltfImportTest, GlbContainer) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  json doc = b.build(triangleMesh(pos), {{{"mesh", 0}}});
+  doc["buffers"][0].erase("uri");  // GLB: buffer 0 is the BIN chunk
+  const std::vector<uint8_t> glb = makeGlb(doc.dump(), b.bytes());
+  auto mesh = importGltfMesh(writeBytes("tri.glb", glb));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_EQ(mesh->indices.size(), 3u);
+
+  // Same bytes under a .gltf name: the magic decides.
+  auto renamed = importGltfMesh(writeBytes("tri_glb.gltf", glb));
+  ASSERT_TRUE(renamed.ok()) << renamed.error().message;
+
+  // Truncated file: the BIN chunk runs past the end.
+  std::vector<uint8_t> truncated(glb.begin(), glb.end() - 8);
+  const uint32_t length = static_cast<uint32_t>(truncated.size());
+  std::memcpy(truncated.data() + 8, &length, 4);
+  auto cut = importGltfMesh(writeBytes("cut.glb", truncated));
+  ASSERT_FALSE(cut.ok());
+  EXPECT_EQ(cut.error().code, ErrorCode::MalformedInput);
+
+  // .glb without the magic.
+  auto notGlb = importGltfMesh(writeText("text.glb", doc.dump()));
+  ASSERT_FALSE(notGlb.ok());
+  EXPECT_EQ(notGlb.error().code, ErrorCode::MalformedInput);
+}
+
+// Builds a document whose positions and indices live only in EXT_meshopt_compression streams (encoded here with
+// meshoptimizer), with the uncompressed bufferViews in a fallback buffer that has no uri.
+json meshoptDoc(const std::vector<glm::vec3>& positions, const std::vector<uint16_t>& indices,
+                std::vector<uint8_t>* compressed) {
+  std::vector<uint8_t> vertexStream(meshopt_encodeVertexBufferBound(positions.size(), sizeof(glm::vec3)));
+  vertexStream.resize(meshopt_encodeVertexBuffer(vertexStream.data(), vertexStream.size(), positions.data(),
+                                                 positions.size(), sizeof(glm::vec3)));
+  std::vector<uint8_t> indexStream(meshopt_encodeIndexBufferBound(indices.size(), positions.size()));
+  indexStream.resize(
+      meshopt_encodeIndexBuffer(indexStream.data(), indexStream.size(), indices.data(), indices.size()));
+  *compressed = vertexStream;
+  while (compressed->size() % 4 != 0) compressed->push_back(0);
+  const size_t indexOffset = compressed->size();
+  compressed->insert(compressed->end(), indexStream.begin(), indexStream.end());
+
+  const size_t vertexBytes = positions.size() * 12;
+  const size_t indexBytes = indices.size() * 2;
+  json ext = {{"EXT_meshopt_compression", json::object()}};
+  return {
+      {"asset", {{"version", "2.0"}}},
+      {"extensionsUsed", {"EXT_meshopt_compression"}},
+      {"extensionsRequired", {"EXT_meshopt_compression"}},
+      {"buffers",
+       {{{"byteLength", compressed->size()},
+         {"uri", "data:application/octet-stream;base64," + base64(*compressed)}},
+        {{"byteLength", vertexBytes + indexBytes}, {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}}}},
+      {"bufferViews",
+       {{{"buffer", 1},
+         {"byteLength", vertexBytes},
+         {"byteStride", 12},
+         {"extensions",
+          {{"EXT_meshopt_compression",
+            {{"buffer", 0},
+             {"byteLength", vertexStream.size()},
+             {"byteStride", 12},
+             {"count", positions.size()},
+             {"mode", "ATTRIBUTES"}}}}}},
+        {{"buffer", 1},
+         {"byteOffset", vertexBytes},
+         {"byteLength", indexBytes},
+         {"extensions",
+          {{"EXT_meshopt_compression",
+            {{"buffer", 0},
+             {"byteOffset", indexOffset},
+             {"byteLength", indexStream.size()},
+             {"byteStride", 2},
+             {"count", indices.size()},
+             {"mode", "TRIANGLES"}}}}}}}},
+      {"accessors",
+       {{{"bufferView", 0}, {"componentType", kFloat}, {"count", positions.size()}, {"type", "VEC3"}},
+        {{"bufferView", 1}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}}}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+      {"nodes", {{{"mesh", 0}}}},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"scene", 0}};
+}
+
+TEST_F(GltfImportTest, MeshoptCompressedBufferViews) {
+  const std::vector<glm::vec3> positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0.5f}};
+  const std::vector<uint16_t> indices = {0, 1, 2, 2, 1, 3, 3, 1, 4};
+  std::vector<uint8_t> compressed;
+  json doc = meshoptDoc(positions, indices, &compressed);
+  auto mesh = importGltfMesh(write("meshopt.gltf", doc));
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  ASSERT_EQ(mesh->positions.size(), positions.size());
+  for (size_t i = 0; i < positions.size(); ++i) EXPECT_EQ(mesh->positions[i], positions[i]) << i;
+  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>(indices.begin(), indices.end())));
+
+  // Corrupt stream (truncated) -> MalformedInput, not a crash.
+  json corrupt = doc;
+  corrupt["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["byteLength"] = 3;
+  auto bad = importGltfMesh(write("meshopt_corrupt.gltf", corrupt));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::MalformedInput);
+
+  // A filter this importer does not know, with the extension required and no fallback data -> Unsupported.
+  json unknown = doc;
+  unknown["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["filter"] = "FUTURE";
+  auto unsupported = importGltfMesh(write("meshopt_future.gltf", unknown));
+  ASSERT_FALSE(unsupported.ok());
+  EXPECT_EQ(unsupported.error().code, ErrorCode::Unsupported);
+}
+
+// ----------------------------------------------------------------------------------------------------------------
+// Third-party sample assets (../shared/assets)
+
+std::optional<std::string> sharedAsset(const std::string& relative) {
+#ifdef VISBUF_SHARED_ASSETS_DIR
+  const fs::path path = fs::path(VISBUF_SHARED_ASSETS_DIR) / relative;
+  if (fs::exists(path)) return path.string();
+#else
+  (void)relative;
+#endif
+  return std::nullopt;
+}
+
+#define REQUIRE_ASSET(var, relative)                                            \
+  const std::optional<std::string> var = sharedAsset(relative);                  \
+  if (!var) GTEST_SKIP() << "shared asset not available: " << (relative)
+
+// Every triangle's counter-clockwise normal agrees with its vertices' stored normals (flat-shaded boxes).
+void expectFlatNormalsMatchWinding(const MeshSource& m) {
+  for (size_t t = 0; t < m.indices.size() / 3; ++t) {
+    const glm::vec3 g = geometricNormal(m, t);
+    for (int k = 0; k < 3; ++k) EXPECT_GT(glm::dot(g, m.normals[m.indices[3 * t + k]]), 0.99f) << "triangle " << t;
+  }
+}
+
+TEST(GltfImportAssets, Kitten) {
+  REQUIRE_ASSET(path, "Kitten/kitten.glb");
+  GltfImportReport report;
+  auto mesh = importGltfMesh(*path, {}, &report);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  EXPECT_EQ(mesh->indices.size() / 3, 28944u);
+  EXPECT_EQ(mesh->positions.size(), 14856u);
+  EXPECT_TRUE(mesh->uvs.empty());
+  EXPECT_EQ(report.primitivesImported, 1u);
+}
+
+TEST(GltfImportAssets, BoxMeshopt) {
+  for (const char* file : {"BoxMeshopt/BoxMeshopt.gltf", "BoxMeshopt/BoxMeshopt.glb"}) {
+    SCOPED_TRACE(file);
+    REQUIRE_ASSET(path, file);
+    auto mesh = importGltfMesh(*path);
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    expectValidMesh(*mesh);
+    EXPECT_EQ(mesh->indices.size() / 3, 12u);
+    EXPECT_EQ(mesh->positions.size(), 24u);
+    for (const glm::vec3& p : mesh->positions) {  // the unit cube: quantized +-1 scaled by 0.5
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(std::abs(p[c]), 0.5f, 1e-4f);
+    }
+    expectFlatNormalsMatchWinding(*mesh);
+  }
+}
+
+TEST(GltfImportAssets, BoxInterleaved) {
+  REQUIRE_ASSET(path, "BoxInterleaved/glTF/BoxInterleaved.gltf");
+  auto mesh = importGltfMesh(*path);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  EXPECT_EQ(mesh->indices.size() / 3, 12u);
+  expectFlatNormalsMatchWinding(*mesh);
+}
+
+TEST(GltfImportAssets, TriangleWithoutIndices) {
+  REQUIRE_ASSET(path, "TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf");
+  auto mesh = importGltfMesh(*path);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>{0, 1, 2}));
+}
+
+TEST(GltfImportAssets, SimpleSparseAccessor) {
+  REQUIRE_ASSET(path, "SimpleSparseAccessor/glTF/SimpleSparseAccessor.gltf");
+  auto mesh = importGltfMesh(*path);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  expectValidMesh(*mesh);
+  EXPECT_EQ(mesh->indices.size() / 3, 12u);
+  ASSERT_EQ(mesh->positions.size(), 14u);
+  // The sparse part lifts vertices 8, 10 and 12 (y = 1 in the dense data).
+  expectVec3Near(mesh->positions[8], {1, 2, 0});
+  expectVec3Near(mesh->positions[10], {3, 3, 0});
+  expectVec3Near(mesh->positions[12], {5, 4, 0});
+  expectVec3Near(mesh->positions[9], {2, 1, 0});
+}
+
+TEST(GltfImportAssets, MeshPrimitiveModes) {
+  // 00-03 and 07-10 are points/lines only; the rest are two triangles each as list, strip or fan.
+  for (int i = 0; i < 16; ++i) {
+    char name[96];
+    std::snprintf(name, sizeof(name), "Mesh_PrimitiveMode/Mesh_PrimitiveMode/Mesh_PrimitiveMode_%02d.gltf", i);
+    SCOPED_TRACE(name);
+    REQUIRE_ASSET(path, std::string(name));
+    GltfImportReport report;
+    auto mesh = importGltfMesh(*path, {}, &report);
+    const bool hasTriangles = (i >= 4 && i <= 6) || i >= 11;
+    if (hasTriangles) {
+      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+      expectValidMesh(*mesh);
+      EXPECT_EQ(mesh->indices.size() / 3, 2u);
+    } else {
+      ASSERT_FALSE(mesh.ok());
+      EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+      EXPECT_NE(mesh.error().message.find("no triangle geometry"), std::string::npos);
+      EXPECT_EQ(report.primitivesSkipped, 1u);
+    }
+  }
+}
+
+TEST(GltfImportAssets, EveryAssetImportsOrFailsCleanly) {
+  REQUIRE_ASSET(root, "");
+  int imported = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(*root)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext != ".gltf" && ext != ".glb") continue;
+    SCOPED_TRACE(entry.path().string());
+    auto mesh = importGltfMesh(entry.path().string());
+    const std::string file = entry.path().filename().string();
+    if (file == "BoxWithInfinites.glb") {  // infinite vertex data on purpose
+      ASSERT_FALSE(mesh.ok());
+      EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+    } else if (file.rfind("Mesh_PrimitiveMode_", 0) == 0 && !mesh.ok()) {
+      EXPECT_NE(mesh.error().message.find("no triangle geometry"), std::string::npos);
+    } else {
+      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+      expectValidMesh(*mesh);
+      ++imported;
+    }
+  }
+  EXPECT_GT(imported, 0);
+}
+
+}  // namespace
+}  // namespace visbuf

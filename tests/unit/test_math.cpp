@@ -1,0 +1,202 @@
+// CPU tests of the math every pass relies on, each against an independent double-precision reference.
+#include <cmath>
+#include <random>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include "render/frame_math.h"
+#include "render/renderer.h"
+#include "scene/generate.h"
+#include "scene/scene.h"
+#include "shared/barycentrics.h"
+
+using namespace visbuf;
+
+namespace {
+
+// Reference: perspective-correct barycentrics are the weights of the point on the triangle that
+// projects to ndc. In clip space that is a 3x3 linear system (double precision):
+//   sum l_i (x_i - ndc.x w_i) = 0,  sum l_i (y_i - ndc.y w_i) = 0,  sum l_i = 1.
+glm::dvec3 referenceBarycentrics(const glm::dvec4 c[3], glm::dvec2 ndc) {
+  glm::dmat3 a;
+  for (int i = 0; i < 3; ++i) a[i] = glm::dvec3(c[i].x - ndc.x * c[i].w, c[i].y - ndc.y * c[i].w, 1.0);
+  return glm::inverse(a) * glm::dvec3(0.0, 0.0, 1.0);
+}
+
+}  // namespace
+
+TEST(Barycentrics, MatchDoubleReferenceAndDerivatives) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), wdist(0.2, 50.0);
+  const glm::dvec2 pixel(2.0 / 1920.0, 2.0 / 1080.0);
+  double worst = 0.0, worstD = 0.0;
+  int tested = 0;
+  for (int t = 0; t < 2000; ++t) {
+    glm::dvec4 c[3];
+    for (auto& v : c) {
+      double w = wdist(rng);
+      v = glm::dvec4(u(rng) * w, u(rng) * w, 0.1, w);
+    }
+    // A point inside the triangle in screen space.
+    glm::dvec3 s(std::abs(u(rng)) + 0.05, std::abs(u(rng)) + 0.05, std::abs(u(rng)) + 0.05);
+    s /= s.x + s.y + s.z;
+    glm::dvec2 ndc = s.x * glm::dvec2(c[0]) / c[0].w + s.y * glm::dvec2(c[1]) / c[1].w + s.z * glm::dvec2(c[2]) / c[2].w;
+    glm::dvec2 e1 = glm::dvec2(c[1]) / c[1].w - glm::dvec2(c[0]) / c[0].w;
+    glm::dvec2 e2 = glm::dvec2(c[2]) / c[2].w - glm::dvec2(c[0]) / c[0].w;
+    double area = std::abs(e1.x * e2.y - e1.y * e2.x);
+    if (area < 1e-3) continue;  // slivers are the stress suite's job
+    ++tested;
+    glm::dvec3 ref = referenceBarycentrics(c, ndc);
+    glm::dvec3 refDx = (referenceBarycentrics(c, ndc + glm::dvec2(pixel.x * 1e-3, 0)) -
+                        referenceBarycentrics(c, ndc - glm::dvec2(pixel.x * 1e-3, 0))) / 2e-3;
+    glm::dvec3 refDy = (referenceBarycentrics(c, ndc + glm::dvec2(0, pixel.y * 1e-3)) -
+                        referenceBarycentrics(c, ndc - glm::dvec2(0, pixel.y * 1e-3))) / 2e-3;
+    gpu::Barycentrics b = gpu::computeBarycentrics(glm::vec4(c[0]), glm::vec4(c[1]), glm::vec4(c[2]), glm::vec2(ndc),
+                                                   glm::vec2(pixel));
+    for (int i = 0; i < 3; ++i) {
+      worst = std::max(worst, std::abs(double(b.lambda[i]) - ref[i]));
+      double scale = std::max({std::abs(refDx[i]), std::abs(refDy[i]), 1e-3});
+      worstD = std::max(worstD, std::abs(double(b.ddx[i]) - refDx[i]) / scale);
+      worstD = std::max(worstD, std::abs(double(b.ddy[i]) - refDy[i]) / scale);
+    }
+  }
+  EXPECT_GT(tested, 1000);
+  EXPECT_LT(worst, 2e-4) << "barycentric error vs double reference";
+  EXPECT_LT(worstD, 1e-3) << "derivative relative error vs double finite differences";
+}
+
+TEST(Octahedral, RoundTripAngleError) {
+  std::mt19937 rng(3);
+  std::normal_distribution<float> g;
+  double worst = 0.0;
+  for (int i = 0; i < 100000; ++i) {
+    glm::vec3 n = glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+    glm::vec3 d = octDecode(octEncode(n));
+    glm::dvec3 a(n), b(d);  // angle in double: acos of a float dot cannot resolve 1e-4
+    worst = std::max(worst, std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)));
+  }
+  EXPECT_LT(worst, 1e-4);  // radians; 16-bit octahedral is ~3e-5
+}
+
+TEST(IdEncoding, NeverAliases) {
+  IdEncoding a = chooseIdEncoding(1000, 28944, false);
+  EXPECT_FALSE(a.wide);
+  EXPECT_EQ(a.triangleBits, 15u);
+  EXPECT_EQ(a.slotBits, 10u);
+  EXPECT_TRUE(chooseIdEncoding(1000000, 28944, false).wide);  // 20 + 15 bits do not fit
+  // Exactly 32 bits of payload would make the largest ID + 1 wrap to 0 ("nothing"): must go wide.
+  EXPECT_TRUE(chooseIdEncoding(1u << 17, 1u << 15, false).wide);
+  EXPECT_FALSE(chooseIdEncoding((1u << 17) - 1, (1u << 15) - 1, false).wide);
+  EXPECT_TRUE(chooseIdEncoding(10, 10, true).wide);
+  // Exhaustive check of the boundary: every (slot, tri) encodes to a distinct non-zero value.
+  for (uint32_t cap : {1u, 2u, 3u, 17u, 4096u}) {
+    for (uint32_t tris : {1u, 2u, 5u, 1000u}) {
+      IdEncoding e = chooseIdEncoding(cap, tris, false);
+      ASSERT_FALSE(e.wide);
+      uint64_t maxValue = ((uint64_t(cap - 1) << e.triangleBits) | (tris - 1)) + 1;
+      EXPECT_LE(maxValue, 0xFFFFFFFFull);
+      EXPECT_GE(1ull << e.triangleBits, tris);
+    }
+  }
+}
+
+TEST(MeshBuild, LodChainIsValidAndDeep) {
+  Result<Mesh> mesh = buildMesh(makeTorusKnot());
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  const Mesh& m = *mesh;
+  EXPECT_EQ(m.triangleCount(0), 240u * 60u * 2u);
+  ASSERT_GE(m.lods.size(), 6u);
+  for (size_t l = 1; l < m.lods.size(); ++l) {
+    EXPECT_GE(m.lods[l].error, m.lods[l - 1].error) << "error must be non-decreasing";
+    EXPECT_LE(m.lods[l].indexCount, m.lods[l - 1].indexCount * 0.85) << "each level must really reduce";
+  }
+  EXPECT_LE(m.triangleCount(m.lods.size() - 1), 100u) << "a distant instance must cost tens of triangles";
+  // The bounding sphere contains every vertex (double check).
+  for (uint32_t i = 0; i < m.vertices.size(); ++i)
+    EXPECT_LE(glm::length(glm::dvec3(m.position(i)) - glm::dvec3(glm::vec3(m.boundsSphere))), double(m.boundsSphere.w));
+}
+
+TEST(MeshBuild, RejectsBadInput) {
+  MeshSource s = makeBox(1);
+  s.indices.push_back(9999);
+  s.indices.push_back(0);
+  s.indices.push_back(1);
+  EXPECT_EQ(buildMesh(s).error().code, ErrorCode::MalformedInput);
+  MeshSource n = makeBox(1);
+  n.positions[3].y = NAN;
+  Result<Mesh> r = buildMesh(n);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("non-finite"), std::string::npos);
+}
+
+TEST(Scene, MaxScaleBoundsSpectralNorm) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  for (int i = 0; i < 1000; ++i) {
+    glm::dmat4 m(1.0);
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) m[c][r] = u(rng);
+    // Power iteration on A^T A for the true spectral norm.
+    glm::dmat3 a(m), ata = glm::transpose(a) * a;
+    glm::dvec3 v(1.0, 0.3, -0.2);
+    for (int k = 0; k < 200; ++k) v = glm::normalize(ata * v);
+    double sigma = std::sqrt(glm::length(ata * v));
+    EXPECT_GE(maxScaleOf(m), sigma * (1.0 - 1e-12));
+  }
+  glm::dmat4 r = glm::rotate(glm::dmat4(1.0), 0.7, glm::normalize(glm::dvec3(1, 2, 3))) * glm::scale(glm::dmat4(1.0), glm::dvec3(2.5));
+  EXPECT_NEAR(maxScaleOf(r), 2.5, 1e-5);  // tight for rotation x uniform scale
+}
+
+TEST(FrameMath, ReverseZInfiniteProjection) {
+  Camera cam;
+  cam.position = {1e6, 5.0, -3.0};
+  cam.target = cam.position + glm::dvec3(0.0, 0.0, -1.0);
+  cam.nearPlane = 0.1;
+  FrameMath fm = computeFrameMath(cam, 1366, 768);
+  auto depth = [&](double d) {
+    glm::dvec4 c = fm.viewProj * glm::dvec4(0.0, 0.0, -d, 1.0);
+    return c.z / c.w;
+  };
+  EXPECT_NEAR(depth(0.1), 1.0, 1e-12);
+  EXPECT_NEAR(depth(1e9), 0.0, 1e-9);
+  EXPECT_GT(depth(10.0), depth(10.001));  // nearer is larger
+  // Points just inside the image corners are inside all planes; just outside, outside one.
+  const double d = 50.0, tanHalf = std::tan(cam.fovY / 2);
+  const double ar = 1366.0 / 768.0;
+  glm::dvec3 inside(0.999 * d * tanHalf * ar, 0.999 * d * tanHalf, -d), outside(1.001 * d * tanHalf * ar, 0.0, -d);
+  EXPECT_TRUE(sphereInFrustum(fm, cam, cam.position + inside, 0.0));
+  EXPECT_FALSE(sphereInFrustum(fm, cam, cam.position + outside, 0.0));
+  EXPECT_FALSE(sphereInFrustum(fm, cam, cam.position + glm::dvec3(0, 0, 1.0), 0.5));  // behind
+  EXPECT_TRUE(sphereInFrustum(fm, cam, cam.position + glm::dvec3(0, 0, -0.05), 0.1));  // crosses the near plane
+}
+
+TEST(Generate, FieldIsDeterministicAndInRange) {
+  FieldParams p;
+  p.objects = 500;
+  p.seed = 42;
+  Result<Scene> a = makeFieldScene(p), b = makeFieldScene(p);
+  ASSERT_TRUE(a.ok() && b.ok());
+  for (size_t i = 0; i < a->objects.size(); ++i) {
+    EXPECT_EQ(a->objects[i].transform, b->objects[i].transform);
+    glm::dvec4 s = objectBoundsWorld(*a, a->objects[i]);
+    for (int k = 0; k < 3; ++k) EXPECT_LE(std::abs(s[k]), 300.0 + 1e-3);
+    EXPECT_GE(s.w, 2.0 * (1 - 1e-4));
+    EXPECT_LT(s.w, 4.0 * (1 + 1e-4));
+  }
+  p.seed = 43;
+  Result<Scene> c = makeFieldScene(p);
+  EXPECT_NE(a->objects[0].transform, c->objects[0].transform);
+  EXPECT_EQ(makeFieldScene(FieldParams{.objects = 0}).error().code, ErrorCode::InvalidArgument);
+}
+
+TEST(Scene, ValidationRejectsNonFiniteAndZeroScale) {
+  Result<Scene> s = makeFieldScene(FieldParams{.objects = 4});
+  ASSERT_TRUE(s.ok());
+  Scene bad = *s;
+  bad.objects[1].transform[3][0] = INFINITY;
+  EXPECT_EQ(validateScene(bad).error().code, ErrorCode::MalformedInput);
+  bad = *s;
+  bad.objects[2].transform = glm::dmat4(0.0);
+  EXPECT_NE(validateScene(bad).error().message.find("zero-scale"), std::string::npos);
+}

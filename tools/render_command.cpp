@@ -1,0 +1,135 @@
+// visbuf render: one scene, one camera, headless; writes the image and prints per-pass GPU times and
+// culling stats (also as JSON).
+#include <algorithm>
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "commands.h"
+#include "core/image_io.h"
+#include "gpu/device.h"
+#include "render/renderer.h"
+#include "stats_output.h"
+
+namespace visbuf::tools {
+
+void addRenderCommand(CLI::App& app, RenderCommand& c) {
+  CLI::App* sub = app.add_subcommand("render", "render a scene headless to an image, print GPU times and stats");
+  addSceneOptions(*sub, c.scene);
+  addCameraOptions(*sub, c.camera);
+  sub->add_option("--size", c.size, "image size WxH")->capture_default_str();
+  sub->add_option("--path", c.path, "visbuf | forward (CPU-culled, one draw per object reference)")
+      ->check(CLI::IsMember({"visbuf", "forward"}))
+      ->capture_default_str();
+  sub->add_option("--device", c.device, "auto | cpu | gpu | N (auto prefers a GPU, else lavapipe)")->capture_default_str();
+  sub->add_option("--cull", c.cull, "none | frustum")->check(CLI::IsMember({"none", "frustum"}))->capture_default_str();
+  sub->add_option("--lod-error", c.lodError, "LOD threshold in pixels of projected error")->capture_default_str();
+  sub->add_flag("--no-lod", c.noLod, "always draw the full-detail mesh");
+  sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per frame (default: one per object)");
+  sub->add_flag("--wide-ids", c.wideIds, "force the 64-bit visibility target");
+  sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
+  sub->add_option("--frames", c.frames, "frames to render; timings are the median over frames after the first")
+      ->check(CLI::Range(1u, 10000u))
+      ->capture_default_str();
+  sub->add_option("-o,--output", c.output, "colour image (.png, .exr, .tif); empty: none")->capture_default_str();
+  sub->add_option("--ids-out", c.idsOut, "decoded IDs (object+1, triangle) as a 2-channel uint32 TIFF");
+  sub->add_option("--json", c.json, "write the stats as JSON");
+}
+
+namespace {
+int fail(const Error& e) {
+  std::fprintf(stderr, "visbuf: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  return 1;
+}
+}  // namespace
+
+int runRender(const RenderCommand& c) {
+  auto size = parseSize(c.size);
+  if (!size) return fail(size.error());
+  auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
+  if (!devOptions) return fail(devOptions.error());
+  if (!(c.lodError >= 0.0f)) return fail({ErrorCode::InvalidArgument, "--lod-error must be >= 0"});
+  if (c.path == "forward" && !c.idsOut.empty())
+    return fail({ErrorCode::InvalidArgument, "--ids-out needs --path visbuf (IDs come from the visibility target)"});
+
+  auto scene = loadScene(c.scene);
+  if (!scene) return fail(scene.error());
+  auto camera = makeCamera(c.camera, *scene);
+  if (!camera) return fail(camera.error());
+  auto device = gpu::Device::create(*devOptions);
+  if (!device) return fail(device.error());
+
+  RendererConfig rc;
+  rc.width = size->first;
+  rc.height = size->second;
+  rc.drawCapacity = c.drawCapacity;
+  rc.forceWideIds = c.wideIds;
+  auto renderer = Renderer::create(**device, *scene, rc);
+  if (!renderer) return fail(renderer.error());
+
+  FrameOptions fo;
+  fo.path = c.path == "forward" ? RenderPath::Forward : RenderPath::Visbuf;
+  fo.cull = c.cull == "none" ? CullMode::None : CullMode::Frustum;
+  fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
+  std::vector<FrameStats> runs;
+  Result<FrameResult> frame = makeError(ErrorCode::InvalidArgument, "no frame");
+  for (uint32_t i = 0; i < c.frames; ++i) {
+    const bool last = i + 1 == c.frames;
+    fo.readColor = last && !c.output.empty();
+    fo.readIds = last && !c.idsOut.empty();
+    frame = (*renderer)->renderFrame(*camera, fo);
+    if (!frame) return fail(frame.error());
+    runs.push_back(frame->stats);
+  }
+  FrameStats stats = frame->stats;
+  if (runs.size() > 1) {  // medians over the frames after the first (warm-up)
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    for (size_t p = 0; p < stats.passMs.size(); ++p) {
+      std::vector<double> v;
+      for (size_t r = 1; r < runs.size(); ++r) v.push_back(runs[r].passMs[p].second);
+      stats.passMs[p].second = median(v);
+    }
+    std::vector<double> g, cpu, wall;
+    for (size_t r = 1; r < runs.size(); ++r) {
+      g.push_back(runs[r].gpuMs);
+      cpu.push_back(runs[r].cpuRecordMs);
+      wall.push_back(runs[r].wallMs);
+    }
+    stats.gpuMs = median(g);
+    stats.cpuRecordMs = median(cpu);
+    stats.wallMs = median(wall);
+  }
+
+  std::printf("%s", formatStats(stats).c_str());
+  if (runs.size() > 1) std::printf("(times: median of %zu frames after 1 warm-up)\n", runs.size() - 1);
+  if (!c.output.empty()) {
+    Status s = writeColorImage(c.output, frame->width, frame->height, frame->color);
+    if (!s) return fail(s.error());
+    std::printf("image         %s\n", c.output.c_str());
+  }
+  if (!c.idsOut.empty()) {
+    Status s = writeIdImage(c.idsOut, frame->width, frame->height, frame->ids);
+    if (!s) return fail(s.error());
+    std::printf("ids           %s\n", c.idsOut.c_str());
+  }
+  if (!c.json.empty()) {
+    nlohmann::json j = statsToJson(stats);
+    j["scene"] = c.scene.scene;
+    j["frames"] = c.frames;
+    j["lodErrorPixels"] = fo.lodErrorPixels;
+    j["cull"] = c.cull;
+    Status s = writeJsonFile(c.json, j);
+    if (!s) return fail(s.error());
+  }
+  if ((*device)->validationEnabled() && (*device)->validationMessages() > 0) {
+    std::fprintf(stderr, "visbuf: %u validation message(s)\n", (*device)->validationMessages());
+    return 3;
+  }
+  if (stats.drawOverflow > 0) std::fprintf(stderr, "visbuf: warning: draw capacity overflow (%u dropped)\n", stats.drawOverflow);
+  return 0;
+}
+
+}  // namespace visbuf::tools

@@ -1,0 +1,37 @@
+// Scene selection shared by the subcommands: built-in layouts or a glTF file.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "core/result.h"
+#include "scene/scene.h"
+
+namespace visbuf::tools {
+
+struct SceneOptions {
+  std::string scene = "field";  // field | city | path to .gltf/.glb
+  uint32_t objects = 0;         // 0: the layout's default
+  uint64_t seed = 1;
+  std::string mesh;             // field: instanced mesh file (.gltf/.glb); empty = procedural knot
+};
+
+void addSceneOptions(CLI::App& app, SceneOptions& options);
+Result<Scene> loadScene(const SceneOptions& options);
+
+struct CameraOptions {
+  std::vector<double> position;  // x,y,z; empty = the scene's default camera
+  std::vector<double> target;
+  double fovDegrees = 60.0;
+  double nearPlane = 0.0;        // 0 = the scene's default
+};
+
+void addCameraOptions(CLI::App& app, CameraOptions& options);
+Result<Camera> makeCamera(const CameraOptions& options, const Scene& scene);
+
+// Parses "WxH".
+Result<std::pair<uint32_t, uint32_t>> parseSize(const std::string& text);
+
+}  // namespace visbuf::tools

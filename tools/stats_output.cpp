@@ -1,0 +1,74 @@
+#include "stats_output.h"
+
+#include <fstream>
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include "core/image_io.h"
+
+namespace visbuf::tools {
+
+std::string formatStats(const FrameStats& s) {
+  std::string out;
+  out += fmt::format("device        {}\n", s.device);
+  out += fmt::format("path          {}  {}x{}\n", renderPathName(s.path), s.width, s.height);
+  out += fmt::format("objects       {} tested, {} frustum-culled, {} drawn\n", s.objectsTested, s.frustumCulled,
+                     s.drawsRendered);
+  out += fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
+  std::string lods;
+  for (size_t i = 0; i < s.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.lodHistogram[i]);
+  out += fmt::format("lod histogram [{}]\n", lods);
+  if (s.path == RenderPath::Visbuf) {
+    out += fmt::format("ids           {}\n", s.ids.describe());
+    out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
+                       s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
+  }
+  for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<10}{:9.3f} ms\n", name, ms);
+  out += fmt::format("gpu total     {:9.3f} ms\n", s.gpuMs);
+  out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
+  out += fmt::format("memory        scene {:.1f} MiB, targets {} B/pixel\n", s.sceneBytes / 1048576.0,
+                     s.targetBytesPerPixel);
+  return out;
+}
+
+nlohmann::json statsToJson(const FrameStats& s) {
+  nlohmann::json j;
+  j["device"] = s.device;
+  j["path"] = renderPathName(s.path);
+  j["width"] = s.width;
+  j["height"] = s.height;
+  j["objects"] = s.objects;
+  j["objectsTested"] = s.objectsTested;
+  j["frustumCulled"] = s.frustumCulled;
+  j["drawsAppended"] = s.drawsAppended;
+  j["drawsRendered"] = s.drawsRendered;
+  j["drawCapacity"] = s.drawCapacity;
+  j["drawOverflow"] = s.drawOverflow;
+  j["trianglesDrawn"] = s.trianglesDrawn;
+  j["lodHistogram"] = s.lodHistogram;
+  j["ids"] = {{"wide", s.ids.wide}, {"triangleBits", s.ids.triangleBits}, {"slotBits", s.ids.slotBits},
+              {"description", s.ids.describe()}};
+  nlohmann::json passes = nlohmann::json::object();
+  for (const auto& [name, ms] : s.passMs) passes[name] = ms;
+  j["passMs"] = passes;
+  j["gpuMs"] = s.gpuMs;
+  j["cpuRecordMs"] = s.cpuRecordMs;
+  j["wallMs"] = s.wallMs;
+  j["sceneBytes"] = s.sceneBytes;
+  j["targetBytesPerPixel"] = s.targetBytesPerPixel;
+  return j;
+}
+
+Status writeJsonFile(const std::string& path, const nlohmann::json& json) {
+  const std::string tmp = path + fmt::format(".tmp{}", getpid());
+  {
+    std::ofstream f(tmp);
+    if (!f) return makeError(ErrorCode::IoError, fmt::format("{}: cannot open for writing", path));
+    f << json.dump(2) << "\n";
+    if (!f.flush()) return makeError(ErrorCode::IoError, fmt::format("{}: write failed", path));
+  }
+  return commitFile(tmp, path);
+}
+
+}  // namespace visbuf::tools

@@ -1,0 +1,18 @@
+// Human-readable stats block and JSON for FrameStats.
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/result.h"
+#include "render/renderer.h"
+
+namespace visbuf::tools {
+
+std::string formatStats(const FrameStats& stats);
+nlohmann::json statsToJson(const FrameStats& stats);
+// Atomic write (temporary file + rename).
+Status writeJsonFile(const std::string& path, const nlohmann::json& json);
+
+}  // namespace visbuf::tools
