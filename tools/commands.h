@@ -25,6 +25,7 @@ struct RenderCommand {
   std::string output = "visbuf.png";
   std::string idsOut;
   std::string json;
+  bool reference = false;  // also render the forward path and report the error against it
 };
 
 void addRenderCommand(CLI::App& app, RenderCommand& cmd);

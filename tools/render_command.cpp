@@ -1,11 +1,13 @@
 // visbuf render: one scene, one camera, headless; writes the image and prints per-pass GPU times and
 // culling stats (also as JSON).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include <fmt/format.h>
 
 #include "commands.h"
+#include "core/image_compare.h"
 #include "core/image_io.h"
 #include "gpu/device.h"
 #include "render/renderer.h"
@@ -34,6 +36,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("-o,--output", c.output, "colour image (.png, .exr, .tif); empty: none")->capture_default_str();
   sub->add_option("--ids-out", c.idsOut, "decoded IDs (object+1, triangle) as a 2-channel uint32 TIFF");
   sub->add_option("--json", c.json, "write the stats as JSON");
+  sub->add_flag("--reference", c.reference,
+                "also render the forward path (same culling and LOD rule, hardware interpolation) over the same "
+                "frames and report the error against it beside both times");
 }
 
 namespace {
@@ -71,40 +76,47 @@ int runRender(const RenderCommand& c) {
   fo.path = c.path == "forward" ? RenderPath::Forward : RenderPath::Visbuf;
   fo.cull = c.cull == "none" ? CullMode::None : CullMode::Frustum;
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
-  std::vector<FrameStats> runs;
+  // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
+  auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
+    std::vector<FrameStats> runs;
+    for (uint32_t i = 0; i < c.frames; ++i) {
+      const bool last = i + 1 == c.frames;
+      options.readColor = last && readColor;
+      options.readIds = last && !c.idsOut.empty() && options.path == RenderPath::Visbuf;
+      frame = (*renderer)->renderFrame(*camera, options);
+      if (!frame) return {};
+      runs.push_back(frame->stats);
+    }
+    FrameStats stats = frame->stats;
+    if (runs.size() > 1) {
+      auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+      };
+      for (size_t p = 0; p < stats.passMs.size(); ++p) {
+        std::vector<double> v;
+        for (size_t r = 1; r < runs.size(); ++r) v.push_back(runs[r].passMs[p].second);
+        stats.passMs[p].second = median(v);
+      }
+      std::vector<double> g, cpu, wall;
+      for (size_t r = 1; r < runs.size(); ++r) {
+        g.push_back(runs[r].gpuMs);
+        cpu.push_back(runs[r].cpuRecordMs);
+        wall.push_back(runs[r].wallMs);
+      }
+      stats.gpuMs = median(g);
+      stats.cpuRecordMs = median(cpu);
+      stats.wallMs = median(wall);
+    }
+    return stats;
+  };
+  const bool compare = c.reference && fo.path == RenderPath::Visbuf;
   Result<FrameResult> frame = makeError(ErrorCode::InvalidArgument, "no frame");
-  for (uint32_t i = 0; i < c.frames; ++i) {
-    const bool last = i + 1 == c.frames;
-    fo.readColor = last && !c.output.empty();
-    fo.readIds = last && !c.idsOut.empty();
-    frame = (*renderer)->renderFrame(*camera, fo);
-    if (!frame) return fail(frame.error());
-    runs.push_back(frame->stats);
-  }
-  FrameStats stats = frame->stats;
-  if (runs.size() > 1) {  // medians over the frames after the first (warm-up)
-    auto median = [](std::vector<double> v) {
-      std::sort(v.begin(), v.end());
-      return v[v.size() / 2];
-    };
-    for (size_t p = 0; p < stats.passMs.size(); ++p) {
-      std::vector<double> v;
-      for (size_t r = 1; r < runs.size(); ++r) v.push_back(runs[r].passMs[p].second);
-      stats.passMs[p].second = median(v);
-    }
-    std::vector<double> g, cpu, wall;
-    for (size_t r = 1; r < runs.size(); ++r) {
-      g.push_back(runs[r].gpuMs);
-      cpu.push_back(runs[r].cpuRecordMs);
-      wall.push_back(runs[r].wallMs);
-    }
-    stats.gpuMs = median(g);
-    stats.cpuRecordMs = median(cpu);
-    stats.wallMs = median(wall);
-  }
+  FrameStats stats = run(fo, !c.output.empty() || compare, frame);
+  if (!frame) return fail(frame.error());
 
   std::printf("%s", formatStats(stats).c_str());
-  if (runs.size() > 1) std::printf("(times: median of %zu frames after 1 warm-up)\n", runs.size() - 1);
+  if (c.frames > 1) std::printf("(times: median of %u frames after 1 warm-up)\n", c.frames - 1);
   if (!c.output.empty()) {
     Status s = writeColorImage(c.output, frame->width, frame->height, frame->color);
     if (!s) return fail(s.error());
@@ -115,8 +127,28 @@ int runRender(const RenderCommand& c) {
     if (!s) return fail(s.error());
     std::printf("ids           %s\n", c.idsOut.c_str());
   }
+  nlohmann::json referenceJson;
+  if (compare) {
+    FrameOptions ref = fo;
+    ref.path = RenderPath::Forward;
+    Result<FrameResult> refFrame = makeError(ErrorCode::InvalidArgument, "no frame");
+    FrameStats refStats = run(ref, true, refFrame);
+    if (!refFrame) return fail(refFrame.error());
+    ImageError e = compareColor(frame->color, refFrame->color);
+    const double refMs = refStats.gpuMs + refStats.cpuRecordMs, visMs = stats.gpuMs + stats.cpuRecordMs;
+    std::printf("reference     forward: gpu %.3f ms + cpu %.3f ms (visbuf %.3f ms: %.2fx faster)\n", refStats.gpuMs,
+                refStats.cpuRecordMs, visMs, refMs / std::max(visMs, 1e-9));
+    std::printf("error         vs forward: max %.5f, mean %.6f, PSNR %.1f dB, %.4f%% pixels > 1/255\n", e.maxAbs,
+                e.meanAbs, e.psnr, 100.0 * e.differingFraction);
+    referenceJson = statsToJson(refStats);
+    referenceJson["error"] = {{"maxAbs", e.maxAbs},
+                              {"meanAbs", e.meanAbs},
+                              {"psnr", std::isfinite(e.psnr) ? e.psnr : 999.0},
+                              {"differingFraction", e.differingFraction}};
+  }
   if (!c.json.empty()) {
     nlohmann::json j = statsToJson(stats);
+    if (compare) j["reference"] = referenceJson;
     j["scene"] = c.scene.scene;
     j["frames"] = c.frames;
     j["lodErrorPixels"] = fo.lodErrorPixels;

@@ -14,31 +14,31 @@
 
 #include "asset/gltf_import.h"
 
+#include <meshoptimizer.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <glm/glm.hpp>
 #include <limits>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string_view>
 #include <utility>
 
-#include <glm/glm.hpp>
-#include <meshoptimizer.h>
-#include <nlohmann/json.hpp>
-
 // --- tinygltf -------------------------------------------------------------------------------------------
-// This is the one translation unit that compiles tinygltf's implementation. Debian's libtinygltf-dev ships the
-// header plus a prebuilt libtinygltf.so; do NOT also link -ltinygltf, or every symbol exists twice.
-// The header includes <nlohmann/json.hpp> (nlohmann-json3-dev, already a dependency) by default.
-// Its default image codecs would need <stb_image.h>/<stb_image_write.h> from libstb-dev, which is not installed
-// and which a geometry importer has no use for, so tinygltf is built without them (hence no
-// STB_IMAGE_IMPLEMENTATION / STB_IMAGE_WRITE_IMPLEMENTATION anywhere) and we install a no-op image loader.
-// TINYGLTF_NO_EXTERNAL_IMAGE keeps it from even reading external image files (Avocado has 8 MB of PNGs).
+// This is the one translation unit that compiles tinygltf's implementation. Debian's libtinygltf-dev ships
+// the header plus a prebuilt libtinygltf.so; do NOT also link -ltinygltf, or every symbol exists twice. The
+// header includes <nlohmann/json.hpp> (nlohmann-json3-dev, already a dependency) by default. Its default
+// image codecs would need <stb_image.h>/<stb_image_write.h> from libstb-dev, which is not installed and which
+// a geometry importer has no use for, so tinygltf is built without them (hence no STB_IMAGE_IMPLEMENTATION /
+// STB_IMAGE_WRITE_IMPLEMENTATION anywhere) and we install a no-op image loader. TINYGLTF_NO_EXTERNAL_IMAGE
+// keeps it from even reading external image files (Avocado has 8 MB of PNGs).
 #define TINYGLTF_IMPLEMENTATION
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE
@@ -169,7 +169,7 @@ uint64_t indexComponentSize(int type) {
 // What an attribute accessor may contain (glTF 2.0 core + KHR_mesh_quantization).
 enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta };
 
-// Returns "" when the accessor's type/componentType/normalized combination is allowed for `kind`, else why not.
+// Returns "" when the accessor's type/componentType/normalized combination suits `kind`, else the reason.
 std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a) {
   const int ct = a.componentType;
   const bool isFloat = ct == TINYGLTF_COMPONENT_TYPE_FLOAT;
@@ -286,8 +286,8 @@ Result<GlbParts> parseGlb(const std::vector<uint8_t>& bytes, const std::string& 
   if (bytes.size() < 20) return malformed(path + ": GLB file is truncated (" + str(bytes.size()) + " bytes)");
   const uint32_t version = readU32(bytes.data() + 4);
   if (version != 2) {
-    return makeError(ErrorCode::Unsupported, path + ": GLB version " + str(uint64_t{version}) +
-                                                 " is not supported (only glTF 2.0)");
+    return makeError(ErrorCode::Unsupported,
+                     path + ": GLB version " + str(uint64_t{version}) + " is not supported (only glTF 2.0)");
   }
   const uint64_t length = readU32(bytes.data() + 8);
   if (length > bytes.size() || length < 20) {
@@ -349,9 +349,9 @@ std::vector<uint8_t> buildGlb(std::string_view json, const uint8_t* bin, uint64_
   return out;
 }
 
-// EXT_meshopt_compression allows a "fallback" buffer with no uri (and, in a GLB, no data): every bufferView in
-// it is meant to be decoded from a compressed buffer instead. tinygltf 2.7 insists on loading every buffer and
-// fails on those, so we give such buffers a 4-byte placeholder data URI. The buffer keeps its extension
+// EXT_meshopt_compression allows a "fallback" buffer with no uri (and, in a GLB, no data): every bufferView
+// in it is meant to be decoded from a compressed buffer instead. tinygltf 2.7 insists on loading every buffer
+// and fails on those, so we give such buffers a 4-byte placeholder data URI. The buffer keeps its extension
 // object, which is how the importer later knows never to read it. Returns nullopt when nothing changes
 // (including when the JSON does not parse: tinygltf then reports the syntax error itself).
 std::optional<std::string> neutraliseMeshoptFallbackBuffers(std::string_view jsonText) {
@@ -376,6 +376,35 @@ std::optional<std::string> neutraliseMeshoptFallbackBuffers(std::string_view jso
   }
   if (!changed) return std::nullopt;
   return doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+// tinygltf converts the JSON DOM recursively, so absurd nesting (e.g. 200k nested arrays in "extras") would
+// overflow the stack before any of our checks run. Real glTF nests about ten levels; refuse anything deeper
+// than this before parsing. (Brackets inside strings do not count.)
+constexpr int kMaxJsonDepth = 512;
+
+bool jsonDepthWithin(std::string_view text, int limit) {
+  int depth = 0;
+  bool inString = false;
+  bool escaped = false;
+  for (const char c : text) {
+    if (inString) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        inString = false;
+      }
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > limit) return false;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return true;
 }
 
 // Image loader that keeps nothing: geometry import needs no pixels, and this spares us libstb.
@@ -414,6 +443,11 @@ Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<st
   if (isGlb) {
     auto parts = parseGlb(*bytes, path);
     if (!parts) return parts.error();
+    // Some exporters pad the JSON chunk with NULs instead of spaces; the JSON parser would reject them.
+    while (!parts->json.empty() && parts->json.back() == '\0') parts->json.remove_suffix(1);
+    if (!jsonDepthWithin(parts->json, kMaxJsonDepth)) {
+      return malformed(path + ": JSON nesting deeper than " + str(kMaxJsonDepth) + " levels");
+    }
     const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(parts->json);
     const std::vector<uint8_t> glb =
         buildGlb(patched ? std::string_view(*patched) : parts->json, parts->bin, parts->binSize);
@@ -424,6 +458,9 @@ Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<st
                                      baseDir);
   } else {
     const std::string_view text(reinterpret_cast<const char*>(bytes->data()), bytes->size());
+    if (!jsonDepthWithin(text, kMaxJsonDepth)) {
+      return malformed(path + ": JSON nesting deeper than " + str(kMaxJsonDepth) + " levels");
+    }
     const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(text);
     const std::string_view json = patched ? std::string_view(*patched) : text;
     ok = loader.LoadASCIIFromString(model, &err, &warn, json.data(), static_cast<unsigned int>(json.size()),
@@ -513,8 +550,8 @@ class Importer {
 
   Result<glm::dmat4> localMatrix(int node);
   Status emitNode(int node, const glm::dmat4& world, MeshSource* out);
-  Status emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world, const std::vector<double>& weights,
-                       const std::string& where, MeshSource* out);
+  Status emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world,
+                       const std::vector<double>& weights, const std::string& where, MeshSource* out);
 
   const std::string& path_;
   const tinygltf::Model& model_;
@@ -530,8 +567,8 @@ class Importer {
 // Required extensions that change how geometry must be read are either handled or refused; the ones that only
 // concern materials, textures or lights cannot change the triangles, so they are ignored.
 Status Importer::checkRequiredExtensions() {
-  static constexpr const char* kIgnorablePrefixes[] = {"KHR_materials_", "KHR_texture_", "EXT_texture_",
-                                                       "KHR_lights_", "MSFT_texture_", "KHR_xmp"};
+  static constexpr const char* kIgnorablePrefixes[] = {"KHR_materials_", "KHR_texture_",  "EXT_texture_",
+                                                       "KHR_lights_",    "MSFT_texture_", "KHR_xmp"};
   for (const std::string& ext : model_.extensionsRequired) {
     if (ext == kMeshoptExt) {
       meshoptRequired_ = true;
@@ -578,8 +615,8 @@ Result<Bytes> Importer::plainViewBytes(int viewIndex, const std::string& where) 
   const std::vector<unsigned char>& data = model_.buffers[static_cast<size_t>(view.buffer)].data;
   if (!rangeFits(view.byteOffset, view.byteLength, data.size())) {
     return malformed(vw + " (byteOffset " + str(uint64_t{view.byteOffset}) + ", byteLength " +
-                     str(uint64_t{view.byteLength}) + ") runs past the end of buffer " + str(view.buffer) + " (" +
-                     str(uint64_t{data.size()}) + " bytes)");
+                     str(uint64_t{view.byteLength}) + ") runs past the end of buffer " + str(view.buffer) +
+                     " (" + str(uint64_t{data.size()}) + " bytes)");
   }
   return Bytes{data.data() + view.byteOffset, view.byteLength};
 }
@@ -618,9 +655,10 @@ Result<Bytes> Importer::meshoptViewBytes(int viewIndex, const std::string& where
     return true;
   };
   uint64_t buffer = 0, byteOffset = 0, byteLength = 0, byteStride = 0, count = 0;
-  for (auto [key, required, dst] : {std::tuple{"buffer", true, &buffer}, std::tuple{"byteOffset", false, &byteOffset},
-                                    std::tuple{"byteLength", true, &byteLength},
-                                    std::tuple{"byteStride", true, &byteStride}, std::tuple{"count", true, &count}}) {
+  for (auto [key, required, dst] :
+       {std::tuple{"buffer", true, &buffer}, std::tuple{"byteOffset", false, &byteOffset},
+        std::tuple{"byteLength", true, &byteLength}, std::tuple{"byteStride", true, &byteStride},
+        std::tuple{"count", true, &count}}) {
     if (!number(key, required, 0, dst)) return malformed(vw + ": missing or invalid '" + key + "'");
   }
   const tinygltf::Value& modeValue = ext.Get("mode");
@@ -634,19 +672,22 @@ Result<Bytes> Importer::meshoptViewBytes(int viewIndex, const std::string& where
   if (mode == "ATTRIBUTES") {
     expectedHeader = 0xA0;
     if (byteStride == 0 || byteStride > 256 || byteStride % 4 != 0) {
-      return malformed(vw + ": ATTRIBUTES byteStride " + str(byteStride) + " must be a multiple of 4 in [4, 256]");
+      return malformed(vw + ": ATTRIBUTES byteStride " + str(byteStride) +
+                       " must be a multiple of 4 in [4, 256]");
     }
   } else if (mode == "TRIANGLES" || mode == "INDICES") {
     expectedHeader = mode == "TRIANGLES" ? 0xE0 : 0xD0;
     if (byteStride != 2 && byteStride != 4) return malformed(vw + ": " + mode + " byteStride must be 2 or 4");
-    if (mode == "TRIANGLES" && count % 3 != 0) return malformed(vw + ": TRIANGLES count must be a multiple of 3");
+    if (mode == "TRIANGLES" && count % 3 != 0)
+      return malformed(vw + ": TRIANGLES count must be a multiple of 3");
   } else {
     return cannotDecode("unknown mode '" + mode + "'");
   }
   if (filter != "NONE") {
     if (mode != "ATTRIBUTES") return malformed(vw + ": filter '" + filter + "' requires mode ATTRIBUTES");
     if (filter == "OCTAHEDRAL") {
-      if (byteStride != 4 && byteStride != 8) return malformed(vw + ": OCTAHEDRAL filter needs byteStride 4 or 8");
+      if (byteStride != 4 && byteStride != 8)
+        return malformed(vw + ": OCTAHEDRAL filter needs byteStride 4 or 8");
     } else if (filter == "QUATERNION") {
       if (byteStride != 8) return malformed(vw + ": QUATERNION filter needs byteStride 8");
     } else if (filter != "EXPONENTIAL") {
@@ -661,9 +702,9 @@ Result<Bytes> Importer::meshoptViewBytes(int viewIndex, const std::string& where
   }
   const std::vector<unsigned char>& source = model_.buffers[buffer].data;
   if (!rangeFits(byteOffset, byteLength, source.size())) {
-    return malformed(vw + ": compressed range (byteOffset " + str(byteOffset) + ", byteLength " + str(byteLength) +
-                     ") runs past the end of buffer " + str(buffer) + " (" + str(uint64_t{source.size()}) +
-                     " bytes)");
+    return malformed(vw + ": compressed range (byteOffset " + str(byteOffset) + ", byteLength " +
+                     str(byteLength) + ") runs past the end of buffer " + str(buffer) + " (" +
+                     str(uint64_t{source.size()}) + " bytes)");
   }
   uint64_t decodedSize = 0;
   if (!checkedMul(count, byteStride, &decodedSize) || decodedSize > view.byteLength) {
@@ -671,8 +712,8 @@ Result<Bytes> Importer::meshoptViewBytes(int viewIndex, const std::string& where
                      " exceeds the bufferView byteLength " + str(uint64_t{view.byteLength}));
   }
   if (decodedSize / kMaxMeshoptExpansion > byteLength + 1024) {
-    return malformed(vw + ": decoded size " + str(decodedSize) + " is implausibly large for " + str(byteLength) +
-                     " compressed bytes");
+    return malformed(vw + ": decoded size " + str(decodedSize) + " is implausibly large for " +
+                     str(byteLength) + " compressed bytes");
   }
 
   std::vector<uint8_t> decoded(decodedSize);
@@ -716,7 +757,8 @@ Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where)
   plan.normalized = acc.normalized;
   plan.numComponents = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
   const int componentSize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(acc.componentType));
-  if (plan.numComponents <= 0 || componentSize <= 0) return malformed(where + ": invalid type or componentType");
+  if (plan.numComponents <= 0 || componentSize <= 0)
+    return malformed(where + ": invalid type or componentType");
   plan.componentSize = static_cast<uint64_t>(componentSize);
   plan.elementSize = plan.componentSize * static_cast<uint64_t>(plan.numComponents);
   plan.count = acc.count;
@@ -734,9 +776,10 @@ Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where)
       uint64_t span = 0;  // bytes from the first element's start to the last element's end
       if (!checkedMul(plan.count - 1, plan.stride, &span) || !checkedAdd(span, plan.elementSize, &span) ||
           !rangeFits(acc.byteOffset, span, bytes->size)) {
-        return malformed(where + ": byteOffset " + str(uint64_t{acc.byteOffset}) + " + count " + str(plan.count) +
-                         " x stride " + str(plan.stride) + " runs past the end of bufferView " +
-                         str(acc.bufferView) + " (" + str(bytes->size) + " bytes)");
+        return malformed(where + ": byteOffset " + str(uint64_t{acc.byteOffset}) + " + count " +
+                         str(plan.count) + " x stride " + str(plan.stride) +
+                         " runs past the end of bufferView " + str(acc.bufferView) + " (" + str(bytes->size) +
+                         " bytes)");
       }
       plan.dense = bytes->data + acc.byteOffset;
     }
@@ -748,7 +791,8 @@ Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where)
   if (acc.sparse.isSparse) {
     const auto& sparse = acc.sparse;
     if (sparse.count <= 0 || static_cast<uint64_t>(sparse.count) > plan.count) {
-      return malformed(where + ": sparse count " + str(sparse.count) + " is not in [1, " + str(plan.count) + "]");
+      return malformed(where + ": sparse count " + str(sparse.count) + " is not in [1, " + str(plan.count) +
+                       "]");
     }
     if (sparse.indices.byteOffset < 0 || sparse.values.byteOffset < 0) {
       return malformed(where + ": negative sparse byteOffset");
@@ -782,8 +826,8 @@ Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where)
   return plan;
 }
 
-// Calls fn(elementIndex, elementBytes) for every element (elementBytes == nullptr: the element is zero), dense
-// elements first, then the sparse substitutions, so later calls overwrite earlier ones.
+// Calls fn(elementIndex, elementBytes) for every element (elementBytes == nullptr: the element is zero),
+// dense elements first, then the sparse substitutions, so later calls overwrite earlier ones.
 template <typename Fn>
 Status Importer::forEachElement(const AccessorPlan& plan, const std::string& where, Fn&& fn) {
   for (uint64_t i = 0; i < plan.count; ++i) fn(i, plan.dense ? plan.dense + i * plan.stride : nullptr);
@@ -798,8 +842,8 @@ Status Importer::forEachElement(const AccessorPlan& plan, const std::string& whe
   return {};
 }
 
-Status Importer::readFloats(int accessor, AttributeKind kind, const std::string& where, std::vector<float>* out,
-                            int* numComponents) {
+Status Importer::readFloats(int accessor, AttributeKind kind, const std::string& where,
+                            std::vector<float>* out, int* numComponents) {
   auto plan = planAccessor(accessor, where);
   if (!plan) return plan.error();
   const std::string why = checkAttributeFormat(kind, model_.accessors[static_cast<size_t>(accessor)]);
@@ -811,9 +855,10 @@ Status Importer::readFloats(int accessor, AttributeKind kind, const std::string&
   return forEachElement(p, where, [&](uint64_t i, const uint8_t* element) {
     float* dst = out->data() + i * static_cast<uint64_t>(n);
     for (int c = 0; c < n; ++c) {
-      dst[c] = element ? static_cast<float>(decodeComponent(element + static_cast<uint64_t>(c) * p.componentSize,
-                                                            p.componentType, p.normalized))
-                       : 0.0f;
+      dst[c] = element
+                   ? static_cast<float>(decodeComponent(element + static_cast<uint64_t>(c) * p.componentSize,
+                                                        p.componentType, p.normalized))
+                   : 0.0f;
     }
   });
 }
@@ -859,7 +904,8 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
   DecodedPrimitive out;
 
   const int mode = prim.mode;
-  if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+  if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+      mode != TINYGLTF_MODE_TRIANGLE_FAN) {
     static constexpr const char* kModeNames[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"};
     const std::string name = (mode >= 0 && mode <= 3) ? kModeNames[mode] : "unknown mode " + str(mode);
     warn(where + ": " + name + " primitive skipped (only triangles are imported)");
@@ -874,16 +920,16 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
   }
 
   // Vertex attributes. All must have POSITION's count.
-  if (Status s = readVec3(positionIt->second, AttributeKind::Position, accessorWhere(positionIt->second, "POSITION"),
-                          true, &out.positions);
+  if (Status s = readVec3(positionIt->second, AttributeKind::Position,
+                          accessorWhere(positionIt->second, "POSITION"), true, &out.positions);
       !s) {
     return s.error();
   }
   const uint64_t vertexCount = out.positions.size();
   auto checkCount = [&](uint64_t count, int accessor, const std::string& semantic) -> Status {
     if (count == vertexCount) return {};
-    return malformed(accessorWhere(accessor, semantic) + ": count " + str(count) + " differs from POSITION count " +
-                     str(vertexCount));
+    return malformed(accessorWhere(accessor, semantic) + ": count " + str(count) +
+                     " differs from POSITION count " + str(vertexCount));
   };
   if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
     const std::string w = accessorWhere(it->second, "NORMAL");
@@ -913,9 +959,11 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     std::vector<float> flat;
     int n = 0;
     if (Status s = readFloats(it->second, AttributeKind::Color, w, &flat, &n); !s) return s.error();
-    if (Status s = checkCount(flat.size() / static_cast<uint64_t>(n), it->second, "COLOR_0"); !s) return s.error();
+    if (Status s = checkCount(flat.size() / static_cast<uint64_t>(n), it->second, "COLOR_0"); !s)
+      return s.error();
     out.colors.resize(vertexCount);
-    for (uint64_t i = 0; i < vertexCount; ++i) out.colors[i] = packColor(&flat[i * static_cast<uint64_t>(n)], n);
+    for (uint64_t i = 0; i < vertexCount; ++i)
+      out.colors[i] = packColor(&flat[i * static_cast<uint64_t>(n)], n);
   }
 
   // Morph targets (only POSITION and NORMAL matter for a static mesh; TANGENT is ignored).
@@ -944,8 +992,8 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     if (Status s = readIndices(prim.indices, w, &indices); !s) return s.error();
     for (size_t i = 0; i < indices.size(); ++i) {
       if (indices[i] >= vertexCount) {
-        return malformed(w + ": index value " + str(uint64_t{indices[i]}) + " at position " + str(uint64_t{i}) +
-                         " is not below the vertex count " + str(vertexCount));
+        return malformed(w + ": index value " + str(uint64_t{indices[i]}) + " at position " +
+                         str(uint64_t{i}) + " is not below the vertex count " + str(vertexCount));
       }
     }
   } else {
@@ -957,7 +1005,8 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
   }
   const size_t n = indices.size();
   if (mode == TINYGLTF_MODE_TRIANGLES) {
-    if (n % 3 != 0) warn(where + ": index count " + str(uint64_t{n}) + " is not a multiple of 3; extra ignored");
+    if (n % 3 != 0)
+      warn(where + ": index count " + str(uint64_t{n}) + " is not a multiple of 3; extra ignored");
     out.triangles.assign(indices.begin(), indices.begin() + static_cast<std::ptrdiff_t>(n - n % 3));
   } else {
     // Strips and fans; triangles that repeat an index are stitching artefacts (strip restarts), so drop them.
@@ -1018,7 +1067,8 @@ Result<glm::dmat4> Importer::localMatrix(int nodeIndex) {
   if (!node.translation.empty() && node.translation.size() != 3) {
     return malformed(where + ": translation must have 3 elements");
   }
-  if (!node.rotation.empty() && node.rotation.size() != 4) return malformed(where + ": rotation must have 4 elements");
+  if (!node.rotation.empty() && node.rotation.size() != 4)
+    return malformed(where + ": rotation must have 4 elements");
   if (!node.scale.empty() && node.scale.size() != 3) return malformed(where + ": scale must have 3 elements");
   glm::dmat3 rs(1.0);
   if (!node.rotation.empty()) {
@@ -1038,13 +1088,15 @@ Result<glm::dmat4> Importer::localMatrix(int nodeIndex) {
     for (int c = 0; c < 3; ++c) rs[c] *= node.scale[static_cast<size_t>(c)];
   }
   m = glm::dmat4(rs);
-  if (!node.translation.empty()) m[3] = glm::dvec4(node.translation[0], node.translation[1], node.translation[2], 1.0);
+  if (!node.translation.empty())
+    m[3] = glm::dvec4(node.translation[0], node.translation[1], node.translation[2], 1.0);
   return m;
 }
 
 // Appends one primitive instance: morph, transform, winding fix-up, normals.
 Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world,
-                               const std::vector<double>& weights, const std::string& where, MeshSource* out) {
+                               const std::vector<double>& weights, const std::string& where,
+                               MeshSource* out) {
   const size_t base = out->positions.size();
   const size_t count = prim.positions.size();
   if (count > std::numeric_limits<uint32_t>::max() - base) {
@@ -1060,9 +1112,10 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
   // matrices; multiplying by sign(det) makes it point like the inverse-transpose.
   const glm::dmat3 linear(world);
   const double det = glm::determinant(linear);
-  const glm::dmat3 normalMatrix = glm::dmat3(glm::cross(linear[1], linear[2]), glm::cross(linear[2], linear[0]),
-                                             glm::cross(linear[0], linear[1])) *
-                                  (det < 0.0 ? -1.0 : 1.0);
+  const glm::dmat3 normalMatrix =
+      glm::dmat3(glm::cross(linear[1], linear[2]), glm::cross(linear[2], linear[0]),
+                 glm::cross(linear[0], linear[1])) *
+      (det < 0.0 ? -1.0 : 1.0);
   const bool flip = det < 0.0;
 
   out->positions.resize(base + count);
@@ -1122,11 +1175,13 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
       if (!needsNormal[v]) continue;
       const double len = glm::length(accum[v]);
       // Vertices used by no (non-degenerate) triangle get an arbitrary unit normal.
-      out->normals[base + v] = len > 0.0 && std::isfinite(len) ? glm::vec3(accum[v] / len) : glm::vec3(0, 0, 1);
+      out->normals[base + v] =
+          len > 0.0 && std::isfinite(len) ? glm::vec3(accum[v] / len) : glm::vec3(0, 0, 1);
     }
   } else if (anyNeeded && !warnedZeroNormals_) {
     warnedZeroNormals_ = true;
-    warn(path_ + ": some vertices have no usable normal and generateNormalsIfMissing is off; they get (0,0,0)");
+    warn(path_ +
+         ": some vertices have no usable normal and generateNormalsIfMissing is off; they get (0,0,0)");
   }
   if (zeroNormals > 0) {
     warn(where + ": " + str(uint64_t{zeroNormals}) + " zero-length normal(s) replaced" +
@@ -1163,8 +1218,8 @@ Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* ou
       ++primitivesSkipped;
       continue;
     }
-    const std::string where = nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " +
-                              str(uint64_t{p});
+    const std::string where =
+        nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " + str(uint64_t{p});
     if (Status s = emitPrimitive(prim, world, weights, where, out); !s) return s;
     ++primitivesImported;
   }
@@ -1223,14 +1278,15 @@ Result<MeshSource> Importer::run() {
     auto local = localMatrix(nodeIndex);
     if (!local) return local.error();
     const glm::dmat4 world = parentWorld * *local;
-    if (!isFinite(world)) return malformed(path_ + ": node " + str(nodeIndex) + named(node.name) + ": non-finite transform");
+    if (!isFinite(world))
+      return malformed(path_ + ": node " + str(nodeIndex) + named(node.name) + ": non-finite transform");
     if (Status s = emitNode(nodeIndex, world, &out); !s) return s.error();
     for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
   }
 
   if (out.indices.empty()) {
-    return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" + str(uint64_t{primitivesSkipped}) +
-                     " primitive(s) skipped)");
+    return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" +
+                     str(uint64_t{primitivesSkipped}) + " primitive(s) skipped)");
   }
   if (!out.uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0.0f));
   if (!out.colors.empty()) out.colors.resize(out.positions.size(), 0xFFFFFFFFu);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/image_compare.h"
 #include "core/image_io.h"
 #include "gpu/device.h"
 #include "render/renderer.h"
@@ -40,33 +41,8 @@ inline gpu::Device& testDevice() {
 #define EXPECT_NO_VALIDATION_MESSAGES(before) \
   EXPECT_EQ(::visbuf::test::testDevice().validationMessages(), (before)) << "Vulkan validation reported messages"
 
-struct ImageError {
-  double maxAbs = 0.0;
-  double meanAbs = 0.0;
-  double psnr = INFINITY;
-  size_t differing = 0;  // pixels whose max channel error > 1/255
-};
-
-inline ImageError compareColor(const std::vector<float>& a, const std::vector<float>& b) {
-  ImageError e;
-  double sumSq = 0.0, sum = 0.0;
-  const size_t pixels = a.size() / 4;
-  for (size_t p = 0; p < pixels; ++p) {
-    double worst = 0.0;
-    for (int c = 0; c < 3; ++c) {
-      double d = std::abs(double(std::clamp(a[p * 4 + c], 0.0f, 1.0f)) - double(std::clamp(b[p * 4 + c], 0.0f, 1.0f)));
-      worst = std::max(worst, d);
-      sumSq += d * d;
-      sum += d;
-    }
-    e.maxAbs = std::max(e.maxAbs, worst);
-    if (worst > 1.0 / 255.0) ++e.differing;
-  }
-  e.meanAbs = sum / double(pixels * 3);
-  double mse = sumSq / double(pixels * 3);
-  e.psnr = mse > 0 ? 10.0 * std::log10(1.0 / mse) : INFINITY;
-  return e;
-}
+using ::visbuf::ImageError;
+using ::visbuf::compareColor;
 
 // Where a test fails, it leaves the images behind for a person to look at.
 inline void saveOnFailure(const std::string& name, const FrameResult& a, const FrameResult& b) {

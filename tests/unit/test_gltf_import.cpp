@@ -1,10 +1,11 @@
 // Tests for importGltfMesh (engine/asset/gltf_import.h).
 //
-// Most tests write a tiny .gltf into a temporary folder: JSON built with nlohmann::json and one buffer embedded as a
-// base64 data URI, so every byte of the input is visible in the test. The tests at the end read the third-party
-// sample assets from VISBUF_SHARED_ASSETS_DIR (set by the build to <repo>/../shared/assets) and skip when that is
-// not defined or the file is missing.
-#include "asset/gltf_import.h"
+// Most tests write a tiny .gltf into a temporary folder: JSON built with nlohmann::json and one buffer
+// embedded as a base64 data URI, so every byte of the input is visible in the test. The tests at the end read
+// the third-party sample assets from VISBUF_SHARED_ASSETS_DIR (set by the build to <repo>/../shared/assets)
+// and skip when that is not defined or the file is missing.
+#include <gtest/gtest.h>
+#include <meshoptimizer.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,16 +13,15 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <glm/glm.hpp>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
-#include <glm/glm.hpp>
-#include <gtest/gtest.h>
-#include <meshoptimizer.h>
-#include <nlohmann/json.hpp>
+#include "asset/gltf_import.h"
 
 namespace visbuf {
 namespace {
@@ -33,7 +33,6 @@ constexpr int kByte = 5120;
 constexpr int kUByte = 5121;
 constexpr int kShort = 5122;
 constexpr int kUShort = 5123;
-constexpr int kUInt = 5125;
 constexpr int kFloat = 5126;
 
 std::string base64(const std::vector<uint8_t>& data) {
@@ -88,7 +87,8 @@ class DocBuilder {
   }
   int addIndices16(const std::vector<uint16_t>& indices) {
     const int view = addView(indices);
-    return addAccessor({{"bufferView", view}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}});
+    return addAccessor(
+        {{"bufferView", view}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}});
   }
 
   json& accessor(int index) { return accessors_[static_cast<size_t>(index)]; }
@@ -99,7 +99,8 @@ class DocBuilder {
   json build(json meshes, json nodes, json scenes = json::array({{{"nodes", {0}}}})) const {
     json doc = {{"asset", {{"version", "2.0"}}},
                 {"buffers",
-                 {{{"byteLength", bytes_.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes_)}}}},
+                 {{{"byteLength", bytes_.size()},
+                   {"uri", "data:application/octet-stream;base64," + base64(bytes_)}}}},
                 {"bufferViews", views_},
                 {"accessors", accessors_},
                 {"meshes", std::move(meshes)},
@@ -131,9 +132,10 @@ class GltfImportTest : public ::testing::Test {
  protected:
   void SetUp() override {
     std::random_device rd;
-    dir_ = fs::temp_directory_path() /
-           ("visbuf_gltf_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(rd()));
+    dir_ =
+        fs::temp_directory_path() /
+        ("visbuf_gltf_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+         "_" + std::to_string(rd()));
     fs::create_directories(dir_);
   }
   void TearDown() override {
@@ -148,8 +150,8 @@ class GltfImportTest : public ::testing::Test {
   }
   std::string writeBytes(const std::string& name, const std::vector<uint8_t>& bytes) {
     const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
-                                                 static_cast<std::streamsize>(bytes.size()));
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     return path.string();
   }
   std::string write(const std::string& name, const json& doc) { return writeText(name, doc.dump(1)); }
@@ -179,12 +181,13 @@ void expectValidMesh(const MeshSource& m) {
   ASSERT_FALSE(m.indices.empty());
   for (uint32_t index : m.indices) ASSERT_LT(index, m.positions.size());
   for (size_t i = 0; i < m.positions.size(); ++i) {
-    ASSERT_TRUE(std::isfinite(m.positions[i].x) && std::isfinite(m.positions[i].y) && std::isfinite(m.positions[i].z));
+    ASSERT_TRUE(std::isfinite(m.positions[i].x) && std::isfinite(m.positions[i].y) &&
+                std::isfinite(m.positions[i].z));
     ASSERT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-4f) << "vertex " << i;
   }
 }
 
-// ----------------------------------------------------------------------------------------------------------------
+// --------------------------------------------------------------------------------------------------------
 // Topology
 
 TEST_F(GltfImportTest, TriangleStripBecomesListAndDropsDegenerates) {
@@ -193,7 +196,8 @@ TEST_F(GltfImportTest, TriangleStripBecomesListAndDropsDegenerates) {
   // The repeated 3 stitches two strips: triangles (2,3,3) and (3,3,4) are degenerate and must go.
   const int idx = b.addIndices16({0, 1, 2, 3, 3, 4, 5});
   GltfImportReport report;
-  auto mesh = importGltfMesh(write("strip.gltf", b.build(triangleMesh(pos, idx, 5), {{{"mesh", 0}}})), {}, &report);
+  auto mesh =
+      importGltfMesh(write("strip.gltf", b.build(triangleMesh(pos, idx, 5), {{{"mesh", 0}}})), {}, &report);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   expectValidMesh(*mesh);
   // Even triangles keep their order, odd ones swap the first two vertices (glTF spec).
@@ -248,7 +252,8 @@ TEST_F(GltfImportTest, PointsAndLinesAreSkippedWithWarning) {
 TEST_F(GltfImportTest, LinesOnlyIsNoTriangleGeometry) {
   DocBuilder b;
   const int pos = b.addVec3(kTriangle);
-  auto mesh = importGltfMesh(write("lines.gltf", b.build(triangleMesh(pos, std::nullopt, 3), {{{"mesh", 0}}})));
+  auto mesh =
+      importGltfMesh(write("lines.gltf", b.build(triangleMesh(pos, std::nullopt, 3), {{{"mesh", 0}}})));
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
   EXPECT_NE(mesh.error().message.find("no triangle geometry"), std::string::npos) << mesh.error().message;
@@ -268,7 +273,7 @@ TEST_F(GltfImportTest, PrimitiveWithoutPositionIsSkipped) {
   EXPECT_NE(report.warnings[0].find("POSITION"), std::string::npos);
 }
 
-// ----------------------------------------------------------------------------------------------------------------
+// --------------------------------------------------------------------------------------------------------
 // Transforms
 
 TEST_F(GltfImportTest, MatrixParentAndTrsChildInstanceOneMeshTwice) {
@@ -276,17 +281,20 @@ TEST_F(GltfImportTest, MatrixParentAndTrsChildInstanceOneMeshTwice) {
   const int pos = b.addVec3(kTriangle);
   const int normal = b.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
   const double s = std::sqrt(0.5);
-  json nodes = {
-      // Uniform scale 2, then translate by (10, 0, 0); column-major.
-      {{"name", "parent"},
-       {"mesh", 0},
-       {"matrix", {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 10, 0, 0, 1}},
-       {"children", {1}}},
-      // T(0,1,0) * R(90 degrees about +Z) * S(3).
-      {{"name", "child"}, {"mesh", 0}, {"translation", {0, 1, 0}}, {"rotation", {0, 0, s, s}}, {"scale", {3, 3, 3}}}};
+  json nodes = {// Uniform scale 2, then translate by (10, 0, 0); column-major.
+                {{"name", "parent"},
+                 {"mesh", 0},
+                 {"matrix", {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 10, 0, 0, 1}},
+                 {"children", {1}}},
+                // T(0,1,0) * R(90 degrees about +Z) * S(3).
+                {{"name", "child"},
+                 {"mesh", 0},
+                 {"translation", {0, 1, 0}},
+                 {"rotation", {0, 0, s, s}},
+                 {"scale", {3, 3, 3}}}};
   GltfImportReport report;
-  auto mesh =
-      importGltfMesh(write("nodes.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes)), {}, &report);
+  auto mesh = importGltfMesh(write("nodes.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes)),
+                             {}, &report);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   expectValidMesh(*mesh);
   EXPECT_EQ(report.primitivesImported, 2u);
@@ -323,12 +331,14 @@ TEST_F(GltfImportTest, NegativeDeterminantFlipsWinding) {
   DocBuilder b;
   const int pos = b.addVec3(kTriangle);
   const int normal = b.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
-  json nodes = {{{"name", "mirrorX"}, {"mesh", 0}, {"scale", {-1, 1, 1}}, {"children", {1}}},
-                // Mirror in Z relative to the parent: det(parent * child) = +1, no flip for this one.
-                {{"name", "mirrorXZ"}, {"mesh", 0}, {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1}}},
-                {{"name", "mirrorZ"}, {"mesh", 0}, {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1}}}};
+  json nodes = {
+      {{"name", "mirrorX"}, {"mesh", 0}, {"scale", {-1, 1, 1}}, {"children", {1}}},
+      // Mirror in Z relative to the parent: det(parent * child) = +1, no flip for this one.
+      {{"name", "mirrorXZ"}, {"mesh", 0}, {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1}}},
+      {{"name", "mirrorZ"}, {"mesh", 0}, {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1}}}};
   json scenes = {{{"nodes", {0, 2}}}};
-  auto mesh = importGltfMesh(write("mirror.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes, scenes)));
+  auto mesh = importGltfMesh(
+      write("mirror.gltf", b.build(triangleMesh(pos, std::nullopt, 4, normal), nodes, scenes)));
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   expectValidMesh(*mesh);
   ASSERT_EQ(mesh->indices.size(), 9u);
@@ -350,10 +360,11 @@ TEST_F(GltfImportTest, NonFiniteNodeTransformIsMalformed) {
   const int pos = b.addVec3(kTriangle);
   // JSON cannot spell NaN, but composing finite matrices can produce one: world(0,0) = 1e308 * 1e308 +
   // 1e308 * -1e308 = inf - inf = NaN.
-  json nodes = {{{"name", "parent"},
-                 {"matrix", {1e308, 0, 0, 0, 1e308, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
-                 {"children", {1}}},
-                {{"name", "Foo"}, {"mesh", 0}, {"matrix", {1e308, -1e308, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}}};
+  json nodes = {
+      {{"name", "parent"},
+       {"matrix", {1e308, 0, 0, 0, 1e308, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
+       {"children", {1}}},
+      {{"name", "Foo"}, {"mesh", 0}, {"matrix", {1e308, -1e308, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}}};
   auto mesh = importGltfMesh(write("nan.gltf", b.build(triangleMesh(pos), nodes)));
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
@@ -401,7 +412,7 @@ TEST_F(GltfImportTest, NoScenesImportsAllRootNodes) {
   expectVec3Near(mesh->positions[3], {0, 0, 5});
 }
 
-// ----------------------------------------------------------------------------------------------------------------
+// --------------------------------------------------------------------------------------------------------
 // Accessors
 
 TEST_F(GltfImportTest, AccessorCountPastBufferIsMalformed) {
@@ -448,6 +459,18 @@ TEST_F(GltfImportTest, InvalidJsonReportsParseError) {
   EXPECT_NE(mesh.error().message.find("parse failed"), std::string::npos) << mesh.error().message;
 }
 
+TEST_F(GltfImportTest, DeeplyNestedJsonIsRejectedNotAStackOverflow) {
+  DocBuilder b;
+  const int pos = b.addVec3(kTriangle);
+  std::string text = b.build(triangleMesh(pos), {{{"mesh", 0}}}).dump();
+  text.pop_back();  // drop the final '}' and append a pathological "extras"
+  text += ",\"extras\":" + std::string(200000, '[') + std::string(200000, ']') + "}";
+  auto mesh = importGltfMesh(writeText("deep.gltf", text));
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(mesh.error().message.find("nesting"), std::string::npos) << mesh.error().message;
+}
+
 TEST_F(GltfImportTest, InterleavedByteStride) {
   DocBuilder b;
   // position (12 bytes) + normal (12 bytes) + uv (8 bytes) per vertex: stride 32.
@@ -455,12 +478,14 @@ TEST_F(GltfImportTest, InterleavedByteStride) {
                                     1, 0, 0, 0, 0, 1, 1.0f, 0.0f,  //
                                     0, 1, 0, 0, 0, 1, 0.0f, 1.0f};
   const int view = b.addView(interleaved, 32);
-  const int pos = b.addAccessor({{"bufferView", view}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
+  const int pos =
+      b.addAccessor({{"bufferView", view}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
   const int nrm = b.addAccessor(
       {{"bufferView", view}, {"byteOffset", 12}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
   const int uv = b.addAccessor(
       {{"bufferView", view}, {"byteOffset", 24}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC2"}});
-  json meshes = json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}}}}}}}});
+  json meshes = json::array(
+      {{{"primitives", {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}}}}}}}});
   auto mesh = importGltfMesh(write("interleaved.gltf", b.build(meshes, {{{"mesh", 0}}})));
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   ASSERT_EQ(mesh->positions.size(), 3u);
@@ -474,8 +499,10 @@ TEST_F(GltfImportTest, InterleavedByteStride) {
   // The last element ends exactly at the end of the view; one more byte of offset runs past it.
   DocBuilder c;
   const int view2 = c.addView(interleaved, 32);
-  c.addAccessor({{"bufferView", view2}, {"byteOffset", 25}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC2"}});
-  const int pos2 = c.addAccessor({{"bufferView", view2}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
+  c.addAccessor(
+      {{"bufferView", view2}, {"byteOffset", 25}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC2"}});
+  const int pos2 =
+      c.addAccessor({{"bufferView", view2}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"}});
   json meshes2 = json::array({{{"primitives", {{{"attributes", {{"POSITION", pos2}, {"TEXCOORD_0", 0}}}}}}}});
   auto bad = importGltfMesh(write("interleaved_bad.gltf", c.build(meshes2, {{{"mesh", 0}}})));
   ASSERT_FALSE(bad.ok());
@@ -527,7 +554,8 @@ TEST_F(GltfImportTest, MorphTargetsUseDefaultWeightsAndSparseOnlyAccessors) {
                                      {"indices", {{"bufferView", sparseIndices}, {"componentType", kUShort}}},
                                      {"values", {{"bufferView", sparseValues}}}}}});
   json meshes = json::array(
-      {{{"weights", {0.5}}, {"primitives", {{{"attributes", {{"POSITION", pos}}}, {"targets", {{{"POSITION", delta}}}}}}}}});
+      {{{"weights", {0.5}},
+        {"primitives", {{{"attributes", {{"POSITION", pos}}}, {"targets", {{{"POSITION", delta}}}}}}}}});
   json nodes = {{{"mesh", 0}, {"children", {1}}}, {{"mesh", 0}, {"weights", {1.0}}}};
   auto mesh = importGltfMesh(write("morph.gltf", b.build(meshes, nodes)));
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
@@ -542,16 +570,26 @@ TEST_F(GltfImportTest, QuantizedAttributes) {
   // KHR_mesh_quantization: SHORT positions (not normalized, 4-byte aligned via byteStride 8), BYTE normalized
   // normals, UNSIGNED_SHORT normalized uvs and UNSIGNED_BYTE normalized RGBA colours.
   const int posView = b.addView(std::vector<int16_t>{0, 0, 0, 0, 100, 0, 0, 0, 0, 100, 0, 0}, 8);
-  const int pos = b.addAccessor({{"bufferView", posView}, {"componentType", kShort}, {"count", 3}, {"type", "VEC3"}});
+  const int pos =
+      b.addAccessor({{"bufferView", posView}, {"componentType", kShort}, {"count", 3}, {"type", "VEC3"}});
   const int nrmView = b.addView(std::vector<int8_t>{0, 0, 127, 0, 0, 0, 127, 0, 0, 0, -128, 0}, 4);
-  const int nrm = b.addAccessor(
-      {{"bufferView", nrmView}, {"componentType", kByte}, {"normalized", true}, {"count", 3}, {"type", "VEC3"}});
+  const int nrm = b.addAccessor({{"bufferView", nrmView},
+                                 {"componentType", kByte},
+                                 {"normalized", true},
+                                 {"count", 3},
+                                 {"type", "VEC3"}});
   const int uvView = b.addView(std::vector<uint16_t>{0, 0, 65535, 0, 0, 65535});
-  const int uv = b.addAccessor(
-      {{"bufferView", uvView}, {"componentType", kUShort}, {"normalized", true}, {"count", 3}, {"type", "VEC2"}});
+  const int uv = b.addAccessor({{"bufferView", uvView},
+                                {"componentType", kUShort},
+                                {"normalized", true},
+                                {"count", 3},
+                                {"type", "VEC2"}});
   const int colorView = b.addView(std::vector<uint8_t>{255, 0, 0, 128, 0, 255, 0, 255, 0, 0, 255, 0});
-  const int color = b.addAccessor(
-      {{"bufferView", colorView}, {"componentType", kUByte}, {"normalized", true}, {"count", 3}, {"type", "VEC4"}});
+  const int color = b.addAccessor({{"bufferView", colorView},
+                                   {"componentType", kUByte},
+                                   {"normalized", true},
+                                   {"count", 3},
+                                   {"type", "VEC4"}});
   json meshes = json::array(
       {{{"primitives",
          {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}, {"COLOR_0", color}}}}}}}});
@@ -597,7 +635,8 @@ TEST_F(GltfImportTest, NormalGenerationCanBeDisabled) {
   GltfImportOptions options;
   options.generateNormalsIfMissing = false;
   GltfImportReport report;
-  auto mesh = importGltfMesh(write("nonormals.gltf", b.build(triangleMesh(pos), {{{"mesh", 0}}})), options, &report);
+  auto mesh =
+      importGltfMesh(write("nonormals.gltf", b.build(triangleMesh(pos), {{{"mesh", 0}}})), options, &report);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   ASSERT_EQ(mesh->normals.size(), 3u);
   for (const glm::vec3& n : mesh->normals) EXPECT_EQ(n, glm::vec3(0));
@@ -615,7 +654,7 @@ TEST_F(GltfImportTest, UnsupportedRequiredExtension) {
   EXPECT_EQ(mesh.error().code, ErrorCode::Unsupported);
 }
 
-// ----------------------------------------------------------------------------------------------------------------
+// --------------------------------------------------------------------------------------------------------
 // Containers and compression
 
 std::vector<uint8_t> makeGlb(const std::string& jsonText, const std::vector<uint8_t>& bin) {
@@ -667,8 +706,8 @@ TEST_F(GltfImportTest, GlbContainer) {
   EXPECT_EQ(notGlb.error().code, ErrorCode::MalformedInput);
 }
 
-// Builds a document whose positions and indices live only in EXT_meshopt_compression streams (encoded here with
-// meshoptimizer), with the uncompressed bufferViews in a fallback buffer that has no uri.
+// Builds a document whose positions and indices live only in EXT_meshopt_compression streams (encoded here
+// with meshoptimizer), with the uncompressed bufferViews in a fallback buffer that has no uri.
 json meshoptDoc(const std::vector<glm::vec3>& positions, const std::vector<uint16_t>& indices,
                 std::vector<uint8_t>* compressed) {
   std::vector<uint8_t> vertexStream(meshopt_encodeVertexBufferBound(positions.size(), sizeof(glm::vec3)));
@@ -685,43 +724,43 @@ json meshoptDoc(const std::vector<glm::vec3>& positions, const std::vector<uint1
   const size_t vertexBytes = positions.size() * 12;
   const size_t indexBytes = indices.size() * 2;
   json ext = {{"EXT_meshopt_compression", json::object()}};
-  return {
-      {"asset", {{"version", "2.0"}}},
-      {"extensionsUsed", {"EXT_meshopt_compression"}},
-      {"extensionsRequired", {"EXT_meshopt_compression"}},
-      {"buffers",
-       {{{"byteLength", compressed->size()},
-         {"uri", "data:application/octet-stream;base64," + base64(*compressed)}},
-        {{"byteLength", vertexBytes + indexBytes}, {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}}}},
-      {"bufferViews",
-       {{{"buffer", 1},
-         {"byteLength", vertexBytes},
-         {"byteStride", 12},
-         {"extensions",
-          {{"EXT_meshopt_compression",
-            {{"buffer", 0},
-             {"byteLength", vertexStream.size()},
+  return {{"asset", {{"version", "2.0"}}},
+          {"extensionsUsed", {"EXT_meshopt_compression"}},
+          {"extensionsRequired", {"EXT_meshopt_compression"}},
+          {"buffers",
+           {{{"byteLength", compressed->size()},
+             {"uri", "data:application/octet-stream;base64," + base64(*compressed)}},
+            {{"byteLength", vertexBytes + indexBytes},
+             {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}}}},
+          {"bufferViews",
+           {{{"buffer", 1},
+             {"byteLength", vertexBytes},
              {"byteStride", 12},
-             {"count", positions.size()},
-             {"mode", "ATTRIBUTES"}}}}}},
-        {{"buffer", 1},
-         {"byteOffset", vertexBytes},
-         {"byteLength", indexBytes},
-         {"extensions",
-          {{"EXT_meshopt_compression",
-            {{"buffer", 0},
-             {"byteOffset", indexOffset},
-             {"byteLength", indexStream.size()},
-             {"byteStride", 2},
-             {"count", indices.size()},
-             {"mode", "TRIANGLES"}}}}}}}},
-      {"accessors",
-       {{{"bufferView", 0}, {"componentType", kFloat}, {"count", positions.size()}, {"type", "VEC3"}},
-        {{"bufferView", 1}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}}}},
-      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
-      {"nodes", {{{"mesh", 0}}}},
-      {"scenes", {{{"nodes", {0}}}}},
-      {"scene", 0}};
+             {"extensions",
+              {{"EXT_meshopt_compression",
+                {{"buffer", 0},
+                 {"byteLength", vertexStream.size()},
+                 {"byteStride", 12},
+                 {"count", positions.size()},
+                 {"mode", "ATTRIBUTES"}}}}}},
+            {{"buffer", 1},
+             {"byteOffset", vertexBytes},
+             {"byteLength", indexBytes},
+             {"extensions",
+              {{"EXT_meshopt_compression",
+                {{"buffer", 0},
+                 {"byteOffset", indexOffset},
+                 {"byteLength", indexStream.size()},
+                 {"byteStride", 2},
+                 {"count", indices.size()},
+                 {"mode", "TRIANGLES"}}}}}}}},
+          {"accessors",
+           {{{"bufferView", 0}, {"componentType", kFloat}, {"count", positions.size()}, {"type", "VEC3"}},
+            {{"bufferView", 1}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}}}},
+          {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+          {"nodes", {{{"mesh", 0}}}},
+          {"scenes", {{{"nodes", {0}}}}},
+          {"scene", 0}};
 }
 
 TEST_F(GltfImportTest, MeshoptCompressedBufferViews) {
@@ -750,7 +789,7 @@ TEST_F(GltfImportTest, MeshoptCompressedBufferViews) {
   EXPECT_EQ(unsupported.error().code, ErrorCode::Unsupported);
 }
 
-// ----------------------------------------------------------------------------------------------------------------
+// --------------------------------------------------------------------------------------------------------
 // Third-party sample assets (../shared/assets)
 
 std::optional<std::string> sharedAsset(const std::string& relative) {
@@ -763,15 +802,16 @@ std::optional<std::string> sharedAsset(const std::string& relative) {
   return std::nullopt;
 }
 
-#define REQUIRE_ASSET(var, relative)                                            \
-  const std::optional<std::string> var = sharedAsset(relative);                  \
+#define REQUIRE_ASSET(var, relative)                            \
+  const std::optional<std::string> var = sharedAsset(relative); \
   if (!var) GTEST_SKIP() << "shared asset not available: " << (relative)
 
 // Every triangle's counter-clockwise normal agrees with its vertices' stored normals (flat-shaded boxes).
 void expectFlatNormalsMatchWinding(const MeshSource& m) {
   for (size_t t = 0; t < m.indices.size() / 3; ++t) {
     const glm::vec3 g = geometricNormal(m, t);
-    for (int k = 0; k < 3; ++k) EXPECT_GT(glm::dot(g, m.normals[m.indices[3 * t + k]]), 0.99f) << "triangle " << t;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_GT(glm::dot(g, m.normals[m.indices[3 * t + k]]), 0.99f) << "triangle " << t;
   }
 }
 
@@ -838,7 +878,8 @@ TEST(GltfImportAssets, MeshPrimitiveModes) {
   // 00-03 and 07-10 are points/lines only; the rest are two triangles each as list, strip or fan.
   for (int i = 0; i < 16; ++i) {
     char name[96];
-    std::snprintf(name, sizeof(name), "Mesh_PrimitiveMode/Mesh_PrimitiveMode/Mesh_PrimitiveMode_%02d.gltf", i);
+    std::snprintf(name, sizeof(name), "Mesh_PrimitiveMode/Mesh_PrimitiveMode/Mesh_PrimitiveMode_%02d.gltf",
+                  i);
     SCOPED_TRACE(name);
     REQUIRE_ASSET(path, std::string(name));
     GltfImportReport report;
