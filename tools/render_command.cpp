@@ -136,7 +136,7 @@ int runRender(const RenderCommand& c) {
     if (!refFrame) return fail(refFrame.error());
     ImageError e = compareColor(frame->color, refFrame->color);
     const double refMs = refStats.gpuMs + refStats.cpuRecordMs, visMs = stats.gpuMs + stats.cpuRecordMs;
-    std::printf("reference     forward: gpu %.3f ms + cpu %.3f ms (visbuf %.3f ms: %.2fx faster)\n", refStats.gpuMs,
+    std::printf("reference     forward: gpu %.3f ms + cpu %.3f ms (visbuf %.3f ms; forward/visbuf = %.2f)\n", refStats.gpuMs,
                 refStats.cpuRecordMs, visMs, refMs / std::max(visMs, 1e-9));
     std::printf("error         vs forward: max %.5f, mean %.6f, PSNR %.1f dB, %.4f%% pixels > 1/255\n", e.maxAbs,
                 e.meanAbs, e.psnr, 100.0 * e.differingFraction);
