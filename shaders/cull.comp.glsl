@@ -16,12 +16,15 @@ void main() {
   bool valid = id < frame.objectCount;
   bool visible = false;
   uint lod = 0;
-  MeshData mesh;
+  uint meshIndex = 0;
   if (valid) {
+    // Only the fields needed are loaded: copying the whole 224-byte MeshData per thread made the pass
+    // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
     ObjectData o = objects[id];
-    mesh = meshes[o.meshIndex];
-    vec3 c = objectToCamera(o, mesh.boundsSphere.xyz);
-    float r = mesh.boundsSphere.w * o.maxScale;
+    meshIndex = o.meshIndex;
+    vec4 sphere = meshes[meshIndex].boundsSphere;
+    vec3 c = objectToCamera(o, sphere.xyz);
+    float r = sphere.w * o.maxScale;
     visible = true;
     if (frame.cullMode != CULL_NONE) {
       // Conservative margin: covers float rounding of the plane distance (a few ulps of the
@@ -34,8 +37,8 @@ void main() {
       // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist.
       float dist = length(c) - r;
       if (dist > frame.nearPlane) {
-        for (uint l = mesh.lodCount - 1; l > 0; --l) {
-          if (mesh.lods[l].error * o.maxScale * frame.lodScale <= frame.lodErrorPixels * dist) {
+        for (uint l = meshes[meshIndex].lodCount - 1; l > 0; --l) {
+          if (meshes[meshIndex].lods[l].error * o.maxScale * frame.lodScale <= frame.lodErrorPixels * dist) {
             lod = l;
             break;
           }
@@ -58,8 +61,8 @@ void main() {
     atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
     return;
   }
-  LodData l = mesh.lods[lod];
-  draws[slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(mesh.vertexOffset), id);
+  LodData l = meshes[meshIndex].lods[lod];
+  draws[slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
   atomicAdd(stats[STAT_TRIANGLES_DRAWN], l.indexCount / 3u);
   atomicAdd(stats[STAT_LOD_HISTOGRAM + lod], 1u);
 }
