@@ -7,6 +7,25 @@
 
 namespace visbuf::gpu {
 
+namespace {
+// One allocation for one resource; device-local memory falls back to any type (lavapipe has no
+// separate device memory). Failure to find a type is fatal like any Vulkan allocation failure.
+VkDeviceMemory allocate(Device& device, const VkMemoryRequirements& req, MemoryUse use) {
+  VkMemoryPropertyFlags flags = use == MemoryUse::HostVisible
+                                    ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+                                    : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  uint32_t type = device.findMemoryType(req.memoryTypeBits, flags);
+  if (type == UINT32_MAX && use == MemoryUse::DeviceLocal) type = device.findMemoryType(req.memoryTypeBits, 0);
+  if (type == UINT32_MAX) vkCheckFailed("findMemoryType", VK_ERROR_OUT_OF_DEVICE_MEMORY, __FILE__, __LINE__);
+  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex = type;
+  VkDeviceMemory memory;
+  VK_CHECK(vkAllocateMemory(device.device(), &ai, nullptr, &memory));
+  return memory;
+}
+}  // namespace
+
 Buffer::Buffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use)
     : device_(device.device()), size_(size) {
   VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
@@ -16,16 +35,7 @@ Buffer::Buffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, Memo
   VK_CHECK(vkCreateBuffer(device_, &bci, nullptr, &buffer_));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(device_, buffer_, &req);
-  VkMemoryPropertyFlags flags = use == MemoryUse::HostVisible
-                                    ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
-                                    : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
-  uint32_t type = device.findMemoryType(req.memoryTypeBits, flags);
-  if (type == UINT32_MAX && use == MemoryUse::DeviceLocal) type = device.findMemoryType(req.memoryTypeBits, 0);
-  if (type == UINT32_MAX) vkCheckFailed("findMemoryType(buffer)", VK_ERROR_OUT_OF_DEVICE_MEMORY, __FILE__, __LINE__);
-  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  ai.allocationSize = req.size;
-  ai.memoryTypeIndex = type;
-  VK_CHECK(vkAllocateMemory(device_, &ai, nullptr, &memory_));
+  memory_ = allocate(device, req, use);
   VK_CHECK(vkBindBufferMemory(device_, buffer_, memory_, 0));
   if (use == MemoryUse::HostVisible) VK_CHECK(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
 }
@@ -67,12 +77,7 @@ Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, V
   VK_CHECK(vkCreateImage(device_, &ici, nullptr, &image_));
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(device_, image_, &req);
-  uint32_t type = device.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  if (type == UINT32_MAX) type = device.findMemoryType(req.memoryTypeBits, 0);
-  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  ai.allocationSize = req.size;
-  ai.memoryTypeIndex = type;
-  VK_CHECK(vkAllocateMemory(device_, &ai, nullptr, &memory_));
+  memory_ = allocate(device, req, MemoryUse::DeviceLocal);
   VK_CHECK(vkBindImageMemory(device_, image_, memory_, 0));
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   vci.image = image_;
