@@ -1,7 +1,14 @@
 #version 460
 // Cull pass: one thread per object. Bounding sphere vs the camera-relative frustum planes, LOD by
-// projected error, then append a VkDrawIndexedIndirectCommand (firstInstance = object ID).
-// Slots are allocated with one atomic per subgroup (ballot + prefix count).
+// projected error, then append a VkDrawIndexedIndirectCommand (firstInstance = object ID). Slots are
+// allocated with one atomic per subgroup (ballot + prefix count).
+//
+// Occlusion mode runs this twice per frame (Hill & Collin's two-phase scheme as used by niagara):
+//   early: objects visible at the end of last frame (history) -> frustum + LOD -> drawn first;
+//   late:  every object -> frustum -> sub-pixel and depth-pyramid tests (pyramid of the early depth)
+//          -> drawn if visible and not already drawn early; history := visible.
+// The early depth is a subset of the final depth, so the late test never hides a visible object,
+// whatever the history holds: a stale or cleared history only costs time.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -10,13 +17,63 @@
 layout(local_size_x = CULL_WORKGROUP_SIZE) in;
 layout(std430, set = 0, binding = BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
 layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
+layout(std430, set = 0, binding = BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
+layout(set = 0, binding = BINDING_PYRAMID) uniform sampler2D pyramid;
+layout(push_constant) uniform Push { PassConstants pc; };
+
+bool frustumVisible(vec3 c, float r) {
+  // Conservative margin: covers float rounding of the plane distance (a few ulps of the magnitudes
+  // involved), so the GPU never culls what a double-precision test keeps.
+  float margin = 1e-5 * (abs(c.x) + abs(c.y) + abs(c.z) + r) + 1e-6;
+  bool visible = true;
+  for (int i = 0; i < 5; ++i)
+    if (dot(frame.frustum[i].xyz, c) + frame.frustum[i].w < -(r + margin)) visible = false;
+  return visible;
+}
+
+// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre. c: camera-relative centre.
+uint occlusionTest(vec3 c, float r) {
+  vec3 v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
+  float rr = r * (1.0 + 1e-5) + 1e-6;
+  if (-(v.z + rr) <= frame.nearPlane * 1.001) return 0u;  // touches the near plane: always visible
+  // Screen rectangle of the sphere's bounding cube: every corner is in front of the camera, so the
+  // hull of the projected corners contains the projected sphere.
+  vec2 lo = vec2(1e30), hi = vec2(-1e30);
+  for (int i = 0; i < 8; ++i) {
+    vec3 p = v + rr * vec3((i & 1) != 0 ? 1.0 : -1.0, (i & 2) != 0 ? 1.0 : -1.0, (i & 4) != 0 ? 1.0 : -1.0);
+    vec2 ndc = vec2(frame.projX * p.x, frame.projY * p.y) / -p.z;
+    lo = min(lo, ndc);
+    hi = max(hi, ndc);
+  }
+  vec2 size = frame.viewport.xy;
+  // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding.
+  vec2 pxLo = (lo * 0.5 + 0.5) * size - 0.5 - 0.01;
+  vec2 pxHi = (hi * 0.5 + 0.5) * size - 0.5 + 0.01;
+  ivec2 a = ivec2(ceil(pxLo));
+  ivec2 b = ivec2(floor(pxHi));
+  a = max(a, ivec2(0));
+  b = min(b, ivec2(size) - 1);
+  if (a.x > b.x || a.y > b.y) return 2u;  // no pixel centre can be covered
+  // Level whose texels span the rectangle in at most 2x2 texels: 2^k >= extent (never floor(log2)).
+  int extent = max(b.x - a.x + 1, b.y - a.y + 1);
+  int level = min(int(ceil(log2(float(extent)))), int(frame.pyramidLevels) - 1);
+  if ((1 << level) < extent) level = min(level + 1, int(frame.pyramidLevels) - 1);  // guard log2 rounding
+  ivec2 ta = a >> level, tb = b >> level;
+  float farthest = 1.0;  // reverse-Z: the occluders' farthest depth is the minimum
+  for (int y = ta.y; y <= tb.y; ++y)
+    for (int x = ta.x; x <= tb.x; ++x) farthest = min(farthest, texelFetch(pyramid, ivec2(x, y), level).r);
+  // The object's nearest possible depth, rounded towards nearer.
+  float nearest = frame.nearPlane / -(v.z + rr) * (1.0 + 1e-5);
+  return nearest < farthest ? 1u : 0u;
+}
 
 void main() {
   uint id = gl_GlobalInvocationID.x;
   bool valid = id < frame.objectCount;
-  bool visible = false;
+  bool draw = false;
   uint lod = 0;
   uint meshIndex = 0;
+  uint frustumCulled = 0, occluded = 0, subpixel = 0;
   if (valid) {
     // Only the fields needed are loaded: copying the whole 224-byte MeshData per thread made the pass
     // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
@@ -25,15 +82,22 @@ void main() {
     vec4 sphere = meshes[meshIndex].boundsSphere;
     vec3 c = objectToCamera(o, sphere.xyz);
     float r = sphere.w * o.maxScale;
-    visible = true;
-    if (frame.cullMode != CULL_NONE) {
-      // Conservative margin: covers float rounding of the plane distance (a few ulps of the
-      // magnitudes involved), so the GPU never culls what a double-precision test keeps.
-      float margin = 1e-5 * (abs(c.x) + abs(c.y) + abs(c.z) + r) + 1e-6;
-      for (int i = 0; i < 5; ++i)
-        if (dot(frame.frustum[i].xyz, c) + frame.frustum[i].w < -(r + margin)) visible = false;
+    bool inFrustum = frame.cullMode == CULL_NONE || frustumVisible(c, r);
+    if (frame.cullMode != CULL_OCCLUSION) {
+      draw = inFrustum;
+      frustumCulled = inFrustum ? 0u : 1u;
+    } else if (pc.phase == CULL_PHASE_EARLY) {
+      draw = inFrustum && history[id] != 0u;  // culled objects are counted by the late phase
+    } else {
+      bool drawnEarly = inFrustum && history[id] != 0u;  // exactly the early phase's decision
+      uint test = inFrustum ? occlusionTest(c, r) : 3u;
+      frustumCulled = test == 3u ? 1u : 0u;
+      occluded = test == 1u ? 1u : 0u;
+      subpixel = test == 2u ? 1u : 0u;
+      history[id] = test == 0u ? 1u : 0u;
+      draw = test == 0u && !drawnEarly;
     }
-    if (visible && frame.lodErrorPixels > 0.0) {
+    if (draw && frame.lodErrorPixels > 0.0) {
       // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist.
       float dist = length(c) - r;
       if (dist > frame.nearPlane) {
@@ -46,23 +110,28 @@ void main() {
       }
     }
   }
-  uint culled = subgroupAdd(valid && !visible ? 1u : 0u);
-  uvec4 ballot = subgroupBallot(visible);
-  uint visibleCount = subgroupBallotBitCount(ballot);
+  uint culledSum = subgroupAdd(frustumCulled);
+  uint occludedSum = subgroupAdd(occluded);
+  uint subpixelSum = subgroupAdd(subpixel);
+  uvec4 ballot = subgroupBallot(draw);
+  uint drawCount = subgroupBallotBitCount(ballot);
+  const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
   uint base = 0;
   if (subgroupElect()) {
-    if (culled > 0) atomicAdd(stats[STAT_FRUSTUM_CULLED], culled);
-    if (visibleCount > 0) base = atomicAdd(stats[STAT_DRAW_COUNT], visibleCount);
+    if (culledSum > 0) atomicAdd(stats[STAT_FRUSTUM_CULLED], culledSum);
+    if (occludedSum > 0) atomicAdd(stats[STAT_OCCLUSION_CULLED], occludedSum);
+    if (subpixelSum > 0) atomicAdd(stats[STAT_SUBPIXEL_CULLED], subpixelSum);
+    if (drawCount > 0) base = atomicAdd(stats[counter], drawCount);
   }
   base = subgroupBroadcastFirst(base);
-  if (!visible) return;
+  if (!draw) return;
   uint slot = base + subgroupBallotExclusiveBitCount(ballot);
   if (slot >= frame.drawCapacity) {
     atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
     return;
   }
   LodData l = meshes[meshIndex].lods[lod];
-  draws[slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
+  draws[pc.drawBase + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
   atomicAdd(stats[STAT_TRIANGLES_DRAWN], l.indexCount / 3u);
   atomicAdd(stats[STAT_LOD_HISTOGRAM + lod], 1u);
 }

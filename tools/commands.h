@@ -15,7 +15,7 @@ struct RenderCommand {
   std::string size = "1920x1080";
   std::string path = "visbuf";
   std::string device = "auto";
-  std::string cull = "frustum";
+  std::string cull = "occlusion";
   float lodError = 1.0f;
   bool noLod = false;
   uint32_t drawCapacity = 0;

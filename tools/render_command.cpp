@@ -24,7 +24,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::IsMember({"visbuf", "forward"}))
       ->capture_default_str();
   sub->add_option("--device", c.device, "auto | cpu | gpu | N (auto prefers a GPU, else lavapipe)")->capture_default_str();
-  sub->add_option("--cull", c.cull, "none | frustum")->check(CLI::IsMember({"none", "frustum"}))->capture_default_str();
+  sub->add_option("--cull", c.cull, "none | frustum | occlusion (two-phase, depth pyramid; forward path: frustum)")
+      ->check(CLI::IsMember({"none", "frustum", "occlusion"}))
+      ->capture_default_str();
   sub->add_option("--lod-error", c.lodError, "LOD threshold in pixels of projected error")->capture_default_str();
   sub->add_flag("--no-lod", c.noLod, "always draw the full-detail mesh");
   sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per frame (default: one per object)");
@@ -74,7 +76,7 @@ int runRender(const RenderCommand& c) {
 
   FrameOptions fo;
   fo.path = c.path == "forward" ? RenderPath::Forward : RenderPath::Visbuf;
-  fo.cull = c.cull == "none" ? CullMode::None : CullMode::Frustum;
+  fo.cull = c.cull == "none" ? CullMode::None : c.cull == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {

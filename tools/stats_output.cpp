@@ -13,8 +13,9 @@ std::string formatStats(const FrameStats& s) {
   std::string out;
   out += fmt::format("device        {}\n", s.device);
   out += fmt::format("path          {}  {}x{}\n", renderPathName(s.path), s.width, s.height);
-  out += fmt::format("objects       {} tested, {} frustum-culled, {} drawn\n", s.objectsTested, s.frustumCulled,
-                     s.drawsRendered);
+  out += fmt::format("objects       {} tested, {} frustum-culled, {} occluded, {} sub-pixel, {} drawn ({} early + {} late)\n",
+                     s.objectsTested, s.frustumCulled, s.occlusionCulled, s.subpixelCulled, s.drawsRendered,
+                     s.drawsEarly, s.drawsLate);
   out += fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
   std::string lods;
   for (size_t i = 0; i < s.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.lodHistogram[i]);
@@ -24,8 +25,8 @@ std::string formatStats(const FrameStats& s) {
     out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
                        s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
   }
-  for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<10}{:9.3f} ms\n", name, ms);
-  out += fmt::format("gpu total     {:9.3f} ms\n", s.gpuMs);
+  for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
+  out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
   out += fmt::format("memory        scene {:.1f} MiB, targets {} B/pixel\n", s.sceneBytes / 1048576.0,
                      s.targetBytesPerPixel);
@@ -41,6 +42,10 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["objects"] = s.objects;
   j["objectsTested"] = s.objectsTested;
   j["frustumCulled"] = s.frustumCulled;
+  j["occlusionCulled"] = s.occlusionCulled;
+  j["subpixelCulled"] = s.subpixelCulled;
+  j["drawsEarly"] = s.drawsEarly;
+  j["drawsLate"] = s.drawsLate;
   j["drawsAppended"] = s.drawsAppended;
   j["drawsRendered"] = s.drawsRendered;
   j["drawCapacity"] = s.drawCapacity;

@@ -8,6 +8,7 @@
 
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"
+#include "depth_pyramid.comp.h"
 #include "forward.frag.h"
 #include "forward.vert.h"
 #include "shade.comp.h"
@@ -25,6 +26,7 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("visibility.frag", spv_visibility_frag)
   VB_SHADER("visibility_wide.frag", spv_visibility_wide_frag)
   VB_SHADER("shade.comp", spv_shade_comp)
+  VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)
 #undef VB_SHADER

@@ -17,6 +17,10 @@ namespace visbuf::gpu {
 // (a build error, not user input).
 std::span<const uint32_t> shaderCode(const std::string& name);
 
+// Stages that see the shared PassConstants push constants (one range for the whole main layout).
+constexpr VkShaderStageFlags kPassConstantStages =
+    VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+
 // Move-only pipeline owner.
 class Pipeline {
  public:

@@ -62,13 +62,13 @@ void Buffer::reset() {
 }
 
 Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
-             VkImageAspectFlags aspect)
-    : device_(device.device()), format_(format), width_(width), height_(height), aspect_(aspect) {
+             VkImageAspectFlags aspect, uint32_t mipLevels)
+    : device_(device.device()), format_(format), width_(width), height_(height), mipLevels_(mipLevels), aspect_(aspect) {
   VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   ici.imageType = VK_IMAGE_TYPE_2D;
   ici.format = format;
   ici.extent = {width, height, 1};
-  ici.mipLevels = 1;
+  ici.mipLevels = mipLevels;
   ici.arrayLayers = 1;
   ici.samples = VK_SAMPLE_COUNT_1_BIT;
   ici.tiling = VK_IMAGE_TILING_OPTIMAL;
@@ -83,8 +83,19 @@ Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, V
   vci.image = image_;
   vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
   vci.format = format;
-  vci.subresourceRange = {aspect, 0, 1, 0, 1};
+  vci.subresourceRange = {aspect, 0, mipLevels, 0, 1};
   VK_CHECK(vkCreateImageView(device_, &vci, nullptr, &view_));
+}
+
+VkImageView Image::createLevelView(uint32_t level) const {
+  VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  vci.image = image_;
+  vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  vci.format = format_;
+  vci.subresourceRange = {aspect_, level, 1, 0, 1};
+  VkImageView view;
+  VK_CHECK(vkCreateImageView(device_, &vci, nullptr, &view));
+  return view;
 }
 
 Image& Image::operator=(Image&& o) noexcept {
@@ -97,6 +108,7 @@ Image& Image::operator=(Image&& o) noexcept {
     format_ = o.format_;
     width_ = o.width_;
     height_ = o.height_;
+    mipLevels_ = o.mipLevels_;
     aspect_ = o.aspect_;
   }
   return *this;
@@ -138,7 +150,7 @@ void imageBarrier(VkCommandBuffer cmd, const Image& image, VkImageLayout from, V
   b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.image = image.handle();
-  b.subresourceRange = {image.aspect(), 0, 1, 0, 1};
+  b.subresourceRange = {image.aspect(), 0, image.mipLevels(), 0, 1};
   VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   di.imageMemoryBarrierCount = 1;
   di.pImageMemoryBarriers = &b;

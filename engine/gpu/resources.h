@@ -42,7 +42,7 @@ class Image {
  public:
   Image() = default;
   Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
-        VkImageAspectFlags aspect);
+        VkImageAspectFlags aspect, uint32_t mipLevels = 1);
   ~Image() { reset(); }
   Image(Image&& o) noexcept { *this = std::move(o); }
   Image& operator=(Image&& o) noexcept;
@@ -55,7 +55,10 @@ class Image {
   VkFormat format() const { return format_; }
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
+  uint32_t mipLevels() const { return mipLevels_; }
   VkImageAspectFlags aspect() const { return aspect_; }
+  // A view of one mip level; the caller owns it (vkDestroyImageView).
+  VkImageView createLevelView(uint32_t level) const;
   explicit operator bool() const { return image_ != VK_NULL_HANDLE; }
 
  private:
@@ -65,6 +68,7 @@ class Image {
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   VkFormat format_ = VK_FORMAT_UNDEFINED;
   uint32_t width_ = 0, height_ = 0;
+  uint32_t mipLevels_ = 1;
   VkImageAspectFlags aspect_ = 0;
 };
 

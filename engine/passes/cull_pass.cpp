@@ -1,6 +1,6 @@
 #include "passes/cull_pass.h"
 
-#include "shared/config.h"
+#include "shared/types.h"
 
 namespace visbuf::passes {
 
@@ -8,9 +8,12 @@ CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout) {
   return CullPass{gpu::createComputePipeline(device, layout, "cull.comp")};
 }
 
-void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount) const {
+void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
+                      uint32_t phase, uint32_t drawBase) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  gpu::PassConstants pc{phase, drawBase, 0, 0};
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
 }
 

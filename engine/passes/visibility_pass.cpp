@@ -17,17 +17,18 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
   return p;
 }
 
-void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth) {
+void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
+                    bool load) {
   VkRenderingAttachmentInfo ca{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   ca.imageView = color.view();
   ca.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  ca.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  ca.loadOp = load ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
   ca.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   ca.clearValue.color = clear;
   VkRenderingAttachmentInfo da{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   da.imageView = depth.view();
   da.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-  da.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  da.loadOp = load ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
   da.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   da.clearValue.depthStencil = {0.0f, 0};  // reverse-Z: 0 is infinitely far
   VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
@@ -48,14 +49,16 @@ void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDesc
   VkClearColorValue nothing{};
   nothing.uint32[0] = VIS_NOTHING;
   nothing.uint32[1] = VIS_NOTHING;
-  beginRendering(cmd, *in.ids, nothing, *in.depth);
+  beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear);
   const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, (isWide ? wide : narrow).handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
+  gpu::PassConstants pc{0, in.drawBase, 0, 0};
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   if (in.maxDraws > 0)
-    vkCmdDrawIndexedIndirectCount(cmd, in.draws, 0, in.drawCount, in.drawCountOffset, in.maxDraws,
-                                  sizeof(gpu::DrawCommand));
+    vkCmdDrawIndexedIndirectCount(cmd, in.draws, VkDeviceSize(in.drawBase) * sizeof(gpu::DrawCommand), in.drawCount,
+                                  in.drawCountOffset, in.maxDraws, sizeof(gpu::DrawCommand));
   vkCmdEndRendering(cmd);
 }
 

@@ -16,6 +16,8 @@ struct VisibilityInputs {
   VkBuffer drawCount = VK_NULL_HANDLE;
   VkDeviceSize drawCountOffset = 0;
   uint32_t maxDraws = 0;
+  uint32_t drawBase = 0;  // first slot of this phase: commands are read from draws at drawBase * 20 bytes
+  bool clear = true;      // early/only phase clears IDs and depth; the late phase loads them
 };
 
 struct VisibilityPass {
@@ -25,7 +27,9 @@ struct VisibilityPass {
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
 };
 
-// Begins dynamic rendering on colour + depth with clears; shared by the visibility and forward passes.
-void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth);
+// Begins dynamic rendering on colour + depth, cleared (depth to 0, reverse-Z) or loaded; shared by the
+// visibility and forward passes.
+void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
+                    bool load = false);
 
 }  // namespace visbuf::passes

@@ -20,6 +20,7 @@
 #include "gpu/pipeline.h"
 #include "gpu/resources.h"
 #include "passes/cull_pass.h"
+#include "passes/depth_pyramid_pass.h"
 #include "passes/forward_pass.h"
 #include "passes/shade_pass.h"
 #include "passes/visibility_pass.h"
@@ -29,7 +30,9 @@
 namespace visbuf {
 
 const char* renderPathName(RenderPath path) { return path == RenderPath::Visbuf ? "visbuf" : "forward"; }
-const char* cullModeName(CullMode mode) { return mode == CullMode::None ? "none" : "frustum"; }
+const char* cullModeName(CullMode mode) {
+  return mode == CullMode::None ? "none" : mode == CullMode::Frustum ? "frustum" : "occlusion";
+}
 
 std::string IdEncoding::describe() const {
   if (wide) return fmt::format("64-bit rg32ui (x: draw slot + 1, {} bits used; y: triangle, {} bits used)", slotBits, triangleBits);
@@ -50,7 +53,7 @@ IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw,
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 5;
+constexpr uint32_t kCommandBuffers = 8;
 
 }  // namespace
 
@@ -74,6 +77,9 @@ struct Renderer::Impl {
   passes::VisibilityPass visibility;
   passes::ShadePass shade;
   passes::ForwardPass forward;
+  passes::DepthPyramidPass pyramid;
+  gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
+  bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
 
   gpu::Buffer frameBuffer;  // FrameData, host visible
   gpu::Buffer draws;        // DrawCommand[capacity]
@@ -109,6 +115,8 @@ struct Renderer::Impl {
         {BINDING_MATERIALS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -117,10 +125,13 @@ struct Renderer::Impl {
     VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     pci.setLayoutCount = 1;
     pci.pSetLayouts = &setLayout;
+    VkPushConstantRange range{gpu::kPassConstantStages, 0, sizeof(gpu::PassConstants)};
+    pci.pushConstantRangeCount = 1;
+    pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7},
-                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8},
+                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
@@ -135,6 +146,7 @@ struct Renderer::Impl {
     VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
     sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
     sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    sci.maxLod = VK_LOD_CLAMP_NONE;
     VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler));
     VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VK_CHECK(vkCreateFence(dev, &fci, nullptr, &fence));
@@ -151,8 +163,9 @@ struct Renderer::Impl {
     ids = gpu::Image(device, idFormat, width, height,
                      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                      VK_IMAGE_ASPECT_COLOR_BIT);
-    depth = gpu::Image(device, VK_FORMAT_D32_SFLOAT, width, height, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                       VK_IMAGE_ASPECT_DEPTH_BIT);
+    depth = gpu::Image(device, VK_FORMAT_D32_SFLOAT, width, height,
+                       VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+    pyramid.resize(depth);
     color = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, width, height,
                        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
                            VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
@@ -167,15 +180,16 @@ struct Renderer::Impl {
   }
 
   void writeDescriptors() {
-    VkDescriptorBufferInfo bufs[8] = {
+    VkDescriptorBufferInfo bufs[9] = {
         {frameBuffer.handle(), 0, VK_WHOLE_SIZE},        {gpuScene.objects.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    {gpuScene.vertices.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
-        {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE}};
-    const uint32_t bufBindings[8] = {BINDING_FRAME,   BINDING_OBJECTS, BINDING_MESHES, BINDING_VERTICES,
-                                     BINDING_INDICES, BINDING_DRAWS,   BINDING_STATS,  BINDING_MATERIALS};
+        {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
+        {history.handle(), 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[9] = {BINDING_FRAME,   BINDING_OBJECTS, BINDING_MESHES, BINDING_VERTICES, BINDING_INDICES,
+                                     BINDING_DRAWS,   BINDING_STATS,   BINDING_MATERIALS, BINDING_HISTORY};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 8; ++i) {
+    for (int i = 0; i < 9; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -197,6 +211,11 @@ struct Renderer::Impl {
     x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
     x.pImageInfo = &colorInfo;
     w.push_back(x);
+    VkDescriptorImageInfo pyramidInfo{sampler, pyramid.pyramid().view(), VK_IMAGE_LAYOUT_GENERAL};
+    x.dstBinding = BINDING_PYRAMID;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    x.pImageInfo = &pyramidInfo;
+    w.push_back(x);
     vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
   }
 
@@ -217,6 +236,10 @@ struct Renderer::Impl {
   gpu::FrameData frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options) const {
     gpu::FrameData f{};
     f.viewProj = glm::mat4(math.viewProj);
+    f.view = glm::mat4(math.view);
+    f.projX = float(math.proj[0][0]);
+    f.projY = float(math.proj[1][1]);
+    f.pyramidLevels = pyramid.levels();
     f.cameraOffset = glm::vec4(glm::vec3(scene.anchor - camera.position), 0.0f);
     for (int i = 0; i < 5; ++i) f.frustum[i] = glm::vec4(math.planes[size_t(i)]);
     f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), 0.85f);
@@ -226,7 +249,9 @@ struct Renderer::Impl {
     f.nearPlane = float(camera.nearPlane);
     f.objectCount = gpuScene.objectCount;
     f.drawCapacity = capacity;
-    f.cullMode = options.cull == CullMode::None ? CULL_NONE : CULL_FRUSTUM;
+    f.cullMode = options.cull == CullMode::None      ? CULL_NONE
+                 : options.cull == CullMode::Frustum ? CULL_FRUSTUM
+                                                     : CULL_OCCLUSION;
     f.triangleBits = encoding.triangleBits;
     f.wideIds = encoding.wide ? 1u : 0u;
     return f;
@@ -266,44 +291,87 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
 
 void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   const uint32_t w = config.width, h = config.height;
-  // cull
-  VkCommandBuffer cmd = cmds[used++];
-  beginCmd(cmd);
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  uint32_t t = timestamps->begin(cmd, "cull");
-  cull.record(cmd, pipelineLayout, set, gpuScene.objectCount);
-  timestamps->end(cmd, t);
-  VK_CHECK(vkEndCommandBuffer(cmd));
+  const bool occlusion = options.cull == CullMode::Occlusion;
+  constexpr VkPipelineStageFlags2 kDepthStages =
+      VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+  constexpr VkAccessFlags2 kDepthAccess =
+      VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
 
-  // visibility
-  cmd = cmds[used++];
-  beginCmd(cmd);
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
-                VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-  gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
-                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-                    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-  t = timestamps->begin(cmd, "visibility");
-  passes::VisibilityInputs in;
-  in.ids = &ids;
-  in.depth = &depth;
-  in.indexBuffer = gpuScene.indices.handle();
-  in.draws = draws.handle();
-  in.drawCount = stats.handle();
-  in.drawCountOffset = STAT_DRAW_COUNT * sizeof(uint32_t);
-  in.maxDraws = capacity;
-  visibility.record(cmd, pipelineLayout, set, in);
-  timestamps->end(cmd, t);
-  VK_CHECK(vkEndCommandBuffer(cmd));
+  auto recordCull = [&](uint32_t phase, uint32_t drawBase, const char* name) {
+    VkCommandBuffer cmd = cmds[used++];
+    beginCmd(cmd);
+    // Counters reset (setup) and, in the late phase, the pyramid and the early draws' reads.
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                                VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
+                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    uint32_t t = timestamps->begin(cmd, name);
+    cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase, drawBase);
+    timestamps->end(cmd, t);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+  };
+  auto recordRaster = [&](uint32_t drawBase, uint32_t countIndex, bool clear, const char* name) {
+    VkCommandBuffer cmd = cmds[used++];
+    beginCmd(cmd);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
+                       VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    if (clear) {
+      gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
+                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+      gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                        kDepthStages | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
+    } else {
+      // Late phase: keep the early phase's IDs and depth (the pyramid pass read the depth).
+      gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                         VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                         VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+      gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
+    }
+    uint32_t t = timestamps->begin(cmd, name);
+    passes::VisibilityInputs in;
+    in.ids = &ids;
+    in.depth = &depth;
+    in.indexBuffer = gpuScene.indices.handle();
+    in.draws = draws.handle();
+    in.drawCount = stats.handle();
+    in.drawCountOffset = countIndex * sizeof(uint32_t);
+    in.maxDraws = capacity;
+    in.drawBase = drawBase;
+    in.clear = clear;
+    visibility.record(cmd, pipelineLayout, set, in);
+    timestamps->end(cmd, t);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+  };
+
+  if (!occlusion) {
+    recordCull(CULL_PHASE_EARLY, 0, "cull");
+    recordRaster(0, STAT_DRAW_COUNT, true, "visibility");
+  } else {
+    recordCull(CULL_PHASE_EARLY, 0, "cull early");
+    recordRaster(0, STAT_DRAW_COUNT, true, "raster early");
+    VkCommandBuffer cmd = cmds[used++];
+    beginCmd(cmd);
+    gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                      VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    // The previous frame's late cull read the pyramid that this pass overwrites.
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    uint32_t t = timestamps->begin(cmd, "depth pyramid");
+    pyramid.record(cmd);
+    timestamps->end(cmd, t);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+    recordCull(CULL_PHASE_LATE, capacity, "cull late");
+    recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, "raster late");
+  }
 
   // shade
-  cmd = cmds[used++];
+  VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
@@ -311,7 +379,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
                     VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  t = timestamps->begin(cmd, "shade");
+  uint32_t t = timestamps->begin(cmd, "shade");
   VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
@@ -320,7 +388,6 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   shade.record(cmd, pipelineLayout, set, w, h);
   timestamps->end(cmd, t);
   VK_CHECK(vkEndCommandBuffer(cmd));
-  (void)options;
 }
 
 Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOptions& options) {
@@ -357,6 +424,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   beginCmd(cmd);
   timestamps->reset(cmd);
   vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);
+  if (historyDirty) {
+    vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
+    historyDirty = false;
+  }
   VK_CHECK(vkEndCommandBuffer(cmd));
 
   const gpu::Image* colorSource = &color;
@@ -427,8 +498,12 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
     st.objectsTested = gpuScene.objectCount;
     st.frustumCulled = s[STAT_FRUSTUM_CULLED];
-    st.drawsAppended = s[STAT_DRAW_COUNT];
-    st.drawsRendered = std::min(st.drawsAppended, capacity);
+    st.occlusionCulled = s[STAT_OCCLUSION_CULLED];
+    st.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
+    st.drawsEarly = std::min(s[STAT_DRAW_COUNT], capacity);
+    st.drawsLate = std::min(s[STAT_DRAW_COUNT_LATE], capacity);
+    st.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
+    st.drawsRendered = st.drawsEarly + st.drawsLate;
     st.drawOverflow = s[STAT_DRAW_OVERFLOW];
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
     st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
@@ -445,7 +520,8 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   }
   if (readDraws) {
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
-    for (uint32_t i = 0; i < st.drawsRendered; ++i) result.drawnObjects.push_back(dr[i].firstInstance);
+    for (uint32_t i = 0; i < st.drawsEarly; ++i) result.drawnObjects.push_back(dr[i].firstInstance);
+    for (uint32_t i = 0; i < st.drawsLate; ++i) result.drawnObjects.push_back(dr[capacity + i].firstInstance);
   }
   if (readIds) {
     result.ids.assign(pixels * 2, 0);
@@ -463,7 +539,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
         slot = v >> encoding.triangleBits;
         tri = v & ((1u << encoding.triangleBits) - 1u);
       }
-      if (slot >= st.drawsRendered) {  // cannot happen unless the GPU misbehaved: make it loud
+      if (slot < capacity ? slot >= st.drawsEarly : slot - capacity >= st.drawsLate) {  // GPU misbehaved: loud
         result.ids[2 * i] = 0xFFFFFFFFu;
         continue;
       }
@@ -492,12 +568,13 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   if (!g) return g.error();
   impl->gpuScene = std::move(g.value());
   impl->capacity = config.drawCapacity ? config.drawCapacity : std::max<uint32_t>(1, impl->gpuScene.objectCount);
-  const uint64_t drawBytes = uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
+  // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
+  const uint64_t drawBytes = 2 * uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
   if (drawBytes > device.properties().limits.maxStorageBufferRange)
     return makeError(ErrorCode::CapacityExceeded,
                      fmt::format("draw capacity {} needs {:.1f} MiB, over maxStorageBufferRange", impl->capacity,
                                  drawBytes / 1048576.0));
-  impl->encoding = chooseIdEncoding(impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
+  impl->encoding = chooseIdEncoding(2 * impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
   impl->createLayouts();
   impl->cull = passes::CullPass::create(device, impl->pipelineLayout);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout);
@@ -515,7 +592,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                             gpu::MemoryUse::DeviceLocal);
   impl->statsReadback = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                     gpu::MemoryUse::HostVisible);
-  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 8);
+  impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                              gpu::MemoryUse::DeviceLocal);
+  impl->pyramid.create(device);
+  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 12);
   impl->createTargets(config.width, config.height);
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
@@ -532,5 +613,7 @@ Result<FrameResult> Renderer::renderFrame(const Camera& camera, const FrameOptio
 }
 
 const IdEncoding& Renderer::idEncoding() const { return impl_->encoding; }
+
+void Renderer::clearHistory() { impl_->historyDirty = true; }
 
 }  // namespace visbuf

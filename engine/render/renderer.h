@@ -21,7 +21,7 @@
 namespace visbuf {
 
 enum class RenderPath { Visbuf, Forward };
-enum class CullMode { None, Frustum };
+enum class CullMode { None, Frustum, Occlusion };
 
 const char* renderPathName(RenderPath path);
 const char* cullModeName(CullMode mode);
@@ -29,13 +29,13 @@ const char* cullModeName(CullMode mode);
 struct RendererConfig {
   uint32_t width = 1920;
   uint32_t height = 1080;
-  uint32_t drawCapacity = 0;  // max draw commands per frame; 0 = one per object (never overflows)
+  uint32_t drawCapacity = 0;  // max draw commands per phase; 0 = one per object (never overflows)
   bool forceWideIds = false;  // use the 64-bit ID target even when 32 bits fit
 };
 
 struct FrameOptions {
   RenderPath path = RenderPath::Visbuf;
-  CullMode cull = CullMode::Frustum;
+  CullMode cull = CullMode::Occlusion;
   float lodErrorPixels = 1.0f;  // <= 0: LOD off (always the full mesh)
   bool readColor = true;        // read the colour image back (RGBA float, linear)
   bool readIds = false;         // visbuf path: decode IDs per pixel (object + 1, triangle in its LOD)
@@ -57,6 +57,10 @@ struct FrameStats {
   uint32_t objects = 0;
   uint32_t objectsTested = 0;
   uint32_t frustumCulled = 0;
+  uint32_t occlusionCulled = 0;  // late phase: behind the depth pyramid
+  uint32_t subpixelCulled = 0;   // late phase: bounds cover no pixel centre
+  uint32_t drawsEarly = 0;       // occlusion mode: draws of the early phase (last frame's visible set)
+  uint32_t drawsLate = 0;        // occlusion mode: draws of the late phase (newly visible)
   uint32_t drawsAppended = 0;   // draws the cull pass produced (visible objects)
   uint32_t drawsRendered = 0;   // min(appended, capacity)
   uint32_t drawCapacity = 0;
@@ -92,6 +96,8 @@ class Renderer {
   Status resize(uint32_t width, uint32_t height);
   Result<FrameResult> renderFrame(const Camera& camera, const FrameOptions& options);
   const IdEncoding& idEncoding() const;
+  // Forgets which objects were visible last frame (as after a camera cut): costs time, never pixels.
+  void clearHistory();
 
   struct Impl;
 

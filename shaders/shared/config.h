@@ -17,13 +17,25 @@
 // Cull modes (FrameData.cullMode).
 #define CULL_NONE 0u
 #define CULL_FRUSTUM 1u
+#define CULL_OCCLUSION 2u  // two phases: last frame's visible set, depth pyramid, then the rest
+
+// Cull phases (push constant): single-phase modes use CULL_PHASE_EARLY only.
+#define CULL_PHASE_EARLY 0u
+#define CULL_PHASE_LATE 1u
+
+// Depth pyramid: at most 2^15 pixels per side (16 levels incl. the full-resolution level 0).
+#define MAX_PYRAMID_LEVELS 16
+#define PYRAMID_TILE 8
 
 // Counter indices in the cull statistics buffer (uint each, read back every frame).
 #define STAT_DRAW_COUNT 0          // draws appended (may exceed capacity: then overflow)
 #define STAT_OBJECTS_TESTED 1
 #define STAT_FRUSTUM_CULLED 2
 #define STAT_TRIANGLES_DRAWN 3     // triangles in the draws that fit the capacity
-#define STAT_DRAW_OVERFLOW 4       // draws dropped because drawCapacity was exceeded
+#define STAT_DRAW_OVERFLOW 4       // draws dropped because drawCapacity was exceeded (both phases)
+#define STAT_DRAW_COUNT_LATE 5     // draws appended by the late phase (occlusion mode)
+#define STAT_OCCLUSION_CULLED 6    // late phase: rejected by the depth pyramid
+#define STAT_SUBPIXEL_CULLED 7     // late phase: bounds cover no pixel centre
 #define STAT_LOD_HISTOGRAM 8       // MAX_LODS counters: draws per LOD level
 #define STAT_COUNT (STAT_LOD_HISTOGRAM + MAX_LODS)
 
@@ -38,5 +50,7 @@
 #define BINDING_MATERIALS 7  // MaterialData[]
 #define BINDING_VISIBILITY 8 // usampler/uimage visibility target (r32ui or rg32ui)
 #define BINDING_COLOR 9      // rgba16f output image
+#define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
+#define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
 
 #endif

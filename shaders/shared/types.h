@@ -74,6 +74,7 @@ struct DrawCommand {
 // the CPU computes (anchor - camera) in double and hands the rounded offset in cameraOffset.
 struct FrameData {
   mat4 viewProj;        // rotation-only view (camera at origin) x reverse-Z infinite projection
+  mat4 view;            // rotation-only view: camera-relative world -> view space (looking down -z)
   vec4 cameraOffset;    // xyz: scene anchor minus camera position (double -> float), w unused
   vec4 frustum[5];      // camera-relative planes (left, right, bottom, top, near): dot(n,p)+w >= 0 inside
   vec4 lightDir;        // xyz: unit direction towards the light (world), w: intensity
@@ -86,6 +87,27 @@ struct FrameData {
   uint cullMode;        // CULL_NONE / CULL_FRUSTUM
   uint triangleBits;    // ID split: low bits = triangle index within the draw's LOD
   uint wideIds;         // 1: visibility target is rg32ui (x: slot+1, y: triangle); 0: r32ui packed
+  float projX;          // proj[0][0]: ndc.x = projX * x / -z
+  float projY;          // proj[1][1] (negative: Vulkan y down): ndc.y = projY * y / -z
+  uint pyramidLevels;   // valid levels of the depth pyramid (0 when occlusion is off)
+  uint pad0;
+};
+
+// Push constants of the cull, visibility and depth pyramid passes (16 bytes).
+struct PassConstants {
+  uint phase;     // CULL_PHASE_EARLY / CULL_PHASE_LATE
+  uint drawBase;  // slot of this phase's first draw in the draw buffer (late draws follow the early ones)
+  uint pad0;
+  uint pad1;
+};
+
+// Push constants of the depth pyramid pass (32 bytes): valid sizes of the source and destination
+// levels (ceil(size / 2^k)), and the destination level (0: copy of the depth image).
+struct PyramidConstants {
+  uint srcWidth, srcHeight;
+  uint dstWidth, dstHeight;
+  uint level;
+  uint pad0, pad1, pad2;
 };
 
 #ifdef __cplusplus

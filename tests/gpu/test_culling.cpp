@@ -118,7 +118,17 @@ std::vector<Camera> cameraPath(const Scene& scene, int frames, bool city) {
   return path;
 }
 
-void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint32_t h) {
+struct PathEvent {
+  int frame;
+  uint32_t width = 0, height = 0;  // resize when non-zero
+  bool clearHistory = false;       // camera cut: forget last frame's visible set
+};
+
+// Renders every camera of the path with `mode` and with no culling at all (LOD off) and requires
+// identical decoded ID images. Occlusion mode keeps its history across frames, so the path exercises
+// the two-phase scheme with stale history, cuts and resizes.
+void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint32_t h,
+                     CullMode mode = CullMode::Frustum, std::vector<PathEvent> events = {}) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
@@ -127,15 +137,28 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
   on.lodErrorPixels = off.lodErrorPixels = 0.0f;  // LOD off: both draw the same triangles
   on.readColor = off.readColor = false;
   on.readIds = off.readIds = true;
-  on.cull = CullMode::Frustum;
+  on.cull = mode;
   off.cull = CullMode::None;
-  size_t covered = 0, culledTotal = 0;
+  size_t covered = 0, culledTotal = 0, occludedTotal = 0, drawnTotal = 0, visibleTotal = 0;
   int index = 0;
   for (const Camera& cam : cameraPath(scene, frames, city)) {
+    for (const PathEvent& e : events) {
+      if (e.frame != index) continue;
+      if (e.width) {
+        ASSERT_TRUE((*renderer)->resize(e.width, e.height).ok());
+      }
+      if (e.clearHistory) (*renderer)->clearHistory();
+    }
     auto a = (*renderer)->renderFrame(cam, on);
     auto b = (*renderer)->renderFrame(cam, off);
     ASSERT_TRUE(a.ok() && b.ok());
-    culledTotal += a->stats.frustumCulled;
+    culledTotal += a->stats.frustumCulled + a->stats.occlusionCulled + a->stats.subpixelCulled;
+    occludedTotal += a->stats.occlusionCulled;
+    drawnTotal += a->stats.drawsRendered;
+    std::set<uint32_t> visible;
+    for (size_t p = 0; p < a->ids.size(); p += 2)
+      if (a->ids[p]) visible.insert(a->ids[p]);
+    visibleTotal += visible.size();
     size_t mismatches = 0;
     for (size_t p = 0; p < a->ids.size(); p += 2) {
       if (a->ids[p] != b->ids[p] || a->ids[p + 1] != b->ids[p + 1]) ++mismatches;
@@ -144,8 +167,10 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
     ASSERT_EQ(mismatches, 0u) << "frame " << index << ": culling changed " << mismatches << " pixels";
     ++index;
   }
-  std::printf("%s %ux%u: %d frames identical with culling on/off (%zu covered pixels, %zu objects culled)\n",
-              city ? "city" : "field", w, h, frames, covered, culledTotal);
+  std::printf("%s %ux%u %s: %d frames identical to no culling (%zu covered pixels, %zu objects culled, %zu "
+              "occluded; drawn %zu vs %zu visible in the image = %.2fx)\n",
+              city ? "city" : "field", w, h, cullModeName(mode), frames, covered, culledTotal, occludedTotal,
+              drawnTotal, visibleTotal, visibleTotal ? double(drawnTotal) / double(visibleTotal) : 0.0);
   EXPECT_GT(covered, 0u);
   EXPECT_GT(culledTotal, 0u) << "the path must exercise culling";
   EXPECT_NO_VALIDATION_MESSAGES(before);
@@ -158,3 +183,20 @@ TEST(Culling, ConservativeVsDoubleReferenceCity) { checkConservative(cityScene(4
 
 TEST(Culling, IdImageUnchangedByCullingField) { checkIdEquality(fieldScene(1500, true), false, 50, 317, 229); }
 TEST(Culling, IdImageUnchangedByCullingCity) { checkIdEquality(cityScene(1200), true, 50, 317, 229); }
+
+// Occlusion culling never hides anything: 100-frame paths with a camera cut, a cleared history and a
+// resize in the middle, at a non-power-of-two size.
+TEST(Occlusion, IdImageUnchangedByOcclusionCullingCity) {
+  checkIdEquality(cityScene(1200), true, 100, 317, 229, CullMode::Occlusion,
+                  {{40, 0, 0, true}, {60, 160, 90, false}, {61, 0, 0, false}, {80, 319, 181, true}});
+}
+TEST(Occlusion, IdImageUnchangedByOcclusionCullingField) {
+  checkIdEquality(fieldScene(1500, true), false, 100, 317, 229, CullMode::Occlusion,
+                  {{50, 211, 97, false}, {75, 0, 0, true}});
+}
+// The depth pyramid at sizes with odd, non-power-of-two and degenerate levels.
+TEST(Occlusion, IdImageUnchangedAtAwkwardResolutions) {
+  Scene city = cityScene(1200);
+  for (auto [w, h] : {std::pair{1366u, 768u}, {1280u, 720u}, {1920u, 1080u}, {1u, 1u}, {3u, 5u}, {5u, 3u}, {33u, 17u}})
+    checkIdEquality(city, true, 3, w, h, CullMode::Occlusion);
+}

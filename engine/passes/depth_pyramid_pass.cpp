@@ -1,0 +1,134 @@
+#include "passes/depth_pyramid_pass.h"
+
+#include <bit>
+
+#include "gpu/check.h"
+#include "shared/types.h"
+
+namespace visbuf::passes {
+
+uint32_t pyramidLevelCount(uint32_t width, uint32_t height) {
+  uint32_t levels = 1;
+  while (width > 1 || height > 1) {
+    width = (width + 1) / 2;
+    height = (height + 1) / 2;
+    ++levels;
+  }
+  return levels;
+}
+
+DepthPyramidPass::~DepthPyramidPass() {
+  if (!device_) return;
+  VkDevice dev = device_->device();
+  vkDeviceWaitIdle(dev);
+  releaseViews();
+  vkDestroyDescriptorPool(dev, pool_, nullptr);
+  vkDestroySampler(dev, sampler_, nullptr);
+  vkDestroyPipelineLayout(dev, layout_, nullptr);
+  vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
+}
+
+void DepthPyramidPass::releaseViews() {
+  for (VkImageView v : levelViews_) vkDestroyImageView(device_->device(), v, nullptr);
+  levelViews_.clear();
+}
+
+void DepthPyramidPass::create(gpu::Device& device) {
+  device_ = &device;
+  VkDevice dev = device.device();
+  VkDescriptorSetLayoutBinding b[2] = {
+      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
+  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  lci.bindingCount = 2;
+  lci.pBindings = b;
+  VK_CHECK(vkCreateDescriptorSetLayout(dev, &lci, nullptr, &setLayout_));
+  VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu::PyramidConstants)};
+  VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pci.setLayoutCount = 1;
+  pci.pSetLayouts = &setLayout_;
+  pci.pushConstantRangeCount = 1;
+  pci.pPushConstantRanges = &range;
+  VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &layout_));
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, MAX_PYRAMID_LEVELS},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, MAX_PYRAMID_LEVELS}};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
+  dpci.maxSets = MAX_PYRAMID_LEVELS;
+  dpci.poolSizeCount = 2;
+  dpci.pPoolSizes = sizes;
+  VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
+  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  sci.maxLod = VK_LOD_CLAMP_NONE;
+  VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler_));
+  pipeline_ = gpu::createComputePipeline(device, layout_, "depth_pyramid.comp");
+}
+
+void DepthPyramidPass::resize(const gpu::Image& depth) {
+  VkDevice dev = device_->device();
+  vkDeviceWaitIdle(dev);
+  releaseViews();
+  if (!sets_.empty()) vkFreeDescriptorSets(dev, pool_, uint32_t(sets_.size()), sets_.data());
+  sets_.clear();
+  width_ = depth.width();
+  height_ = depth.height();
+  levels_ = pyramidLevelCount(width_, height_);
+  const uint32_t pw = std::bit_ceil(width_), ph = std::bit_ceil(height_);
+  pyramid_ = gpu::Image(*device_, VK_FORMAT_R32_SFLOAT, pw, ph, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                        VK_IMAGE_ASPECT_COLOR_BIT, levels_);
+  std::vector<VkDescriptorSetLayout> layouts(levels_, setLayout_);
+  sets_.resize(levels_);
+  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  ai.descriptorPool = pool_;
+  ai.descriptorSetCount = levels_;
+  ai.pSetLayouts = layouts.data();
+  VK_CHECK(vkAllocateDescriptorSets(dev, &ai, sets_.data()));
+  for (uint32_t k = 0; k < levels_; ++k) levelViews_.push_back(pyramid_.createLevelView(k));
+  // The pyramid lives in GENERAL from here on (written as storage, read with texelFetch); it is
+  // zero-filled (depth 0 = infinitely far = occludes nothing) so that a pass reading it before the
+  // first build sees a valid, conservative pyramid.
+  VkCommandBuffer cmd = device_->beginOneShot();
+  gpu::imageBarrier(cmd, pyramid_, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                    VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  VkClearColorValue zero{};
+  VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, levels_, 0, 1};
+  vkCmdClearColorImage(cmd, pyramid_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+  device_->submitOneShot(cmd);
+  for (uint32_t k = 0; k < levels_; ++k) {
+    VkDescriptorImageInfo src = k == 0 ? VkDescriptorImageInfo{sampler_, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+                                       : VkDescriptorImageInfo{sampler_, levelViews_[k - 1], VK_IMAGE_LAYOUT_GENERAL};
+    VkDescriptorImageInfo dst{VK_NULL_HANDLE, levelViews_[k], VK_IMAGE_LAYOUT_GENERAL};
+    VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
+    w[0].dstSet = w[1].dstSet = sets_[k];
+    w[0].dstBinding = 0;
+    w[0].descriptorCount = 1;
+    w[0].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[0].pImageInfo = &src;
+    w[1].dstBinding = 1;
+    w[1].descriptorCount = 1;
+    w[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    w[1].pImageInfo = &dst;
+    vkUpdateDescriptorSets(dev, 2, w, 0, nullptr);
+  }
+}
+
+void DepthPyramidPass::record(VkCommandBuffer cmd) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.handle());
+  uint32_t sw = width_, sh = height_;
+  for (uint32_t k = 0; k < levels_; ++k) {
+    const uint32_t dw = k == 0 ? width_ : (sw + 1) / 2, dh = k == 0 ? height_ : (sh + 1) / 2;
+    gpu::PyramidConstants pc{sw, sh, dw, dh, k, 0, 0, 0};
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &sets_[k], 0, nullptr);
+    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
+    vkCmdDispatch(cmd, (dw + PYRAMID_TILE - 1) / PYRAMID_TILE, (dh + PYRAMID_TILE - 1) / PYRAMID_TILE, 1);
+    // The next level reads this one.
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    sw = dw;
+    sh = dh;
+  }
+}
+
+}  // namespace visbuf::passes

@@ -1,0 +1,45 @@
+// Depth pyramid pass (shaders/depth_pyramid.comp.glsl): a conservative farthest-depth (reverse-Z
+// minimum) reduction of the visibility depth over every level, one dispatch per level.
+// Reads: depth (SHADER_READ_ONLY_OPTIMAL). Writes: pyramid (r32f, GENERAL, all levels).
+// Level 0 is full resolution; level k's valid size is ceil(size / 2^k). The image is allocated with
+// power-of-two extents >= the valid sizes so every valid texel exists at every level.
+#pragma once
+
+#include <vector>
+
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+
+namespace visbuf::passes {
+
+// Number of levels until the valid size is 1x1.
+uint32_t pyramidLevelCount(uint32_t width, uint32_t height);
+
+class DepthPyramidPass {
+ public:
+  DepthPyramidPass() = default;
+  ~DepthPyramidPass();
+  DepthPyramidPass(const DepthPyramidPass&) = delete;
+  DepthPyramidPass& operator=(const DepthPyramidPass&) = delete;
+  void create(gpu::Device& device);
+  // (Re)creates the pyramid image for a depth image of this size and writes the per-level descriptors.
+  void resize(const gpu::Image& depth);
+  void record(VkCommandBuffer cmd) const;
+  const gpu::Image& pyramid() const { return pyramid_; }
+  uint32_t levels() const { return levels_; }
+
+ private:
+  void releaseViews();
+  gpu::Device* device_ = nullptr;
+  VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
+  VkPipelineLayout layout_ = VK_NULL_HANDLE;
+  VkDescriptorPool pool_ = VK_NULL_HANDLE;
+  VkSampler sampler_ = VK_NULL_HANDLE;
+  gpu::Pipeline pipeline_;
+  gpu::Image pyramid_;
+  std::vector<VkImageView> levelViews_;
+  std::vector<VkDescriptorSet> sets_;
+  uint32_t width_ = 0, height_ = 0, levels_ = 0;
+};
+
+}  // namespace visbuf::passes
