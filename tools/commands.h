@@ -26,9 +26,25 @@ struct RenderCommand {
   std::string idsOut;
   std::string json;
   bool reference = false;  // also render the forward path and report the error against it
+  std::string view = "shaded";  // debug view written to -o instead of the shaded image
+  int pyramidLevel = -1;        // --view pyramid: the level to show
+  bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
 };
 
 void addRenderCommand(CLI::App& app, RenderCommand& cmd);
 int runRender(const RenderCommand& cmd);
+
+// visbuf bake (tools/bake_command.cpp): glTF -> pack. Exit codes: 0 ok, 1 bad input, 2 usage.
+struct BakeCommand {
+  std::string input;                                   // .gltf / .glb
+  std::string output;                                  // pack to write
+  uint32_t lodCount = MeshBuildOptions{}.maxLods;      // LOD levels incl. the full mesh, 1..MAX_LODS
+  uint32_t lodMinTriangles = MeshBuildOptions{}.minTriangles;
+  bool quantize = false;                               // not implemented yet: usage error
+  std::string json;                                    // summary as JSON; empty: none
+};
+
+void addBakeCommand(CLI::App& app, BakeCommand& cmd);
+int runBake(const BakeCommand& cmd);
 
 }  // namespace visbuf::tools

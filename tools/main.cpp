@@ -10,11 +10,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   visbuf::tools::RenderCommand render;
   visbuf::tools::addRenderCommand(app, render);
+  visbuf::tools::BakeCommand bake;
+  visbuf::tools::addBakeCommand(app, bake);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int rc = app.exit(e);  // prints help or the usage error
+    return rc == 0 ? 0 : 2;      // every usage error exits 2 (bad input 1, success 0)
   }
   if (app.got_subcommand("render")) return visbuf::tools::runRender(render);
+  if (app.got_subcommand("bake")) return visbuf::tools::runBake(bake);
   return 2;
 }

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "commands.h"
+#include "debug_views.h"
 #include "core/image_compare.h"
 #include "core/image_io.h"
 #include "gpu/device.h"
@@ -41,6 +42,13 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_flag("--reference", c.reference,
                 "also render the forward path (same culling and LOD rule, hardware interpolation) over the same "
                 "frames and report the error against it beside both times");
+  sub->add_option("--view", c.view, "image written to -o: shaded | objects | triangles | lod | culled | pyramid")
+      ->check(CLI::IsMember(debugViewNames()))
+      ->capture_default_str();
+  sub->add_option("--pyramid-level", c.pyramidLevel, "--view pyramid: depth pyramid level (0 = full resolution)");
+  sub->add_flag("--freeze-culling", c.freezeCulling,
+                "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
+                "frame's draw lists (shows what the first camera culled)");
 }
 
 namespace {
@@ -85,6 +93,9 @@ int runRender(const RenderCommand& c) {
       const bool last = i + 1 == c.frames;
       options.readColor = last && readColor;
       options.readIds = last && !c.idsOut.empty() && options.path == RenderPath::Visbuf;
+      options.readDraws = false;
+      options.readPyramid = false;
+      if (last && c.view != "shaded" && options.path == RenderPath::Visbuf) prepareViewOptions(c.view, options);
       frame = (*renderer)->renderFrame(*camera, options);
       if (!frame) return {};
       runs.push_back(frame->stats);
@@ -113,12 +124,27 @@ int runRender(const RenderCommand& c) {
     return stats;
   };
   const bool compare = c.reference && fo.path == RenderPath::Visbuf;
+  if (c.freezeCulling) {
+    if (fo.path != RenderPath::Visbuf) return fail({ErrorCode::InvalidArgument, "--freeze-culling needs --path visbuf"});
+    FrameOptions cullFrame = fo;
+    cullFrame.readColor = false;
+    for (int i = 0; i < 3; ++i) {  // occlusion mode's history settles after two frames
+      auto f = (*renderer)->renderFrame(scene->defaultCamera, cullFrame);
+      if (!f) return fail(f.error());
+    }
+    fo.freezeCulling = true;
+  }
   Result<FrameResult> frame = makeError(ErrorCode::InvalidArgument, "no frame");
   FrameStats stats = run(fo, !c.output.empty() || compare, frame);
   if (!frame) return fail(frame.error());
 
   std::printf("%s", formatStats(stats).c_str());
   if (c.frames > 1) std::printf("(times: median of %u frames after 1 warm-up)\n", c.frames - 1);
+  if (!c.output.empty() && c.view != "shaded") {
+    auto view = buildDebugView(c.view, *frame, *scene, *camera, std::max(c.pyramidLevel, 0));
+    if (!view) return fail(view.error());
+    frame->color = std::move(view.value());
+  }
   if (!c.output.empty()) {
     Status s = writeColorImage(c.output, frame->width, frame->height, frame->color);
     if (!s) return fail(s.error());

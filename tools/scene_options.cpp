@@ -2,16 +2,20 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include <fmt/format.h>
 
 #include "asset/gltf_import.h"
+#include "asset/pack_reader.h"
+#include "asset/scene_bake.h"
 #include "scene/generate.h"
 
 namespace visbuf::tools {
 
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
-  app.add_option("--scene", o.scene, "field | city | a .gltf/.glb file")->capture_default_str();
+  app.add_option("--scene", o.scene, "field | city | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
+      ->capture_default_str();
   app.add_option("--objects,--instances", o.objects, "number of objects (field: instances; city: approx. total)");
   app.add_option("--seed", o.seed, "scene generator seed")->capture_default_str();
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
@@ -45,30 +49,34 @@ Result<Scene> loadScene(const SceneOptions& o) {
     p.seed = o.seed;
     return makeCityScene(p);
   }
-  // A glTF file: its default scene flattened into one mesh, instanced once (or --instances times
-  // in the field layout).
-  Result<MeshSource> m = importMesh(o.scene);
-  if (!m) return m.error();
+  // A baked pack (told by its magic, or by the .vbp extension so that a damaged pack gets the pack reader's
+  // message rather than the glTF parser's).
+  if (isPackFile(o.scene) || std::filesystem::path(o.scene).extension() == ".vbp") {
+    if (o.objects > 1)
+      return makeError(ErrorCode::InvalidArgument,
+                       "--objects applies to field, city and glTF scenes, not to packs");
+    return readPack(o.scene);
+  }
+  // A glTF file with --objects N > 1: its default scene flattened into one mesh, instanced N times in the
+  // field layout.
   if (o.objects > 1) {
+    Result<MeshSource> m = importMesh(o.scene);
+    if (!m) return m.error();
     FieldParams p;
     p.objects = o.objects;
     p.seed = o.seed;
     p.mesh = std::move(m.value());
     return makeFieldScene(p);
   }
-  Result<Mesh> mesh = buildMesh(m.value());
-  if (!mesh) return mesh.error();
-  Scene scene;
-  scene.name = o.scene;
-  glm::vec4 s = mesh->boundsSphere;
-  scene.meshes.push_back(std::move(mesh.value()));
-  scene.materials.push_back({"default", glm::vec4(0.8f, 0.8f, 0.8f, 1.0f)});
-  scene.objects.push_back({glm::dmat4(1.0), 0, 0});
-  // Frame the whole object: distance so the bounding sphere fits the vertical field of view.
-  double dist = double(s.w) / std::sin(glm::radians(60.0) * 0.5) * 1.05;
-  scene.defaultCamera.target = glm::dvec3(glm::vec3(s));
-  scene.defaultCamera.position = scene.defaultCamera.target + glm::normalize(glm::dvec3(0.35, 0.3, 1.0)) * dist;
-  scene.defaultCamera.nearPlane = std::max(1e-4, double(s.w) * 1e-3);
+  // Otherwise its node hierarchy as instances of per-material meshes, baked in memory as `visbuf bake` does
+  // (default LOD options); the default camera frames the scene's bounds.
+  GltfImportReport report;
+  Result<ImportedScene> imported = importGltfScene(o.scene, {}, &report);
+  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", w.c_str());
+  if (!imported) return imported.error();
+  Result<Scene> scene = buildImportedScene(*imported);
+  if (!scene) return scene.error();
+  scene->name = o.scene;
   return scene;
 }
 

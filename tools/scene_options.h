@@ -1,4 +1,4 @@
-// Scene selection shared by the subcommands: built-in layouts or a glTF file.
+// Scene selection shared by the subcommands: built-in layouts, a glTF file or a baked pack.
 #pragma once
 
 #include <optional>
@@ -12,7 +12,7 @@
 namespace visbuf::tools {
 
 struct SceneOptions {
-  std::string scene = "field";  // field | city | path to .gltf/.glb
+  std::string scene = "field";  // field | city | path to .gltf/.glb | path to a pack (.vbp)
   uint32_t objects = 0;         // 0: the layout's default
   uint64_t seed = 1;
   std::string mesh;             // field: instanced mesh file (.gltf/.glb); empty = procedural knot

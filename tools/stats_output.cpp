@@ -21,6 +21,8 @@ std::string formatStats(const FrameStats& s) {
   for (size_t i = 0; i < s.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.lodHistogram[i]);
   out += fmt::format("lod histogram [{}]\n", lods);
   if (s.path == RenderPath::Visbuf) {
+    if (s.cullingFrozen) out += "culling       FROZEN: draw lists of an earlier frame\n";
+    out += fmt::format("pyramid       {}\n", s.pyramidLevels ? fmt::format("{} levels", s.pyramidLevels) : "not built");
     out += fmt::format("ids           {}\n", s.ids.describe());
     out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
                        s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
@@ -46,6 +48,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["subpixelCulled"] = s.subpixelCulled;
   j["drawsEarly"] = s.drawsEarly;
   j["drawsLate"] = s.drawsLate;
+  j["cullingFrozen"] = s.cullingFrozen;
+  j["pyramidLevels"] = s.pyramidLevels;
   j["drawsAppended"] = s.drawsAppended;
   j["drawsRendered"] = s.drawsRendered;
   j["drawCapacity"] = s.drawCapacity;

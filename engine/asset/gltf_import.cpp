@@ -1,4 +1,5 @@
-// glTF 2.0 -> MeshSource importer. The contract (what is supported, which errors) is in gltf_import.h.
+// glTF 2.0 -> MeshSource / ImportedScene importer. The contract (what is supported, which errors) is in
+// gltf_import.h.
 //
 // Pipeline:
 //   1. loadModel(): read the file ourselves (FileNotFound / IoError), check and re-pack the GLB container,
@@ -7,6 +8,9 @@
 //   2. Importer::run(): walk the scene graph with double-precision transforms; the first time a mesh is met,
 //      decode its primitives into local-space arrays (cached, so a mesh instanced by 1000 nodes is decoded
 //      once); then transform, morph and append each primitive instance to the output MeshSource.
+//   2'. Importer::runScene() (importGltfScene): the same walk (walkScene), but each (mesh, material,
+//      mirrored, weights) group is emitted once in object space and every node becomes instances with world
+//      transforms.
 //
 // Safety rule: tinygltf only parses; it does not validate ranges. Every index, offset, count and stride that
 // comes from the file is checked here with overflow-safe arithmetic before any byte is touched, and every
@@ -29,6 +33,7 @@
 #include <optional>
 #include <set>
 #include <string_view>
+#include <tuple>
 #include <utility>
 
 // --- tinygltf -------------------------------------------------------------------------------------------
@@ -521,6 +526,7 @@ class Importer {
       : path_(path), model_(model), options_(options), warnings_(warnings) {}
 
   Result<MeshSource> run();
+  Result<ImportedScene> runScene();
 
   uint32_t primitivesImported = 0;
   uint32_t primitivesSkipped = 0;
@@ -552,6 +558,15 @@ class Importer {
   Status emitNode(int node, const glm::dmat4& world, MeshSource* out);
   Status emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world,
                        const std::vector<double>& weights, const std::string& where, MeshSource* out);
+  template <typename Visit>
+  Status walkScene(Visit&& visit, std::string* sceneLabel);
+  Status importMaterials(ImportedScene* scene);
+  Status emitSceneNode(int node, const glm::dmat4& world, ImportedScene* scene);
+
+  // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights).
+  using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>>;
+  std::map<SceneMeshKey, uint32_t> sceneMeshes_;  // -> ImportedScene::meshes index, UINT32_MAX: no triangles
+  std::optional<uint32_t> defaultMaterial_;
 
   const std::string& path_;
   const tinygltf::Model& model_;
@@ -1226,14 +1241,18 @@ Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* ou
   return {};
 }
 
-Result<MeshSource> Importer::run() {
-  if (Status s = checkRequiredExtensions(); !s) return s.error();
+// Depth-first walk of the default scene with an explicit stack (no recursion depth limit from the file),
+// calling visit(nodeIndex, world) for every node in document order. glTF node graphs are disjoint trees, so a
+// node met twice means a cycle or a shared child: refuse rather than loop or explode. `sceneLabel` receives a
+// description of the roots for messages.
+template <typename Visit>
+Status Importer::walkScene(Visit&& visit, std::string* sceneLabel) {
+  if (Status s = checkRequiredExtensions(); !s) return s;
   meshCache_.resize(model_.meshes.size());
   const size_t nodeCount = model_.nodes.size();
 
   // Root nodes: the chosen scene's, or every parentless node when the file has no scenes.
   std::vector<int> roots;
-  std::string sceneLabel;
   if (!model_.scenes.empty()) {
     int scene = model_.defaultScene;
     if (scene < 0) scene = 0;
@@ -1241,7 +1260,7 @@ Result<MeshSource> Importer::run() {
       return malformed(path_ + ": default scene " + str(scene) + " does not exist");
     }
     roots = model_.scenes[static_cast<size_t>(scene)].nodes;
-    sceneLabel = "scene " + str(scene);
+    *sceneLabel = "scene " + str(scene);
   } else {
     std::vector<uint8_t> hasParent(nodeCount, 0);
     for (const tinygltf::Node& node : model_.nodes) {
@@ -1252,13 +1271,9 @@ Result<MeshSource> Importer::run() {
     for (size_t i = 0; i < nodeCount; ++i) {
       if (!hasParent[i]) roots.push_back(static_cast<int>(i));
     }
-    sceneLabel = "root nodes (file has no scenes)";
+    *sceneLabel = "root nodes (file has no scenes)";
   }
 
-  // Depth-first walk with an explicit stack (no recursion depth limit from the file). glTF node graphs are
-  // disjoint trees, so a node met twice means a cycle or a shared child: refuse rather than loop or explode.
-  MeshSource out;
-  out.name = std::filesystem::path(path_).stem().string();
   std::vector<uint8_t> visited(nodeCount, 0);
   std::vector<std::pair<int, glm::dmat4>> stack;
   for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, glm::dmat4(1.0));
@@ -1266,7 +1281,7 @@ Result<MeshSource> Importer::run() {
     auto [nodeIndex, parentWorld] = stack.back();
     stack.pop_back();
     if (nodeIndex < 0 || static_cast<size_t>(nodeIndex) >= nodeCount) {
-      return malformed(path_ + ": node " + str(nodeIndex) + " does not exist (referenced by " + sceneLabel +
+      return malformed(path_ + ": node " + str(nodeIndex) + " does not exist (referenced by " + *sceneLabel +
                        " or a parent node)");
     }
     const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
@@ -1280,9 +1295,19 @@ Result<MeshSource> Importer::run() {
     const glm::dmat4 world = parentWorld * *local;
     if (!isFinite(world))
       return malformed(path_ + ": node " + str(nodeIndex) + named(node.name) + ": non-finite transform");
-    if (Status s = emitNode(nodeIndex, world, &out); !s) return s.error();
+    if (Status s = visit(nodeIndex, world); !s) return s;
     for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
   }
+  return {};
+}
+
+Result<MeshSource> Importer::run() {
+  MeshSource out;
+  out.name = std::filesystem::path(path_).stem().string();
+  std::string sceneLabel;
+  Status walked = walkScene(
+      [&](int nodeIndex, const glm::dmat4& world) { return emitNode(nodeIndex, world, &out); }, &sceneLabel);
+  if (!walked) return walked.error();
 
   if (out.indices.empty()) {
     return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" +
@@ -1291,6 +1316,172 @@ Result<MeshSource> Importer::run() {
   if (!out.uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0.0f));
   if (!out.colors.empty()) out.colors.resize(out.positions.size(), 0xFFFFFFFFu);
   return out;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Scene import (instances)
+
+// Converts glTF materials 1:1 (index i stays i).
+Status Importer::importMaterials(ImportedScene* scene) {
+  for (size_t i = 0; i < model_.materials.size(); ++i) {
+    const tinygltf::Material& gm = model_.materials[i];
+    const std::string where = path_ + ": material " + str(uint64_t{i}) + named(gm.name);
+    Material m;
+    m.name = gm.name.empty() ? "material" + str(uint64_t{i}) : gm.name;
+    const std::vector<double>& f = gm.pbrMetallicRoughness.baseColorFactor;
+    if (f.size() != 4) return malformed(where + ": baseColorFactor must have 4 elements");
+    if (!allFinite(f)) return malformed(where + ": non-finite baseColorFactor");
+    bool clamped = false;
+    for (int c = 0; c < 4; ++c) {
+      const double v = std::clamp(f[static_cast<size_t>(c)], 0.0, 1.0);
+      clamped |= v != f[static_cast<size_t>(c)];
+      m.baseColor[c] = static_cast<float>(v);
+    }
+    if (clamped) warn(where + ": baseColorFactor outside [0,1] clamped");
+    if (gm.alphaMode == "MASK") {
+      m.alphaMode = AlphaMode::Mask;
+    } else if (gm.alphaMode == "BLEND") {
+      m.alphaMode = AlphaMode::Blend;
+    } else {
+      if (gm.alphaMode != "OPAQUE" && !gm.alphaMode.empty())
+        warn(where + ": unknown alphaMode '" + gm.alphaMode + "' treated as OPAQUE");
+      m.alphaMode = AlphaMode::Opaque;
+    }
+    if (!std::isfinite(gm.alphaCutoff)) return malformed(where + ": non-finite alphaCutoff");
+    m.alphaCutoff = static_cast<float>(gm.alphaCutoff);
+    m.doubleSided = gm.doubleSided;
+    const tinygltf::TextureInfo& tex = gm.pbrMetallicRoughness.baseColorTexture;
+    if (tex.index >= 0) {
+      if (static_cast<size_t>(tex.index) >= model_.textures.size()) {
+        return malformed(where + ": baseColorTexture " + str(tex.index) + " does not exist");
+      }
+      m.baseColorTexture.texture = tex.index;
+      m.baseColorTexture.texCoord = tex.texCoord >= 0 ? static_cast<uint32_t>(tex.texCoord) : 0;
+      const int source = model_.textures[static_cast<size_t>(tex.index)].source;
+      if (source >= 0 && static_cast<size_t>(source) < model_.images.size()) {
+        m.baseColorTexture.image = source;
+        m.baseColorTexture.uri = model_.images[static_cast<size_t>(source)].uri;
+      } else {
+        warn(where + ": baseColorTexture " + str(tex.index) + " has no usable image source");
+      }
+    }
+    scene->materials.push_back(std::move(m));
+  }
+  return {};
+}
+
+// Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
+Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
+  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+  if (node.mesh < 0) return {};
+  const std::string nodeWhere = path_ + ": node " + str(nodeIndex) + named(node.name);
+  if (static_cast<size_t>(node.mesh) >= model_.meshes.size()) {
+    return malformed(nodeWhere + ": mesh " + str(node.mesh) + " does not exist");
+  }
+  const tinygltf::Mesh& mesh = model_.meshes[static_cast<size_t>(node.mesh)];
+  auto prims = decodedMesh(node.mesh);
+  if (!prims) return prims.error();
+  const std::vector<double>& weights = node.weights.empty() ? mesh.weights : node.weights;
+  if (!allFinite(weights)) return malformed(nodeWhere + ": non-finite morph weights");
+
+  const double det = glm::determinant(glm::dmat3(world));
+  if (!(std::abs(det) > 0.0)) {
+    warn(nodeWhere + ": zero-scale (singular) transform; instance skipped");
+    return {};
+  }
+  const bool mirrored = det < 0.0;
+
+  // Material groups in order of first appearance among the primitives.
+  std::vector<int> groups;
+  for (const tinygltf::Primitive& p : mesh.primitives) {
+    if (p.material >= 0 && static_cast<size_t>(p.material) >= model_.materials.size()) {
+      return malformed(nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + ": material " +
+                       str(p.material) + " does not exist");
+    }
+    if (std::find(groups.begin(), groups.end(), p.material) == groups.end()) groups.push_back(p.material);
+  }
+
+  for (const int gltfMaterial : groups) {
+    SceneMeshKey key{node.mesh, gltfMaterial, mirrored, weights};
+    auto found = sceneMeshes_.find(key);
+    uint32_t meshIndex = 0;
+    uint32_t groupPrimitives = 0;
+    for (size_t p = 0; p < (*prims)->size(); ++p) {
+      if (mesh.primitives[p].material == gltfMaterial && !(**prims)[p].skipped) ++groupPrimitives;
+    }
+    if (found == sceneMeshes_.end()) {
+      ImportedMesh im;
+      im.gltfMesh = node.mesh;
+      im.mirrored = mirrored;
+      if (gltfMaterial >= 0) {
+        im.material = static_cast<uint32_t>(gltfMaterial);
+      } else {
+        if (!defaultMaterial_) {
+          defaultMaterial_ = static_cast<uint32_t>(scene->materials.size());
+          Material m;
+          m.name = "default";
+          scene->materials.push_back(m);
+        }
+        im.material = *defaultMaterial_;
+      }
+      im.source.name = mesh.name.empty() ? "mesh" + str(node.mesh) : mesh.name;
+      if (groups.size() > 1) im.source.name += "/" + scene->materials[im.material].name;
+      if (mirrored) im.source.name += " (mirrored)";
+      // Object space: identity transform. Normals are generated (when missing) from the file's winding.
+      for (size_t p = 0; p < (*prims)->size(); ++p) {
+        const DecodedPrimitive& prim = (**prims)[p];
+        if (mesh.primitives[p].material != gltfMaterial || prim.skipped) continue;
+        const std::string where =
+            nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " + str(uint64_t{p});
+        if (Status s = emitPrimitive(prim, glm::dmat4(1.0), weights, where, &im.source); !s) return s;
+      }
+      if (!im.source.uvs.empty()) im.source.uvs.resize(im.source.positions.size(), glm::vec2(0.0f));
+      if (!im.source.colors.empty()) im.source.colors.resize(im.source.positions.size(), 0xFFFFFFFFu);
+      if (mirrored) {
+        for (size_t i = 0; i + 2 < im.source.indices.size(); i += 3)
+          std::swap(im.source.indices[i + 1], im.source.indices[i + 2]);
+      }
+      if (im.source.indices.empty()) {
+        meshIndex = std::numeric_limits<uint32_t>::max();  // every primitive of the group was skipped
+      } else {
+        meshIndex = static_cast<uint32_t>(scene->meshes.size());
+        scene->meshes.push_back(std::move(im));
+      }
+      found = sceneMeshes_.emplace(std::move(key), meshIndex).first;
+    }
+    meshIndex = found->second;
+    // Counted per primitive instance, like importGltfMesh.
+    uint32_t groupSkipped = 0;
+    for (size_t p = 0; p < (*prims)->size(); ++p) {
+      if (mesh.primitives[p].material == gltfMaterial && (**prims)[p].skipped) ++groupSkipped;
+    }
+    primitivesSkipped += groupSkipped;
+    if (meshIndex == std::numeric_limits<uint32_t>::max()) continue;
+    primitivesImported += groupPrimitives;
+    ImportedInstance inst;
+    inst.mesh = meshIndex;
+    inst.material = scene->meshes[meshIndex].material;
+    inst.transform = world;
+    inst.node = nodeIndex;
+    scene->instances.push_back(inst);
+  }
+  return {};
+}
+
+Result<ImportedScene> Importer::runScene() {
+  ImportedScene scene;
+  scene.name = std::filesystem::path(path_).stem().string();
+  if (Status s = importMaterials(&scene); !s) return s.error();
+  std::string sceneLabel;
+  Status walked = walkScene(
+      [&](int nodeIndex, const glm::dmat4& world) { return emitSceneNode(nodeIndex, world, &scene); },
+      &sceneLabel);
+  if (!walked) return walked.error();
+  if (scene.instances.empty()) {
+    return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" +
+                     str(uint64_t{primitivesSkipped}) + " primitive(s) skipped)");
+  }
+  return scene;
 }
 
 }  // namespace
@@ -1306,6 +1497,26 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
     if (Status s = loadModel(path, &model, &rep.warnings); !s) return s.error();
     Importer importer(path, model, options, &rep.warnings);
     Result<MeshSource> result = importer.run();
+    rep.primitivesImported = importer.primitivesImported;
+    rep.primitivesSkipped = importer.primitivesSkipped;
+    return result;
+  } catch (const std::bad_alloc&) {
+    return makeError(ErrorCode::CapacityExceeded, path + ": out of memory while importing");
+  } catch (const std::exception& e) {
+    return malformed(path + ": " + e.what());
+  }
+}
+
+Result<ImportedScene> importGltfScene(const std::string& path, const GltfImportOptions& options,
+                                      GltfImportReport* report) {
+  GltfImportReport localReport;
+  GltfImportReport& rep = report ? *report : localReport;
+  rep = GltfImportReport{};
+  try {
+    tinygltf::Model model;
+    if (Status s = loadModel(path, &model, &rep.warnings); !s) return s.error();
+    Importer importer(path, model, options, &rep.warnings);
+    Result<ImportedScene> result = importer.runScene();
     rep.primitivesImported = importer.primitivesImported;
     rep.primitivesSkipped = importer.primitivesSkipped;
     return result;

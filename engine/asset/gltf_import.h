@@ -1,7 +1,9 @@
-// glTF 2.0 importer: flattens the default scene of a .gltf / .glb file into ONE MeshSource.
+// glTF 2.0 importer. importGltfMesh() flattens the default scene of a .gltf / .glb file into ONE MeshSource;
+// importGltfScene() (declared at the end) keeps the node hierarchy as instances of per-material meshes.
 //
-// The renderer draws one mesh many times (e.g. the Kitten stress scene), so the importer bakes every node's
-// world transform into the vertices and concatenates all primitives into a single indexed triangle list.
+// importGltfMesh: the renderer draws one mesh many times (e.g. the Kitten stress scene), so it bakes every
+// node's world transform into the vertices and concatenates all primitives into a single indexed triangle
+// list.
 // Materials, textures, cameras, lights, skins and animations are ignored (meshes come out in rest pose, with
 // the mesh's default morph weights, or the node's weights where a node overrides them).
 //
@@ -51,8 +53,11 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "core/result.h"
 #include "scene/mesh.h"
+#include "scene/scene.h"
 
 namespace visbuf {
 
@@ -71,5 +76,58 @@ struct GltfImportReport {
 // `report` may be null. MeshSource::name is the file name without its extension.
 Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptions& options = {},
                                   GltfImportReport* report = nullptr);
+
+// ---------------------------------------------------------------------------------------------------------
+// Scene import: the node hierarchy kept as instances.
+//
+// importGltfScene() walks the same default scene as importGltfMesh() (same roots, transforms, attribute rules
+// and errors) but does not bake transforms into vertices:
+//   - Meshes: one MeshSource per (glTF mesh, material) group: the primitives of a glTF mesh that share a
+//     material are concatenated in object space; a mesh whose primitives use 3 materials gives 3 sources.
+//     A mesh used by many nodes is decoded and stored once.
+//   - Instances: every node that references a mesh gives one instance per material group:
+//     (mesh index, material index, world transform as a dmat4, composed in double precision).
+//   - Mirrored instances (det of the world 3x3 < 0): the renderer has a single front-face setting
+//     (counter-clockwise), so such instances use a *mirrored mesh variant*: a second MeshSource with the same
+//     vertices and normals whose triangles have their 2nd and 3rd index swapped. Under the mirroring
+//     transform those triangles are counter-clockwise again, and the object-space normals (transformed with
+//     the instance) still point outwards. The variant is created once per (mesh, material, morph weights),
+//     shared by every mirrored instance of it; ImportedMesh::mirrored marks it.
+//   - Morph weights: a node whose weights differ from the mesh's gets its own mesh variant (weights are baked
+//     into the vertices, as importGltfMesh does).
+//   - Zero-determinant (degenerate) instances are skipped with a warning (they cover no pixels).
+//   - Materials: every glTF material, in file order (so glTF material i is materials[i]), with base colour
+//     factor (linear RGBA, clamped to [0,1] with a warning), alpha mode and cutoff, double-sided, and the
+//     base-colour texture reference (texture index, image index, image URI, TEXCOORD set; no pixels are
+//     read). Primitives without a material use a "default" material (glTF's: white, opaque) appended after
+//     the file's materials, only when needed. Skins and animations are ignored (rest pose, as in
+//     importGltfMesh).
+// Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist and
+// for non-finite material factors.
+struct ImportedMesh {
+  MeshSource source;      // object space; name: "<mesh name>" [+ "/<material name>"] [+ " (mirrored)"]
+  int32_t gltfMesh = -1;  // source glTF mesh index
+  uint32_t material = 0;  // index into ImportedScene::materials used by every instance of this mesh
+  bool mirrored = false;  // winding flipped (for instances with a negative-determinant transform)
+};
+
+struct ImportedInstance {
+  uint32_t mesh = 0;          // into ImportedScene::meshes
+  uint32_t material = 0;      // into ImportedScene::materials (== meshes[mesh].material)
+  glm::dmat4 transform{1.0};  // object -> world, double precision, finite, |det| > 0
+  int32_t node = -1;          // source glTF node index
+};
+
+struct ImportedScene {
+  std::string name;  // file name without its extension
+  std::vector<ImportedMesh> meshes;
+  std::vector<Material> materials;
+  std::vector<ImportedInstance> instances;
+};
+
+// Imports the default scene of the glTF file at `path` as meshes + materials + instances (see above).
+// `report` may be null; its primitive counts are per primitive instance, as for importGltfMesh().
+Result<ImportedScene> importGltfScene(const std::string& path, const GltfImportOptions& options = {},
+                                      GltfImportReport* report = nullptr);
 
 }  // namespace visbuf

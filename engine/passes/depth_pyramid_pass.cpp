@@ -76,7 +76,8 @@ void DepthPyramidPass::resize(const gpu::Image& depth) {
   height_ = depth.height();
   levels_ = pyramidLevelCount(width_, height_);
   const uint32_t pw = std::bit_ceil(width_), ph = std::bit_ceil(height_);
-  pyramid_ = gpu::Image(*device_, VK_FORMAT_R32_SFLOAT, pw, ph, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+  pyramid_ = gpu::Image(*device_, VK_FORMAT_R32_SFLOAT, pw, ph, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
+                            VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                         VK_IMAGE_ASPECT_COLOR_BIT, levels_);
   std::vector<VkDescriptorSetLayout> layouts(levels_, setLayout_);
   sets_.resize(levels_);

@@ -80,6 +80,9 @@ struct Renderer::Impl {
   passes::DepthPyramidPass pyramid;
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
+  bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
+  CullMode lastCull = CullMode::Frustum;
+  gpu::Buffer pyramidReadback;
 
   gpu::Buffer frameBuffer;  // FrameData, host visible
   gpu::Buffer draws;        // DrawCommand[capacity]
@@ -291,7 +294,8 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
 
 void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   const uint32_t w = config.width, h = config.height;
-  const bool occlusion = options.cull == CullMode::Occlusion;
+  const bool frozen = options.freezeCulling && haveDraws;
+  const bool occlusion = (frozen ? lastCull : options.cull) == CullMode::Occlusion;
   constexpr VkPipelineStageFlags2 kDepthStages =
       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
   constexpr VkAccessFlags2 kDepthAccess =
@@ -329,8 +333,11 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                          VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                          VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
+      if (frozen)
+        gpu::memoryBarrier(cmd, kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kDepthStages, kDepthAccess);
+      else
+        gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
     }
     uint32_t t = timestamps->begin(cmd, name);
     passes::VisibilityInputs in;
@@ -348,7 +355,10 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
 
-  if (!occlusion) {
+  if (frozen) {  // the draw lists and their counts are the frozen frame's: raster them as they are
+    recordRaster(0, STAT_DRAW_COUNT, true, occlusion ? "raster early" : "visibility");
+    if (occlusion) recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, "raster late");
+  } else if (!occlusion) {
     recordCull(CULL_PHASE_EARLY, 0, "cull");
     recordRaster(0, STAT_DRAW_COUNT, true, "visibility");
   } else {
@@ -423,7 +433,8 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   timestamps->reset(cmd);
-  vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);
+  const bool frozen = options.path == RenderPath::Visbuf && options.freezeCulling && haveDraws;
+  if (!frozen) vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);  // frozen: keep the counts
   if (historyDirty) {
     vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
     historyDirty = false;
@@ -431,13 +442,25 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   VK_CHECK(vkEndCommandBuffer(cmd));
 
   const gpu::Image* colorSource = &color;
+  const CullMode effectiveCull = frozen ? lastCull : options.cull;
+  const bool builtPyramid = options.path == RenderPath::Visbuf && !frozen && options.cull == CullMode::Occlusion;
+  st.cullingFrozen = frozen;
+  st.pyramidLevels = builtPyramid ? pyramid.levels() : 0;
   if (options.path == RenderPath::Visbuf) {
     recordVisbuf(options, used);
+    haveDraws = true;
+    lastCull = effectiveCull;
     st.targetBytesPerPixel = gpu::formatBytes(ids.format()) + 4 /*depth*/ + 8 /*colour*/;
   } else {
     std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
     if (options.readDraws)
-      for (const auto& d : fdraws) result.drawnObjects.push_back(d.objectId);
+      for (const auto& d : fdraws) {
+        const gpu::MeshData& md = gpuScene.meshTable[scene.objects[d.objectId].mesh];
+        uint32_t lod = 0;
+        while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
+        result.drawnObjects.push_back(d.objectId);
+        result.drawnLods.push_back(lod);
+      }
     cmd = cmds[used++];
     beginCmd(cmd);
     gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
@@ -474,6 +497,34 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
       drawsReadback = gpu::Buffer(device, draws.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
     VkBufferCopy dc{0, 0, draws.size()};
     vkCmdCopyBuffer(cmd, draws.handle(), drawsReadback.handle(), 1, &dc);
+  }
+  const bool readPyramid = builtPyramid && options.readPyramid;
+  std::vector<std::pair<uint32_t, uint32_t>> pyramidSizes;
+  if (readPyramid) {
+    uint32_t lw = w, lh = h;
+    VkDeviceSize offset = 0;
+    std::vector<VkBufferImageCopy> regions;
+    for (uint32_t k = 0; k < pyramid.levels(); ++k) {
+      VkBufferImageCopy region{};
+      region.bufferOffset = offset;
+      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, k, 0, 1};
+      region.imageExtent = {lw, lh, 1};
+      regions.push_back(region);
+      pyramidSizes.emplace_back(lw, lh);
+      offset += VkDeviceSize(lw) * lh * 4;
+      lw = (lw + 1) / 2;
+      lh = (lh + 1) / 2;
+    }
+    if (!pyramidReadback || pyramidReadback.size() < offset)
+      pyramidReadback = gpu::Buffer(device, offset, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+    gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    vkCmdCopyImageToBuffer(cmd, pyramid.pyramid().handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                           pyramidReadback.handle(), uint32_t(regions.size()), regions.data());
+    gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   }
   if (readIds) {
     gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
@@ -520,8 +571,22 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   }
   if (readDraws) {
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
-    for (uint32_t i = 0; i < st.drawsEarly; ++i) result.drawnObjects.push_back(dr[i].firstInstance);
-    for (uint32_t i = 0; i < st.drawsLate; ++i) result.drawnObjects.push_back(dr[capacity + i].firstInstance);
+    auto add = [&](const gpu::DrawCommand& d) {
+      result.drawnObjects.push_back(d.firstInstance);
+      const gpu::MeshData& md = gpuScene.meshTable[scene.objects[d.firstInstance].mesh];
+      uint32_t lod = 0;
+      while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
+      result.drawnLods.push_back(lod);
+    };
+    for (uint32_t i = 0; i < st.drawsEarly; ++i) add(dr[i]);
+    for (uint32_t i = 0; i < st.drawsLate; ++i) add(dr[capacity + i]);
+  }
+  if (readPyramid) {
+    const float* p = static_cast<const float*>(pyramidReadback.mapped());
+    for (auto [lw, lh] : pyramidSizes) {
+      result.pyramid.push_back({lw, lh, std::vector<float>(p, p + size_t(lw) * lh)});
+      p += size_t(lw) * lh;
+    }
   }
   if (readIds) {
     result.ids.assign(pixels * 2, 0);
@@ -605,7 +670,7 @@ Status Renderer::resize(uint32_t width, uint32_t height) {
   if (width == 0 || height == 0 || width > 16384 || height > 16384)
     return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
   impl_->createTargets(width, height);
-  return {};
+  return {};  // the draw lists stay valid (they do not depend on the size): freezeCulling still works
 }
 
 Result<FrameResult> Renderer::renderFrame(const Camera& camera, const FrameOptions& options) {

@@ -40,6 +40,9 @@ struct FrameOptions {
   bool readColor = true;        // read the colour image back (RGBA float, linear)
   bool readIds = false;         // visbuf path: decode IDs per pixel (object + 1, triangle in its LOD)
   bool readDraws = false;       // return the IDs of the objects drawn (visbuf: from the GPU's commands)
+  bool freezeCulling = false;   // visbuf: redraw the last culled frame's draw lists (no cull, no pyramid), so
+                                // the camera can move on and show what that frame culled
+  bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
 };
 
 // How the visibility target's bits are split (DESIGN.md property 4).
@@ -68,6 +71,8 @@ struct FrameStats {
   uint64_t trianglesDrawn = 0;
   std::vector<uint32_t> lodHistogram;  // draws per LOD level
   IdEncoding ids;
+  bool cullingFrozen = false;   // this frame reused an earlier frame's draw lists
+  uint32_t pyramidLevels = 0;   // depth pyramid levels built this frame (0: no pyramid pass)
   std::vector<std::pair<std::string, double>> passMs;  // GPU time per pass, recording order
   double gpuMs = 0.0;           // sum of pass times
   double cpuRecordMs = 0.0;     // CPU time to cull (forward) and record
@@ -81,6 +86,12 @@ struct FrameResult {
   std::vector<float> color;     // RGBA, linear, row-major, top row first
   std::vector<uint32_t> ids;    // 2 per pixel: object ID + 1 (0 = nothing), triangle index in its LOD
   std::vector<uint32_t> drawnObjects;  // with readDraws: object IDs drawn this frame (any order)
+  std::vector<uint32_t> drawnLods;     // with readDraws: the LOD level of each drawn object (parallel)
+  struct PyramidLevel {
+    uint32_t width = 0, height = 0;  // valid size: ceil(frame size / 2^level)
+    std::vector<float> depth;        // reverse-Z, row-major
+  };
+  std::vector<PyramidLevel> pyramid;   // with readPyramid: level 0 (full resolution) first
   FrameStats stats;
 };
 

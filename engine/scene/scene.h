@@ -44,9 +44,25 @@ struct MeshBuildOptions {
 // input (indices out of range, non-finite positions).
 Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options = {});
 
+// glTF alpha modes. Values are stored in packs: never renumber.
+enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
+
+// A reference to a texture image, carried as metadata until textures are supported (no pixels loaded).
+struct TextureRef {
+  int32_t texture = -1;  // source glTF texture index; -1: no texture
+  int32_t image = -1;    // source glTF image index; -1: none or unknown
+  uint32_t texCoord = 0; // TEXCOORD_n set the texture is sampled with
+  std::string uri;       // image URI as written in the glTF (relative to it); empty for embedded images
+  bool operator==(const TextureRef&) const = default;
+};
+
 struct Material {
   std::string name;
-  glm::vec4 baseColor{1.0f};  // linear
+  glm::vec4 baseColor{1.0f};  // linear RGBA, each in [0,1]
+  AlphaMode alphaMode = AlphaMode::Opaque;
+  float alphaCutoff = 0.5f;   // AlphaMode::Mask: fragments with alpha < cutoff are discarded
+  bool doubleSided = false;
+  TextureRef baseColorTexture;
 };
 
 struct Object {

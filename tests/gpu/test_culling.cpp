@@ -200,3 +200,79 @@ TEST(Occlusion, IdImageUnchangedAtAwkwardResolutions) {
   for (auto [w, h] : {std::pair{1366u, 768u}, {1280u, 720u}, {1920u, 1080u}, {1u, 1u}, {3u, 5u}, {5u, 3u}, {33u, 17u}})
     checkIdEquality(city, true, 3, w, h, CullMode::Occlusion);
 }
+
+// The depth pyramid against an independent CPU reduction: every level-k texel (x, y) must equal the
+// minimum (reverse-Z farthest) of level 0 over [x 2^k, (x+1) 2^k) x [y 2^k, (y+1) 2^k) clipped to the
+// image, at sizes with odd, non-power-of-two and degenerate levels.
+TEST(Occlusion, DepthPyramidMatchesCpuReduction) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene city = cityScene(600);
+  for (auto [w, h] : {std::pair{1366u, 768u}, {1280u, 720u}, {1920u, 1080u}, {1u, 1u}, {3u, 5u}, {37u, 11u}}) {
+    auto renderer = Renderer::create(dev, city, {.width = w, .height = h});
+    ASSERT_TRUE(renderer.ok());
+    FrameOptions fo;
+    fo.readColor = false;
+    fo.readPyramid = true;
+    (*renderer)->renderFrame(city.defaultCamera, fo).value();  // history settles: early depth non-empty
+    auto f = (*renderer)->renderFrame(city.defaultCamera, fo);
+    ASSERT_TRUE(f.ok());
+    ASSERT_FALSE(f->pyramid.empty());
+    const auto& l0 = f->pyramid[0];
+    ASSERT_EQ(l0.width, w);
+    ASSERT_EQ(l0.height, h);
+    EXPECT_EQ(f->pyramid.back().width, 1u);
+    EXPECT_EQ(f->pyramid.back().height, 1u);
+    size_t nonZero = 0;
+    for (float d : l0.depth) nonZero += d > 0.0f;
+    if (w * h > 100) {
+      EXPECT_GT(nonZero, 0u) << "the early phase must have drawn something";
+    }
+    for (size_t k = 1; k < f->pyramid.size(); ++k) {
+      const auto& lk = f->pyramid[k];
+      ASSERT_EQ(lk.width, (w + (1u << k) - 1) >> k);
+      ASSERT_EQ(lk.height, (h + (1u << k) - 1) >> k);
+      for (uint32_t y = 0; y < lk.height; ++y)
+        for (uint32_t x = 0; x < lk.width; ++x) {
+          float expect = 1.0f;
+          for (uint32_t py = y << k; py < std::min(h, (y + 1) << k); ++py)
+            for (uint32_t px = x << k; px < std::min(w, (x + 1) << k); ++px)
+              expect = std::min(expect, l0.depth[size_t(py) * w + px]);
+          ASSERT_EQ(lk.depth[size_t(y) * lk.width + x], expect) << w << "x" << h << " level " << k << " texel " << x << "," << y;
+        }
+    }
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// --freeze-culling: the frozen frame draws exactly the draw lists of the frame it froze.
+TEST(Occlusion, FrozenCullingRedrawsTheFrozenDrawLists) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene city = cityScene(1200);
+  auto renderer = Renderer::create(dev, city, {.width = 320, .height = 180});
+  ASSERT_TRUE(renderer.ok());
+  FrameOptions fo;
+  fo.readColor = false;
+  fo.readDraws = true;
+  Result<FrameResult> culled = makeError(ErrorCode::InvalidArgument, "");
+  for (int i = 0; i < 3; ++i) culled = (*renderer)->renderFrame(city.defaultCamera, fo);
+  ASSERT_TRUE(culled.ok());
+  Camera elsewhere = city.defaultCamera;
+  elsewhere.position += glm::dvec3(0.0, 80.0, 60.0);
+  fo.freezeCulling = true;
+  auto frozen = (*renderer)->renderFrame(elsewhere, fo);
+  ASSERT_TRUE(frozen.ok());
+  EXPECT_TRUE(frozen->stats.cullingFrozen);
+  EXPECT_EQ(frozen->stats.pyramidLevels, 0u) << "a frozen frame builds no pyramid";
+  auto sorted = [](std::vector<uint32_t> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  EXPECT_EQ(sorted(frozen->drawnObjects), sorted(culled->drawnObjects));
+  fo.freezeCulling = false;
+  auto live = (*renderer)->renderFrame(elsewhere, fo);
+  ASSERT_TRUE(live.ok());
+  EXPECT_NE(sorted(live->drawnObjects), sorted(culled->drawnObjects)) << "the moved camera sees other objects";
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}

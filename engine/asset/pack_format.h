@@ -1,0 +1,153 @@
+// The visbuf pack (.vbp): a baked Scene (meshes with LOD chains, materials, objects, default camera) in one
+// little-endian binary file that loads without any processing. docs/pack-format.md is the full description
+// (policy, what readers reject); this header is the normative layout. Every record is plain data, copied with
+// memcpy (never read in place through a cast), sizes pinned by static_assert.
+//
+// File layout (all offsets in bytes from the start of the file):
+//
+//   [0, 64)                  Header
+//   [64, 64 + 48 * count)    SectionEntry[Header::sectionCount]   (the section table)
+//   then the sections, each starting at a multiple of kAlignment (16), zero padding in between and after
+//   the last one up to Header::fileSize, which is a multiple of 16.
+//
+// Integrity: Header::headerCrc is the CRC-32 of the header (with headerCrc itself set to 0) followed by the
+// whole section table; SectionEntry::crc32 is the CRC-32 of the section's `size` bytes. CRC-32 is the
+// IEEE 802.3 / zlib / PNG one (reflected polynomial 0xEDB88320, initial value and final XOR 0xFFFFFFFF).
+//
+// Versioning: Header::version is kVersion. Any change to the layout or meaning of an existing record or
+// section bumps it, and readers refuse every version other than their own (the user re-bakes). A writer may
+// add sections that older readers of the same version can ignore; readers skip unknown section names (still
+// range- and CRC-checked).
+#pragma once
+
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+
+#include "shared/types.h"
+
+namespace visbuf::pack {
+
+static_assert(std::endian::native == std::endian::little, "packs are little-endian; add byte swapping");
+
+inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
+inline constexpr uint32_t kVersion = 1;
+inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
+inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
+inline constexpr size_t kSectionNameSize = 16;
+
+struct Header {
+  char magic[4];              // "VBPK"
+  uint32_t version;           // kVersion
+  uint32_t headerSize;        // sizeof(Header) = 64
+  uint32_t sectionEntrySize;  // sizeof(SectionEntry) = 48
+  uint32_t sectionCount;      // entries in the table at offset headerSize; 1..kMaxSections
+  uint32_t flags;             // 0 in version 1
+  uint64_t fileSize;          // total file size in bytes, multiple of kAlignment
+  uint32_t reserved[7];       // 0
+  uint32_t headerCrc;         // CRC-32 of header (this field = 0) + section table
+};
+static_assert(sizeof(Header) == 64 && offsetof(Header, fileSize) == 24 && offsetof(Header, headerCrc) == 60);
+
+struct SectionEntry {
+  char name[kSectionNameSize];  // ASCII, NUL-padded, at least one NUL (e.g. "indices")
+  uint64_t offset;              // from the start of the file; multiple of kAlignment; after the table
+  uint64_t size;                // bytes; == count * elementSize
+  uint64_t count;               // number of records
+  uint32_t elementSize;         // bytes per record (1 for "strings")
+  uint32_t crc32;               // CRC-32 of the section's `size` bytes
+};
+static_assert(sizeof(SectionEntry) == 48 && offsetof(SectionEntry, offset) == 16 &&
+              offsetof(SectionEntry, crc32) == 44);
+
+// A UTF-8 string in the "strings" section (not NUL-terminated). length 0: empty string.
+struct StringRef {
+  uint32_t offset;  // into the "strings" section
+  uint32_t length;  // bytes
+};
+static_assert(sizeof(StringRef) == 8);
+
+// Section "scene": exactly one record.
+struct SceneRecord {
+  StringRef name;
+  double anchor[3];          // Scene::anchor (world units)
+  double cameraPosition[3];  // Scene::defaultCamera
+  double cameraTarget[3];
+  double cameraUp[3];
+  double cameraFovY;        // radians, in (0, pi)
+  double cameraNear;        // > 0, world units
+  float lightDirection[3];  // unit vector towards the light (world)
+  uint32_t reserved;        // 0
+};
+static_assert(sizeof(SceneRecord) == 136 && offsetof(SceneRecord, lightDirection) == 120);
+
+// Section "meshes": one record per Scene::meshes entry. The mesh's vertices are
+// vertices[firstVertex, firstVertex + vertexCount), its indices (all LODs, mesh-local values below
+// vertexCount) indices[firstIndex, firstIndex + indexCount), its LODs lods[firstLod, firstLod + lodCount).
+struct MeshRecord {
+  StringRef name;
+  uint64_t firstVertex;   // into "vertices"
+  uint64_t firstIndex;    // into "indices"
+  uint32_t vertexCount;   // >= 1
+  uint32_t indexCount;    // >= 3
+  uint32_t firstLod;      // into "lods"
+  uint32_t lodCount;      // 1..MAX_LODS; lods[firstLod] is the full mesh
+  float boundsSphere[4];  // object space: centre xyz, radius w >= 0
+};
+static_assert(sizeof(MeshRecord) == 56 && offsetof(MeshRecord, boundsSphere) == 40);
+
+// Section "lods": Lod records, ranges relative to their mesh's index range.
+struct LodRecord {
+  uint32_t firstIndex;  // relative to the mesh's firstIndex
+  uint32_t indexCount;  // > 0, multiple of 3; firstIndex + indexCount <= mesh indexCount
+  float error;          // object-space simplification error, finite, >= 0
+  uint32_t reserved;    // 0
+};
+static_assert(sizeof(LodRecord) == 16);
+
+// Section "vertices": gpu::Vertex records as the GPU pool stores them (32 bytes, shaders/shared/types.h).
+static_assert(sizeof(gpu::Vertex) == 32);
+// Section "indices": uint32_t, mesh-local.
+
+inline constexpr uint32_t kMaterialDoubleSided = 1u;  // MaterialRecord::flags
+
+// Section "materials": one record per Scene::materials entry.
+struct MaterialRecord {
+  StringRef name;
+  float baseColor[4];          // linear RGBA, finite
+  uint32_t alphaMode;          // AlphaMode: 0 opaque, 1 mask, 2 blend
+  float alphaCutoff;           // finite
+  uint32_t flags;              // kMaterialDoubleSided
+  uint32_t reserved0;          // 0
+  int32_t baseColorTexture;    // source glTF texture index, -1: none
+  int32_t baseColorImage;      // source glTF image index, -1: none
+  uint32_t baseColorTexCoord;  // TEXCOORD_n
+  uint32_t reserved1;          // 0
+  StringRef baseColorUri;      // image URI relative to the source glTF, empty when embedded / none
+};
+static_assert(sizeof(MaterialRecord) == 64 && offsetof(MaterialRecord, baseColorUri) == 56);
+
+// Section "objects": one record per Scene::objects entry.
+struct ObjectRecord {
+  double transform[16];  // object -> world, column-major (glm::dmat4 memory order), finite, |det| > 0
+  uint32_t mesh;         // < mesh count
+  uint32_t material;     // < material count
+  uint32_t flags;        // 0
+  uint32_t reserved;     // 0
+};
+static_assert(sizeof(ObjectRecord) == 144 && offsetof(ObjectRecord, mesh) == 128);
+
+// Section names of version 1, all required, each at most once.
+inline constexpr const char* kSceneSection = "scene";
+inline constexpr const char* kStringsSection = "strings";
+inline constexpr const char* kMeshesSection = "meshes";
+inline constexpr const char* kLodsSection = "lods";
+inline constexpr const char* kVerticesSection = "vertices";
+inline constexpr const char* kIndicesSection = "indices";
+inline constexpr const char* kMaterialsSection = "materials";
+inline constexpr const char* kObjectsSection = "objects";
+
+// CRC-32 (IEEE, as zlib's crc32()): crc32(b, crc32(a)) == crc32(a + b). Start with crc = 0.
+uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);
+
+}  // namespace visbuf::pack

@@ -1,0 +1,449 @@
+// Pack reader. Order of checks (docs/pack-format.md lists them for users):
+//   1. header: size, magic, version, header/entry sizes, flags, section count, table inside the file;
+//   2. header + table checksum;
+//   3. each section: name, alignment, count x elementSize (overflow), size, range inside the file, overlap,
+//      then the declared file size;
+//   4. each section's checksum; required sections present, once, with the expected record size;
+//   5. contents: string refs, mesh/LOD/vertex/index ranges, index values, finite values, object references;
+//   6. validateScene() on the result.
+#include "asset/pack_reader.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <new>
+#include <string_view>
+#include <vector>
+
+#include "asset/pack_format.h"
+
+namespace visbuf {
+
+namespace {
+
+bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
+  return offset <= limit && size <= limit - offset;
+}
+
+struct SectionView {
+  pack::SectionEntry entry;
+  std::string name;
+  const uint8_t* data = nullptr;
+};
+
+// Expected record size of the sections this reader knows.
+uint32_t expectedElementSize(std::string_view name) {
+  if (name == pack::kSceneSection) return sizeof(pack::SceneRecord);
+  if (name == pack::kStringsSection) return 1;
+  if (name == pack::kMeshesSection) return sizeof(pack::MeshRecord);
+  if (name == pack::kLodsSection) return sizeof(pack::LodRecord);
+  if (name == pack::kVerticesSection) return sizeof(gpu::Vertex);
+  if (name == pack::kIndicesSection) return sizeof(uint32_t);
+  if (name == pack::kMaterialsSection) return sizeof(pack::MaterialRecord);
+  if (name == pack::kObjectsSection) return sizeof(pack::ObjectRecord);
+  return 0;
+}
+
+constexpr const char* kRequiredSections[] = {
+    pack::kSceneSection,    pack::kStringsSection, pack::kMeshesSection,    pack::kLodsSection,
+    pack::kVerticesSection, pack::kIndicesSection, pack::kMaterialsSection, pack::kObjectsSection};
+
+class Parser {
+ public:
+  Parser(const uint8_t* data, size_t size, const std::string& label)
+      : data_(data), size_(size), label_(label) {}
+
+  Result<Scene> run();
+
+ private:
+  Error fail(std::string message, ErrorCode code = ErrorCode::MalformedInput) const {
+    return makeError(code, label_ + ": " + message);
+  }
+  Status parseTable();
+  template <typename T>
+  T record(const SectionView& s,
+           uint64_t i) const {  // caller guarantees i < count and size == count*sizeof(T)
+    T r;
+    std::memcpy(&r, s.data + i * sizeof(T), sizeof(T));
+    return r;
+  }
+  Result<std::string> string(pack::StringRef ref, const std::string& where) const;
+  Status readScene(Scene* scene);
+  Status readMeshes(Scene* scene);
+  Status readMaterials(Scene* scene);
+  Status readObjects(Scene* scene);
+
+  const uint8_t* data_;
+  size_t size_;
+  const std::string& label_;
+  std::map<std::string, SectionView, std::less<>> sections_;
+};
+
+Result<std::string> Parser::string(pack::StringRef ref, const std::string& where) const {
+  const SectionView& s = sections_.at(pack::kStringsSection);
+  if (!rangeFits(ref.offset, ref.length, s.entry.size)) {
+    return fail(
+        fmt::format("{}: string (offset {}, length {}) runs past the end of section 'strings' ({} bytes)",
+                    where, ref.offset, ref.length, s.entry.size));
+  }
+  return std::string(reinterpret_cast<const char*>(s.data) + ref.offset, ref.length);
+}
+
+Status Parser::parseTable() {
+  if (size_ < sizeof(pack::Header)) {
+    return fail(
+        fmt::format("file is {} bytes, smaller than the {}-byte pack header (truncated, or not a pack)",
+                    size_, sizeof(pack::Header)));
+  }
+  pack::Header h;
+  std::memcpy(&h, data_, sizeof(h));
+  if (std::memcmp(h.magic, pack::kMagic, 4) != 0) {
+    return fail(fmt::format("not a visbuf pack (magic {:02x} {:02x} {:02x} {:02x}, expected 'VBPK')",
+                            uint8_t(h.magic[0]), uint8_t(h.magic[1]), uint8_t(h.magic[2]),
+                            uint8_t(h.magic[3])));
+  }
+  if (h.version != pack::kVersion) {
+    return fail(fmt::format("pack format version {} is not supported by this build (it reads version {}); "
+                            "re-bake the pack with this visbuf",
+                            h.version, pack::kVersion),
+                ErrorCode::Unsupported);
+  }
+  if (h.headerSize != sizeof(pack::Header) || h.sectionEntrySize != sizeof(pack::SectionEntry)) {
+    return fail(fmt::format("header fields 'headerSize' {} / 'sectionEntrySize' {} must be {} / {}",
+                            h.headerSize, h.sectionEntrySize, sizeof(pack::Header),
+                            sizeof(pack::SectionEntry)));
+  }
+  if (h.flags != 0)
+    return fail(fmt::format("header field 'flags' is {:#x}; version 1 defines none", h.flags));
+  if (h.sectionCount == 0 || h.sectionCount > pack::kMaxSections) {
+    return fail(fmt::format("header field 'sectionCount' is {} (1..{})", h.sectionCount, pack::kMaxSections));
+  }
+  const uint64_t tableEnd = sizeof(pack::Header) + uint64_t{h.sectionCount} * sizeof(pack::SectionEntry);
+  if (tableEnd > size_) {
+    return fail(
+        fmt::format("the section table ({} entries, ends at byte {}) runs past the end of the file ({} "
+                    "bytes)",
+                    h.sectionCount, tableEnd, size_));
+  }
+  pack::Header zeroed = h;
+  zeroed.headerCrc = 0;
+  const uint32_t crc = pack::crc32(data_ + sizeof(pack::Header), tableEnd - sizeof(pack::Header),
+                                   pack::crc32(&zeroed, sizeof(zeroed)));
+  if (crc != h.headerCrc) {
+    return fail(
+        fmt::format("header or section table checksum mismatch (stored {:#010x}, computed {:#010x}): the "
+                    "file is damaged",
+                    h.headerCrc, crc));
+  }
+
+  std::vector<SectionView> views;
+  for (uint32_t i = 0; i < h.sectionCount; ++i) {
+    SectionView v;
+    std::memcpy(&v.entry, data_ + sizeof(pack::Header) + uint64_t{i} * sizeof(pack::SectionEntry),
+                sizeof(v.entry));
+    const pack::SectionEntry& e = v.entry;
+    const char* end = static_cast<const char*>(std::memchr(e.name, 0, pack::kSectionNameSize));
+    const bool printable = end != nullptr && end != e.name &&
+                           std::all_of(e.name, end, [](char c) { return c > 0x20 && c < 0x7F; });
+    if (!printable)
+      return fail(fmt::format("section table entry {}: the name is not NUL-terminated ASCII", i));
+    v.name.assign(e.name, end);
+    const std::string where = fmt::format("section '{}'", v.name);
+    uint64_t bytes = 0;
+    if (__builtin_mul_overflow(e.count, uint64_t{e.elementSize}, &bytes)) {
+      return fail(fmt::format("{}: field 'count' {} x 'elementSize' {} overflows 64 bits", where, e.count,
+                              e.elementSize));
+    }
+    if (bytes != e.size) {
+      return fail(fmt::format("{}: field 'size' {} differs from 'count' {} x 'elementSize' {} = {}", where,
+                              e.size, e.count, e.elementSize, bytes));
+    }
+    if (e.count > std::numeric_limits<size_t>::max() / std::max<uint64_t>(e.elementSize, 1)) {
+      return fail(
+          fmt::format("{}: field 'count' {} does not fit this machine's address space", where, e.count));
+    }
+    if (e.offset % pack::kAlignment != 0 || e.offset < tableEnd) {
+      return fail(
+          fmt::format("{}: field 'offset' {} must be a multiple of {} after the section table (byte {})",
+                      where, e.offset, pack::kAlignment, tableEnd));
+    }
+    if (!rangeFits(e.offset, e.size, size_)) {
+      return fail(fmt::format("{} runs past the end of the file (offset {}, size {}, file {})", where,
+                              e.offset, e.size, size_));
+    }
+    const uint32_t expected = expectedElementSize(v.name);
+    if (expected != 0 && e.elementSize != expected) {
+      return fail(fmt::format("{}: field 'elementSize' is {}, expected {}", where, e.elementSize, expected));
+    }
+    v.data = data_ + e.offset;
+    if (sections_.count(v.name) != 0) return fail(fmt::format("{} appears twice", where));
+    views.push_back(v);
+    sections_.emplace(v.name, v);
+  }
+  std::sort(views.begin(), views.end(),
+            [](const SectionView& a, const SectionView& b) { return a.entry.offset < b.entry.offset; });
+  for (size_t i = 1; i < views.size(); ++i) {
+    if (views[i].entry.offset < views[i - 1].entry.offset + views[i - 1].entry.size) {
+      return fail(fmt::format("section '{}' (offset {}) overlaps section '{}' (offset {}, size {})",
+                              views[i].name, views[i].entry.offset, views[i - 1].name,
+                              views[i - 1].entry.offset, views[i - 1].entry.size));
+    }
+  }
+  if (h.fileSize != size_) {
+    return fail(fmt::format("header field 'fileSize' is {} but the file has {} bytes ({})", h.fileSize, size_,
+                            h.fileSize > size_ ? "truncated" : "trailing bytes"));
+  }
+  for (const SectionView& v : views) {
+    const uint32_t c = pack::crc32(v.data, v.entry.size);
+    if (c != v.entry.crc32) {
+      return fail(
+          fmt::format("section '{}': checksum mismatch (stored {:#010x}, computed {:#010x}): the file is "
+                      "damaged",
+                      v.name, v.entry.crc32, c));
+    }
+  }
+  for (const char* name : kRequiredSections) {
+    if (sections_.count(name) == 0) return fail(fmt::format("required section '{}' is missing", name));
+  }
+  return {};
+}
+
+bool allFinite(const double* v, int n) {
+  return std::all_of(v, v + n, [](double x) { return std::isfinite(x); });
+}
+bool allFinite(const float* v, int n) {
+  return std::all_of(v, v + n, [](float x) { return std::isfinite(x); });
+}
+
+Status Parser::readScene(Scene* scene) {
+  const SectionView& s = sections_.at(pack::kSceneSection);
+  if (s.entry.count != 1) return fail(fmt::format("section 'scene': {} records, expected 1", s.entry.count));
+  const auto r = record<pack::SceneRecord>(s, 0);
+  auto name = string(r.name, "section 'scene' field 'name'");
+  if (!name) return name.error();
+  scene->name = *name;
+  if (!allFinite(r.anchor, 3) || !allFinite(r.cameraPosition, 3) || !allFinite(r.cameraTarget, 3) ||
+      !allFinite(r.cameraUp, 3) || !allFinite(r.lightDirection, 3)) {
+    return fail("section 'scene': non-finite anchor, camera or light direction");
+  }
+  if (!(r.cameraFovY > 0.0 && r.cameraFovY < 3.14159)) {
+    return fail(fmt::format("section 'scene' field 'cameraFovY' {} is not in (0, pi)", r.cameraFovY));
+  }
+  if (!(r.cameraNear > 0.0) || !std::isfinite(r.cameraNear)) {
+    return fail(
+        fmt::format("section 'scene' field 'cameraNear' {} must be a positive distance", r.cameraNear));
+  }
+  const glm::vec3 light(r.lightDirection[0], r.lightDirection[1], r.lightDirection[2]);
+  if (!(glm::length(light) > 0.0f)) return fail("section 'scene' field 'lightDirection' is zero");
+  scene->anchor = {r.anchor[0], r.anchor[1], r.anchor[2]};
+  scene->defaultCamera.position = {r.cameraPosition[0], r.cameraPosition[1], r.cameraPosition[2]};
+  scene->defaultCamera.target = {r.cameraTarget[0], r.cameraTarget[1], r.cameraTarget[2]};
+  scene->defaultCamera.up = {r.cameraUp[0], r.cameraUp[1], r.cameraUp[2]};
+  scene->defaultCamera.fovY = r.cameraFovY;
+  scene->defaultCamera.nearPlane = r.cameraNear;
+  scene->lightDirection = light;
+  return {};
+}
+
+Status Parser::readMeshes(Scene* scene) {
+  const SectionView& meshes = sections_.at(pack::kMeshesSection);
+  const SectionView& lods = sections_.at(pack::kLodsSection);
+  const SectionView& vertices = sections_.at(pack::kVerticesSection);
+  const SectionView& indices = sections_.at(pack::kIndicesSection);
+  if (meshes.entry.count == 0) return fail("section 'meshes' is empty: a pack needs at least one mesh");
+  scene->meshes.reserve(meshes.entry.count);
+  for (uint64_t i = 0; i < meshes.entry.count; ++i) {
+    const auto r = record<pack::MeshRecord>(meshes, i);
+    std::string where = fmt::format("section 'meshes' record {}", i);
+    auto name = string(r.name, where + " field 'name'");
+    if (!name) return name.error();
+    where += " ('" + *name + "')";
+    auto outside = [&](const char* first, uint64_t firstValue, const char* count, uint64_t countValue,
+                       const SectionView& target) {
+      return fail(fmt::format("{}: fields '{}' {} + '{}' {} run past the {} records of section '{}'", where,
+                              first, firstValue, count, countValue, target.entry.count, target.name));
+    };
+    if (r.vertexCount == 0 || r.indexCount < 3) {
+      return fail(fmt::format("{}: 'vertexCount' {} / 'indexCount' {} (need >= 1 / >= 3)", where,
+                              r.vertexCount, r.indexCount));
+    }
+    if (!rangeFits(r.firstVertex, r.vertexCount, vertices.entry.count))
+      return outside("firstVertex", r.firstVertex, "vertexCount", r.vertexCount, vertices);
+    if (!rangeFits(r.firstIndex, r.indexCount, indices.entry.count))
+      return outside("firstIndex", r.firstIndex, "indexCount", r.indexCount, indices);
+    if (r.lodCount == 0 || r.lodCount > MAX_LODS)
+      return fail(fmt::format("{}: field 'lodCount' is {} (1..{})", where, r.lodCount, MAX_LODS));
+    if (!rangeFits(r.firstLod, r.lodCount, lods.entry.count))
+      return outside("firstLod", r.firstLod, "lodCount", r.lodCount, lods);
+    if (!allFinite(r.boundsSphere, 4) || r.boundsSphere[3] < 0.0f)
+      return fail(fmt::format("{}: field 'boundsSphere' is not finite with a radius >= 0", where));
+
+    Mesh mesh;
+    mesh.name = *name;
+    mesh.boundsSphere = glm::vec4(r.boundsSphere[0], r.boundsSphere[1], r.boundsSphere[2], r.boundsSphere[3]);
+    mesh.vertices.resize(r.vertexCount);
+    std::memcpy(mesh.vertices.data(), vertices.data + r.firstVertex * sizeof(gpu::Vertex),
+                size_t{r.vertexCount} * sizeof(gpu::Vertex));
+    mesh.indices.resize(r.indexCount);
+    std::memcpy(mesh.indices.data(), indices.data + r.firstIndex * sizeof(uint32_t),
+                size_t{r.indexCount} * sizeof(uint32_t));
+    // Culling is only conservative if the sphere really contains the mesh: check it (relative slack as in
+    // buildMesh's padding, plus float rounding of the distance).
+    const glm::dvec3 centre(mesh.boundsSphere);
+    const double radius = double(mesh.boundsSphere.w) * (1.0 + 1e-4) + 1e-5;
+    for (uint32_t v = 0; v < r.vertexCount; ++v) {
+      const gpu::Vertex& vx = mesh.vertices[v];
+      if (!std::isfinite(vx.px) || !std::isfinite(vx.py) || !std::isfinite(vx.pz) || !std::isfinite(vx.u) ||
+          !std::isfinite(vx.v)) {
+        return fail(fmt::format("{}: vertex {} has a non-finite position or texture coordinate", where, v));
+      }
+      if (glm::length(glm::dvec3(vx.px, vx.py, vx.pz) - centre) > radius)
+        return fail(fmt::format("{}: vertex {} lies outside field 'boundsSphere'", where, v));
+    }
+    for (uint32_t k = 0; k < r.indexCount; ++k) {
+      if (mesh.indices[k] >= r.vertexCount) {
+        return fail(fmt::format("{}: index {} has value {}, not below 'vertexCount' {}", where, k,
+                                mesh.indices[k], r.vertexCount));
+      }
+    }
+    for (uint32_t l = 0; l < r.lodCount; ++l) {
+      const auto lr = record<pack::LodRecord>(lods, uint64_t{r.firstLod} + l);
+      const std::string lw =
+          fmt::format("{} LOD {} (section 'lods' record {})", where, l, uint64_t{r.firstLod} + l);
+      if (lr.indexCount == 0 || lr.indexCount % 3 != 0)
+        return fail(
+            fmt::format("{}: field 'indexCount' {} is not a positive multiple of 3", lw, lr.indexCount));
+      if (!rangeFits(lr.firstIndex, lr.indexCount, r.indexCount)) {
+        return fail(fmt::format("{}: fields 'firstIndex' {} + 'indexCount' {} run past the mesh's {} indices",
+                                lw, lr.firstIndex, lr.indexCount, r.indexCount));
+      }
+      if (!std::isfinite(lr.error) || lr.error < 0.0f)
+        return fail(fmt::format("{}: field 'error' {} is not a finite value >= 0", lw, lr.error));
+      mesh.lods.push_back({lr.firstIndex, lr.indexCount, lr.error});
+    }
+    scene->meshes.push_back(std::move(mesh));
+  }
+  return {};
+}
+
+Status Parser::readMaterials(Scene* scene) {
+  const SectionView& s = sections_.at(pack::kMaterialsSection);
+  if (s.entry.count == 0) return fail("section 'materials' is empty: a pack needs at least one material");
+  scene->materials.reserve(s.entry.count);
+  for (uint64_t i = 0; i < s.entry.count; ++i) {
+    const auto r = record<pack::MaterialRecord>(s, i);
+    const std::string where = fmt::format("section 'materials' record {}", i);
+    auto name = string(r.name, where + " field 'name'");
+    if (!name) return name.error();
+    auto uri = string(r.baseColorUri, where + " field 'baseColorUri'");
+    if (!uri) return uri.error();
+    if (!allFinite(r.baseColor, 4) || !std::isfinite(r.alphaCutoff))
+      return fail(where + ": non-finite 'baseColor' or 'alphaCutoff'");
+    if (r.alphaMode > uint32_t(AlphaMode::Blend))
+      return fail(fmt::format("{}: field 'alphaMode' is {} (0 opaque, 1 mask, 2 blend)", where, r.alphaMode));
+    if ((r.flags & ~pack::kMaterialDoubleSided) != 0)
+      return fail(fmt::format("{}: field 'flags' {:#x} has unknown bits", where, r.flags));
+    if (r.baseColorTexture < -1 || r.baseColorImage < -1)
+      return fail(where + ": fields 'baseColorTexture' / 'baseColorImage' must be >= -1");
+    Material m;
+    m.name = *name;
+    m.baseColor = glm::vec4(r.baseColor[0], r.baseColor[1], r.baseColor[2], r.baseColor[3]);
+    m.alphaMode = AlphaMode(r.alphaMode);
+    m.alphaCutoff = r.alphaCutoff;
+    m.doubleSided = (r.flags & pack::kMaterialDoubleSided) != 0;
+    m.baseColorTexture.texture = r.baseColorTexture;
+    m.baseColorTexture.image = r.baseColorImage;
+    m.baseColorTexture.texCoord = r.baseColorTexCoord;
+    m.baseColorTexture.uri = *uri;
+    scene->materials.push_back(std::move(m));
+  }
+  return {};
+}
+
+Status Parser::readObjects(Scene* scene) {
+  const SectionView& s = sections_.at(pack::kObjectsSection);
+  scene->objects.reserve(s.entry.count);
+  for (uint64_t i = 0; i < s.entry.count; ++i) {
+    const auto r = record<pack::ObjectRecord>(s, i);
+    const std::string where = fmt::format("section 'objects' record {}", i);
+    if (r.mesh >= scene->meshes.size() || r.material >= scene->materials.size()) {
+      return fail(fmt::format("{}: field 'mesh' {} / 'material' {} out of range ({} meshes, {} materials)",
+                              where, r.mesh, r.material, scene->meshes.size(), scene->materials.size()));
+    }
+    if (!allFinite(r.transform, 16)) return fail(where + ": field 'transform' is not finite");
+    if (r.transform[3] != 0.0 || r.transform[7] != 0.0 || r.transform[11] != 0.0 || r.transform[15] != 1.0)
+      return fail(where + ": field 'transform' is not affine (last row must be 0 0 0 1)");
+    Object o;
+    for (int c = 0; c < 4; ++c)
+      for (int row = 0; row < 4; ++row) o.transform[c][row] = r.transform[c * 4 + row];
+    if (!(std::abs(glm::determinant(glm::dmat3(o.transform))) >= 1e-30))
+      return fail(where + ": field 'transform' is degenerate (zero scale)");
+    o.mesh = r.mesh;
+    o.material = r.material;
+    scene->objects.push_back(o);
+  }
+  return {};
+}
+
+Result<Scene> Parser::run() {
+  if (Status s = parseTable(); !s) return s.error();
+  Scene scene;
+  if (Status s = readScene(&scene); !s) return s.error();
+  if (Status s = readMeshes(&scene); !s) return s.error();
+  if (Status s = readMaterials(&scene); !s) return s.error();
+  if (Status s = readObjects(&scene); !s) return s.error();
+  if (Status s = validateScene(scene); !s) return fail(s.error().message);
+  return scene;
+}
+
+}  // namespace
+
+Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label) {
+  try {
+    Parser parser(data, size, label);
+    return parser.run();
+  } catch (const std::bad_alloc&) {
+    return makeError(ErrorCode::CapacityExceeded, label + ": out of memory while reading the pack");
+  }
+}
+
+Result<Scene> readPack(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status))
+    return makeError(ErrorCode::FileNotFound, path + ": file not found");
+  if (!std::filesystem::is_regular_file(status))
+    return makeError(ErrorCode::FileNotFound, path + ": not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return makeError(ErrorCode::IoError, path + ": cannot open for reading");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) return makeError(ErrorCode::IoError, path + ": cannot determine the file size");
+  if (static_cast<uint64_t>(size) > std::numeric_limits<size_t>::max())
+    return makeError(ErrorCode::CapacityExceeded, path + ": file too large for this machine");
+  std::vector<uint8_t> bytes;
+  try {
+    bytes.resize(static_cast<size_t>(size));
+  } catch (const std::bad_alloc&) {
+    return makeError(ErrorCode::CapacityExceeded, path + ": out of memory reading the pack");
+  }
+  in.seekg(0, std::ios::beg);
+  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size))
+    return makeError(ErrorCode::IoError, path + ": read failed");
+  return parsePack(bytes.data(), bytes.size(), path);
+}
+
+bool isPackFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {};
+  if (!in || !in.read(magic, 4)) return false;
+  return std::memcmp(magic, pack::kMagic, 4) == 0;
+}
+
+}  // namespace visbuf

@@ -1,0 +1,65 @@
+#include "asset/scene_bake.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace visbuf {
+
+Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildOptions& options,
+                                 const BakeProgress& progress) {
+  Scene scene;
+  scene.name = imported.name;
+  scene.meshes.reserve(imported.meshes.size());
+  for (size_t i = 0; i < imported.meshes.size(); ++i) {
+    Result<Mesh> mesh = buildMesh(imported.meshes[i].source, options);
+    if (!mesh) {
+      return makeError(mesh.error().code, fmt::format("{}: mesh {} '{}': {}", imported.name, i,
+                                                      imported.meshes[i].source.name, mesh.error().message));
+    }
+    scene.meshes.push_back(std::move(mesh.value()));
+    if (progress) progress(i + 1, imported.meshes.size(), imported.meshes[i].source.name);
+  }
+  scene.materials = imported.materials;
+  if (scene.materials.empty()) {
+    Material m;
+    m.name = "default";
+    scene.materials.push_back(m);
+  }
+  scene.objects.reserve(imported.instances.size());
+  for (const ImportedInstance& inst : imported.instances)
+    scene.objects.push_back({inst.transform, inst.mesh, inst.material});
+  frameScene(scene);
+  return scene;
+}
+
+glm::dvec4 sceneBounds(const Scene& scene) {
+  if (scene.objects.empty()) return glm::dvec4(0.0);
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (const Object& o : scene.objects) {
+    const glm::dvec4 s = objectBoundsWorld(scene, o);
+    lo = glm::min(lo, glm::dvec3(s) - s.w);
+    hi = glm::max(hi, glm::dvec3(s) + s.w);
+  }
+  const glm::dvec3 centre = (lo + hi) * 0.5;
+  double radius = 0.0;
+  for (const Object& o : scene.objects) {
+    const glm::dvec4 s = objectBoundsWorld(scene, o);
+    radius = std::max(radius, glm::length(glm::dvec3(s) - centre) + s.w);
+  }
+  return {centre, radius};
+}
+
+void frameScene(Scene& scene) {
+  const glm::dvec4 b = sceneBounds(scene);
+  const double radius = std::max(b.w, 1e-6);
+  Camera& c = scene.defaultCamera;
+  const double dist = radius / std::sin(c.fovY * 0.5) * 1.05;
+  scene.anchor = glm::dvec3(b);
+  c.target = glm::dvec3(b);
+  c.position = c.target + glm::normalize(glm::dvec3(0.35, 0.3, 1.0)) * dist;
+  c.nearPlane = std::max(1e-4, radius * 1e-3);
+}
+
+}  // namespace visbuf

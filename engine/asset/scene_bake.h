@@ -1,0 +1,33 @@
+// Turns an imported glTF scene (gltf_import.h) into a render-ready Scene: every mesh through buildMesh()
+// (meshoptimizer optimisation + LOD chain), instances as objects, and a default camera that frames it.
+// Shared by `visbuf bake` (which then writes a pack) and `visbuf render --scene FILE.gltf` (in memory).
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <string>
+
+#include "asset/gltf_import.h"
+#include "core/result.h"
+#include "scene/scene.h"
+
+namespace visbuf {
+
+// Called after each mesh is built: (meshes done, meshes total, name of the mesh just built).
+using BakeProgress = std::function<void(size_t done, size_t total, const std::string& mesh)>;
+
+// Builds every imported mesh with `options` (in order, so scene.meshes[i] comes from imported.meshes[i]),
+// copies materials, turns instances into objects, then calls frameScene(). Errors name the mesh.
+Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildOptions& options = {},
+                                 const BakeProgress& progress = {});
+
+// World-space bounding sphere of all objects (xyz centre, w radius; double precision, conservative).
+// Returns (0,0,0,0) for a scene without objects.
+glm::dvec4 sceneBounds(const Scene& scene);
+
+// Sets scene.anchor to the centre of sceneBounds() and the default camera to look at that centre from the
+// (0.35, 0.3, 1) direction, far enough for the bounding sphere to fit the camera's vertical field of view
+// (plus 5 %), with a near plane of 1e-3 x the radius (at least 1e-4).
+void frameScene(Scene& scene);
+
+}  // namespace visbuf

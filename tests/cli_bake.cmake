@@ -1,0 +1,23 @@
+# visbuf bake as a user runs it: a real asset to a pack, the pack rendered; bad input exits 1, usage 2,
+# and a failed bake leaves no file behind.
+file(MAKE_DIRECTORY ${OUT})
+file(REMOVE ${OUT}/helmet.vbp)
+execute_process(COMMAND ${VISBUF} bake ${ASSETS}/DamagedHelmet/glTF-Binary/DamagedHelmet.glb -o ${OUT}/helmet.vbp
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet.vbp)
+  message(FATAL_ERROR "bake failed (${rc}):\n${out}\n${err}")
+endif()
+execute_process(COMMAND ${VISBUF} render --scene ${OUT}/helmet.vbp --size 160x120 --validation -o ${OUT}/helmet.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out2 ERROR_VARIABLE err2)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet.png)
+  message(FATAL_ERROR "render of the pack failed (${rc}):\n${out2}\n${err2}")
+endif()
+execute_process(COMMAND ${VISBUF} bake ${OUT}/missing.glb -o ${OUT}/missing.vbp RESULT_VARIABLE rc ERROR_VARIABLE e OUTPUT_QUIET)
+if(NOT rc EQUAL 1 OR EXISTS ${OUT}/missing.vbp)
+  message(FATAL_ERROR "a missing input must exit 1 and write nothing (got ${rc}): ${e}")
+endif()
+execute_process(COMMAND ${VISBUF} bake --lod-count abc RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+if(NOT rc EQUAL 2)
+  message(FATAL_ERROR "a usage error must exit 2 (got ${rc})")
+endif()
+message(STATUS "${out}")

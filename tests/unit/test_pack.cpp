@@ -1,0 +1,563 @@
+// Tests for the pack format (engine/asset/pack_{format,writer,reader}.h): round trips of a generated scene
+// and of real assets, truncation, checksums, versions, overflowing counts, atomic writes, and a bounded fuzz
+// run.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "asset/gltf_import.h"
+#include "asset/pack_format.h"
+#include "asset/pack_reader.h"
+#include "asset/pack_writer.h"
+#include "asset/scene_bake.h"
+#include "scene/generate.h"
+
+namespace visbuf {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path assetPath(const std::string& relative) {
+#ifdef VISBUF_SHARED_ASSETS_DIR
+  return fs::path(VISBUF_SHARED_ASSETS_DIR) / relative;
+#else
+  return fs::path(relative);
+#endif
+}
+
+// A small scene that exercises every field: two meshes with LOD chains, materials of every alpha mode with
+// texture references, mirrored and far-from-origin objects, a non-default camera and anchor.
+Scene makeTestScene(uint32_t knotSegments = 64, uint32_t knotSides = 12) {
+  Scene scene;
+  scene.name = "generated test scene";
+  Result<Mesh> knot = buildMesh(makeTorusKnot(knotSegments, knotSides));
+  Result<Mesh> box = buildMesh(makeBox(2));
+  EXPECT_TRUE(knot && box);
+  scene.meshes.push_back(std::move(knot.value()));
+  scene.meshes.push_back(std::move(box.value()));
+  Material opaque;
+  opaque.name = "opaque";
+  opaque.baseColor = {0.25f, 0.5f, 0.75f, 1.0f};
+  Material mask;
+  mask.name = "mask";
+  mask.alphaMode = AlphaMode::Mask;
+  mask.alphaCutoff = 0.3f;
+  mask.doubleSided = true;
+  mask.baseColorTexture = {2, 5, 1, "textures/leaf.png"};
+  Material blend;
+  blend.name = "";  // empty names survive too
+  blend.alphaMode = AlphaMode::Blend;
+  blend.baseColor = {1.0f, 0.0f, 0.0f, 0.25f};
+  scene.materials = {opaque, mask, blend};
+  scene.objects.push_back({glm::dmat4(1.0), 0, 0});
+  scene.objects.push_back(
+      {glm::scale(glm::translate(glm::dmat4(1.0), {3.0, 0.0, 0.0}), {-1.0, 2.0, 1.0}), 1, 1});
+  scene.objects.push_back({glm::translate(glm::dmat4(1.0), {1e6 + 0.125, -2e5, 3.0}), 0, 2});
+  scene.anchor = {1.5, -2.25, 1e5};
+  scene.defaultCamera.position = {10.0, 20.0, 30.0};
+  scene.defaultCamera.target = {1.0, 2.0, 3.0};
+  scene.defaultCamera.fovY = 0.9;
+  scene.defaultCamera.nearPlane = 0.01;
+  scene.lightDirection = glm::normalize(glm::vec3(-1.0f, 2.0f, 0.5f));
+  return scene;
+}
+
+void expectScenesEqual(const Scene& a, const Scene& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.anchor, b.anchor);
+  EXPECT_EQ(a.defaultCamera.position, b.defaultCamera.position);
+  EXPECT_EQ(a.defaultCamera.target, b.defaultCamera.target);
+  EXPECT_EQ(a.defaultCamera.up, b.defaultCamera.up);
+  EXPECT_EQ(a.defaultCamera.fovY, b.defaultCamera.fovY);
+  EXPECT_EQ(a.defaultCamera.nearPlane, b.defaultCamera.nearPlane);
+  EXPECT_EQ(a.lightDirection, b.lightDirection);
+  ASSERT_EQ(a.meshes.size(), b.meshes.size());
+  for (size_t i = 0; i < a.meshes.size(); ++i) {
+    const Mesh& x = a.meshes[i];
+    const Mesh& y = b.meshes[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.boundsSphere, y.boundsSphere);
+    ASSERT_EQ(x.vertices.size(), y.vertices.size());
+    EXPECT_EQ(std::memcmp(x.vertices.data(), y.vertices.data(), x.vertices.size() * sizeof(gpu::Vertex)), 0)
+        << "mesh " << i;
+    EXPECT_EQ(x.indices, y.indices) << "mesh " << i;
+    ASSERT_EQ(x.lods.size(), y.lods.size());
+    for (size_t l = 0; l < x.lods.size(); ++l) {
+      EXPECT_EQ(x.lods[l].firstIndex, y.lods[l].firstIndex);
+      EXPECT_EQ(x.lods[l].indexCount, y.lods[l].indexCount);
+      EXPECT_EQ(x.lods[l].error, y.lods[l].error);
+    }
+  }
+  ASSERT_EQ(a.materials.size(), b.materials.size());
+  for (size_t i = 0; i < a.materials.size(); ++i) {
+    const Material& x = a.materials[i];
+    const Material& y = b.materials[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.baseColor, y.baseColor);
+    EXPECT_EQ(x.alphaMode, y.alphaMode);
+    EXPECT_EQ(x.alphaCutoff, y.alphaCutoff);
+    EXPECT_EQ(x.doubleSided, y.doubleSided);
+    EXPECT_EQ(x.baseColorTexture, y.baseColorTexture);
+  }
+  ASSERT_EQ(a.objects.size(), b.objects.size());
+  for (size_t i = 0; i < a.objects.size(); ++i) {
+    EXPECT_EQ(a.objects[i].transform, b.objects[i].transform) << "object " << i;
+    EXPECT_EQ(a.objects[i].mesh, b.objects[i].mesh);
+    EXPECT_EQ(a.objects[i].material, b.objects[i].material);
+  }
+}
+
+std::vector<uint8_t> readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+pack::Header headerOf(const std::vector<uint8_t>& bytes) {
+  pack::Header h;
+  std::memcpy(&h, bytes.data(), sizeof(h));
+  return h;
+}
+
+pack::SectionEntry entryOf(const std::vector<uint8_t>& bytes, size_t i) {
+  pack::SectionEntry e;
+  std::memcpy(&e, bytes.data() + sizeof(pack::Header) + i * sizeof(pack::SectionEntry), sizeof(e));
+  return e;
+}
+
+void setEntry(std::vector<uint8_t>& bytes, size_t i, const pack::SectionEntry& e) {
+  std::memcpy(bytes.data() + sizeof(pack::Header) + i * sizeof(pack::SectionEntry), &e, sizeof(e));
+}
+
+size_t sectionIndex(const std::vector<uint8_t>& bytes, const std::string& name) {
+  const pack::Header h = headerOf(bytes);
+  for (size_t i = 0; i < h.sectionCount; ++i)
+    if (std::string(entryOf(bytes, i).name) == name) return i;
+  ADD_FAILURE() << "no section " << name;
+  return 0;
+}
+
+// Recomputes every section checksum that can be computed (section inside the file) and the header checksum,
+// so that a deliberate edit reaches the reader's later checks instead of stopping at a checksum mismatch.
+void reseal(std::vector<uint8_t>& bytes) {
+  if (bytes.size() < sizeof(pack::Header)) return;
+  pack::Header h = headerOf(bytes);
+  const uint64_t count = std::min<uint64_t>(h.sectionCount, pack::kMaxSections);
+  const uint64_t tableEnd = sizeof(pack::Header) + count * sizeof(pack::SectionEntry);
+  if (tableEnd > bytes.size()) return;
+  for (size_t i = 0; i < count; ++i) {
+    pack::SectionEntry e = entryOf(bytes, i);
+    if (e.offset <= bytes.size() && e.size <= bytes.size() - e.offset) {
+      e.crc32 = pack::crc32(bytes.data() + e.offset, e.size);
+      setEntry(bytes, i, e);
+    }
+  }
+  h.headerCrc = 0;
+  h.headerCrc = pack::crc32(bytes.data() + sizeof(h), tableEnd - sizeof(h), pack::crc32(&h, sizeof(h)));
+  std::memcpy(bytes.data(), &h, sizeof(h));
+}
+
+Result<Scene> parse(const std::vector<uint8_t>& bytes) {
+  return parsePack(bytes.data(), bytes.size(), "pack.vbp");
+}
+
+::testing::AssertionResult failsWith(const Result<Scene>& r, const std::string& text,
+                                     ErrorCode code = ErrorCode::MalformedInput) {
+  if (r)
+    return ::testing::AssertionFailure() << "read succeeded; expected an error containing '" << text << "'";
+  if (r.error().code != code)
+    return ::testing::AssertionFailure()
+           << "code " << errorCodeName(r.error().code) << ": " << r.error().message;
+  if (r.error().message.rfind("pack.vbp: ", 0) != 0 || r.error().message.find(text) == std::string::npos)
+    return ::testing::AssertionFailure() << "message '" << r.error().message << "' lacks '" << text << "'";
+  return ::testing::AssertionSuccess();
+}
+
+class PackFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::random_device rd;
+    dir_ = fs::temp_directory_path() / ("visbuf_pack_test_" + std::to_string(rd()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::permissions(dir_, fs::perms::owner_all, ec);
+    fs::remove_all(dir_, ec);
+  }
+  std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  fs::path dir_;
+};
+
+TEST(PackFormat, Crc32MatchesTheStandardCheckValue) {
+  EXPECT_EQ(pack::crc32("123456789", 9), 0xCBF43926u);  // the CRC-32/ISO-HDLC check value (zlib, PNG)
+  EXPECT_EQ(pack::crc32("56789", 5, pack::crc32("1234", 4)), 0xCBF43926u);
+  EXPECT_EQ(pack::crc32("", 0), 0u);
+}
+
+// --- round trips
+// --------------------------------------------------------------------------------------------
+
+TEST(PackRoundTrip, GeneratedSceneInMemory) {
+  const Scene scene = makeTestScene();
+  PackWriteReport report;
+  Result<std::vector<uint8_t>> bytes = serializePack(scene, &report);
+  ASSERT_TRUE(bytes) << bytes.error().message;
+  EXPECT_EQ(report.fileBytes, bytes->size());
+  EXPECT_EQ(bytes->size() % pack::kAlignment, 0u);
+  for (const PackSectionInfo& s : report.sections) EXPECT_EQ(s.offset % pack::kAlignment, 0u) << s.name;
+  Result<Scene> back = parse(*bytes);
+  ASSERT_TRUE(back) << back.error().message;
+  expectScenesEqual(scene, *back);
+  // The layout is deterministic: serialising the result again gives the same bytes.
+  Result<std::vector<uint8_t>> again = serializePack(*back);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(*again, *bytes);
+}
+
+TEST_F(PackFileTest, GeneratedSceneThroughFile) {
+  const Scene scene = makeTestScene();
+  const fs::path path = dir_ / "scene.vbp";
+  ASSERT_TRUE(writePack(scene, path.string()));
+  EXPECT_TRUE(isPackFile(path.string()));
+  Result<Scene> back = readPack(path.string());
+  ASSERT_TRUE(back) << back.error().message;
+  expectScenesEqual(scene, *back);
+  EXPECT_EQ(listing(), std::vector<std::string>{"scene.vbp"});  // no temporary file left behind
+}
+
+TEST_F(PackFileTest, RealAssetsThroughFile) {
+  for (const char* relative :
+       {"DamagedHelmet/glTF-Binary/DamagedHelmet.glb", "OrientationTest/glTF/OrientationTest.gltf",
+        "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf"}) {
+    SCOPED_TRACE(relative);
+    const fs::path asset = assetPath(relative);
+    if (!fs::exists(asset)) GTEST_SKIP() << "asset not found: " << asset;
+    Result<ImportedScene> imported = importGltfScene(asset.string());
+    ASSERT_TRUE(imported) << imported.error().message;
+    Result<Scene> scene = buildImportedScene(*imported);
+    ASSERT_TRUE(scene) << scene.error().message;
+    EXPECT_EQ(scene->objects.size(), imported->instances.size());
+    const fs::path path = dir_ / "asset.vbp";
+    ASSERT_TRUE(writePack(*scene, path.string()));
+    Result<Scene> back = readPack(path.string());
+    ASSERT_TRUE(back) << back.error().message;
+    expectScenesEqual(*scene, *back);
+  }
+}
+
+// --- damaged files
+// ------------------------------------------------------------------------------------------
+
+TEST(PackReader, TruncatedAtEverySixteenth) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
+  ASSERT_TRUE(bytes);
+  for (size_t k = 0; k < 16; ++k) {
+    const size_t size = bytes->size() * k / 16;
+    Result<Scene> r = parsePack(bytes->data(), size, "pack.vbp");
+    ASSERT_FALSE(r) << "truncated to " << size;
+    EXPECT_EQ(r.error().code, ErrorCode::MalformedInput) << r.error().message;
+    EXPECT_EQ(r.error().message.rfind("pack.vbp: ", 0), 0u) << r.error().message;
+  }
+  // Cut inside the vertex data: the message names the section and its extent.
+  const pack::SectionEntry vertices = entryOf(*bytes, sectionIndex(*bytes, "vertices"));
+  const size_t cut = vertices.offset + vertices.size / 2;
+  EXPECT_TRUE(failsWith(parsePack(bytes->data(), cut, "pack.vbp"),
+                        "section 'vertices' runs past the end of the file (offset " +
+                            std::to_string(vertices.offset) + ", size " + std::to_string(vertices.size) +
+                            ", file " + std::to_string(cut) + ")"));
+  // One byte short: the padding of the last section is gone, the declared file size no longer matches.
+  EXPECT_TRUE(failsWith(parsePack(bytes->data(), bytes->size() - 1, "pack.vbp"), "'fileSize'"));
+}
+
+TEST(PackReader, FlippedByteInEachSectionIsAChecksumError) {
+  PackWriteReport report;
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene(), &report);
+  ASSERT_TRUE(bytes);
+  ASSERT_EQ(report.sections.size(), 8u);
+  for (const PackSectionInfo& s : report.sections) {
+    ASSERT_GT(s.size, 0u) << s.name;
+    for (uint64_t at : {s.offset, s.offset + s.size / 2, s.offset + s.size - 1}) {
+      std::vector<uint8_t> damaged = *bytes;
+      damaged[at] ^= 0x10;
+      EXPECT_TRUE(failsWith(parse(damaged), "section '" + s.name + "': checksum mismatch")) << "byte " << at;
+    }
+  }
+  // Header and table bytes are covered by the header checksum.
+  for (size_t at : {size_t{40}, sizeof(pack::Header) + 3, sizeof(pack::Header) + 48 + 20}) {
+    std::vector<uint8_t> damaged = *bytes;
+    damaged[at] ^= 0x01;
+    EXPECT_TRUE(failsWith(parse(damaged), "header or section table checksum mismatch")) << "byte " << at;
+  }
+}
+
+TEST(PackReader, WrongMagicAndVersion) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
+  ASSERT_TRUE(bytes);
+  std::vector<uint8_t> v = *bytes;
+  pack::Header h = headerOf(v);
+  h.version = pack::kVersion + 1;
+  std::memcpy(v.data(), &h, sizeof(h));
+  reseal(v);
+  EXPECT_TRUE(failsWith(parse(v), "pack format version 2 is not supported", ErrorCode::Unsupported));
+  v = *bytes;
+  v[0] = 'X';
+  EXPECT_TRUE(failsWith(parse(v), "not a visbuf pack"));
+  const char gltf[] = "glTF\x02\0\0\0";
+  EXPECT_TRUE(failsWith(parsePack(reinterpret_cast<const uint8_t*>(gltf), 8, "pack.vbp"), "smaller than"));
+}
+
+TEST(PackReader, HugeCountsAreRejectedWithoutOverflow) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
+  ASSERT_TRUE(bytes);
+  const size_t idx = sectionIndex(*bytes, "indices");
+  {
+    // count x elementSize overflows 64 bits.
+    std::vector<uint8_t> v = *bytes;
+    pack::SectionEntry e = entryOf(v, idx);
+    e.count = (uint64_t{1} << 62) + 1;
+    setEntry(v, idx, e);
+    reseal(v);
+    EXPECT_TRUE(failsWith(
+        parse(v), "section 'indices': field 'count' 4611686018427387905 x 'elementSize' 4 overflows"));
+  }
+  {
+    // A consistent but enormous count/size: range check, no allocation.
+    std::vector<uint8_t> v = *bytes;
+    pack::SectionEntry e = entryOf(v, idx);
+    e.count = uint64_t{1} << 40;
+    e.size = e.count * 4;
+    setEntry(v, idx, e);
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "section 'indices' runs past the end of the file"));
+  }
+  {
+    // Offset near 2^64: offset + size would wrap.
+    std::vector<uint8_t> v = *bytes;
+    pack::SectionEntry e = entryOf(v, idx);
+    e.offset = ~uint64_t{15};
+    setEntry(v, idx, e);
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "section 'indices' runs past the end of the file"));
+  }
+  {
+    // A mesh record whose vertex range wraps around 2^64.
+    std::vector<uint8_t> v = *bytes;
+    const pack::SectionEntry meshes = entryOf(v, sectionIndex(v, "meshes"));
+    pack::MeshRecord m;
+    std::memcpy(&m, v.data() + meshes.offset, sizeof(m));
+    m.firstVertex = ~uint64_t{0} - 2;
+    std::memcpy(v.data() + meshes.offset, &m, sizeof(m));
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "section 'meshes' record 0"));
+  }
+  {
+    std::vector<uint8_t> v = *bytes;
+    pack::Header h = headerOf(v);
+    h.sectionCount = 0xFFFFFFFFu;
+    std::memcpy(v.data(), &h, sizeof(h));
+    EXPECT_TRUE(failsWith(parse(v), "'sectionCount'"));
+  }
+}
+
+TEST(PackReader, BadReferencesInsideSections) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
+  ASSERT_TRUE(bytes);
+  auto editRecord = [&](const char* section, size_t record, auto edit) {
+    std::vector<uint8_t> v = *bytes;
+    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
+    uint8_t* at = v.data() + e.offset + record * e.elementSize;
+    edit(at);
+    reseal(v);
+    return parse(v);
+  };
+  EXPECT_TRUE(failsWith(editRecord("objects", 1,
+                                   [](uint8_t* p) {
+                                     uint32_t m = 9;
+                                     std::memcpy(p + 128, &m, 4);
+                                   }),
+                        "section 'objects' record 1: field 'mesh' 9"));
+  EXPECT_TRUE(failsWith(editRecord("objects", 0,
+                                   [](uint8_t* p) {
+                                     double nan = NAN;
+                                     std::memcpy(p + 8, &nan, 8);
+                                   }),
+                        "section 'objects' record 0: field 'transform' is not finite"));
+  EXPECT_TRUE(failsWith(editRecord("indices", 5,
+                                   [](uint8_t* p) {
+                                     uint32_t i = 1u << 30;
+                                     std::memcpy(p, &i, 4);
+                                   }),
+                        "index 5 has value 1073741824"));
+  EXPECT_TRUE(failsWith(editRecord("lods", 1,
+                                   [](uint8_t* p) {
+                                     uint32_t n = 1u << 31;
+                                     std::memcpy(p + 4, &n, 4);
+                                   }),
+                        "field 'indexCount' 2147483648"));
+  EXPECT_TRUE(failsWith(editRecord("materials", 2,
+                                   [](uint8_t* p) {
+                                     uint32_t n = 1000;
+                                     std::memcpy(p, &n, 4);
+                                   }),
+                        "section 'materials' record 2 field 'name'"));
+  EXPECT_TRUE(failsWith(editRecord("vertices", 3,
+                                   [](uint8_t* p) {
+                                     float f = 1e30f;
+                                     std::memcpy(p, &f, 4);
+                                   }),
+                        "vertex 3 lies outside field 'boundsSphere'"));
+}
+
+// --- atomic writes
+// ------------------------------------------------------------------------------------------
+
+TEST_F(PackFileTest, FailedWriteKeepsTheOldPack) {
+  const fs::path path = dir_ / "scene.vbp";
+  Scene small = makeTestScene(16, 6);
+  ASSERT_TRUE(writePack(small, path.string()));
+  const std::vector<uint8_t> before = readBytes(path);
+
+  // Simulate a full disk / quota: a file size limit below the new pack's size makes write() fail (EFBIG).
+  Scene big = makeTestScene(256, 32);
+  struct rlimit old {};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  struct sigaction ignore {
+  }, previous{};
+  ignore.sa_handler = SIG_IGN;
+  ASSERT_EQ(sigaction(SIGXFSZ, &ignore, &previous), 0);
+  struct rlimit limited = old;
+  limited.rlim_cur = before.size() + 4096;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limited), 0);
+  Status s = writePack(big, path.string());
+  setrlimit(RLIMIT_FSIZE, &old);
+  sigaction(SIGXFSZ, &previous, nullptr);
+
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code, ErrorCode::IoError);
+  EXPECT_NE(s.error().message.find("write failed"), std::string::npos) << s.error().message;
+  EXPECT_EQ(readBytes(path), before);                           // the old pack is intact
+  EXPECT_EQ(listing(), std::vector<std::string>{"scene.vbp"});  // and no partial file is left
+  EXPECT_TRUE(readPack(path.string()));
+}
+
+TEST_F(PackFileTest, DestinationProblemsLeaveNothingBehind) {
+  const Scene scene = makeTestScene(16, 6);
+  // The destination is a directory: the rename fails, the temporary file is removed.
+  fs::create_directories(dir_ / "taken.vbp");
+  Status s = writePack(scene, (dir_ / "taken.vbp").string());
+  EXPECT_FALSE(s);
+  EXPECT_EQ(listing(), std::vector<std::string>{"taken.vbp"});
+  EXPECT_TRUE(fs::is_empty(dir_ / "taken.vbp"));
+  // The folder does not exist.
+  s = writePack(scene, (dir_ / "missing" / "x.vbp").string());
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("cannot create the temporary file"), std::string::npos)
+      << s.error().message;
+  // A scene that fails validation writes nothing.
+  Scene broken = scene;
+  broken.objects[0].mesh = 99;
+  EXPECT_FALSE(writePack(broken, (dir_ / "broken.vbp").string()));
+  EXPECT_EQ(listing(), std::vector<std::string>{"taken.vbp"});
+}
+
+TEST_F(PackFileTest, UnwritableDirectory) {
+  if (geteuid() == 0)
+    GTEST_SKIP() << "root ignores directory permissions (covered by FailedWriteKeepsTheOldPack)";
+  const fs::path path = dir_ / "scene.vbp";
+  ASSERT_TRUE(writePack(makeTestScene(16, 6), path.string()));
+  const std::vector<uint8_t> before = readBytes(path);
+  fs::permissions(dir_, fs::perms::owner_read | fs::perms::owner_exec);
+  Status s = writePack(makeTestScene(), path.string());
+  fs::permissions(dir_, fs::perms::owner_all);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(readBytes(path), before);
+  EXPECT_EQ(listing(), std::vector<std::string>{"scene.vbp"});
+}
+
+// --- fuzz
+// ---------------------------------------------------------------------------------------------------
+
+// 2,000 random mutations of a valid pack (fixed seed): bit flips, random bytes, extreme integers written over
+// header/table/record fields, truncation and extension. Half of them are resealed (checksums recomputed) so
+// that they reach the structural and content checks. Every read must return (no crash, no sanitizer report
+// under the sanitizer build); a success must be a valid scene.
+TEST(PackFuzz, RandomMutationsNeverCrash) {
+  Result<std::vector<uint8_t>> original = serializePack(makeTestScene(16, 6));
+  ASSERT_TRUE(original);
+  Rng rng(20240611);
+  auto below = [&](uint64_t n) { return n == 0 ? 0 : rng.next() % n; };
+  const uint64_t extremes[] = {0,
+                               1,
+                               3,
+                               15,
+                               16,
+                               0x7FFFFFFF,
+                               0xFFFFFFFF,
+                               0x100000000ull,
+                               uint64_t{1} << 62,
+                               ~uint64_t{0},
+                               ~uint64_t{0} - 15};
+  size_t failures = 0, deep = 0, successes = 0;
+  for (int iteration = 0; iteration < 2000; ++iteration) {
+    std::vector<uint8_t> v = *original;
+    const int mutations = 1 + static_cast<int>(below(4));
+    for (int m = 0; m < mutations; ++m) {
+      // Bias towards the header, the table and the small record sections at the front.
+      const uint64_t span = below(4) == 0 ? v.size() : std::min<uint64_t>(v.size(), 1024);
+      const uint64_t at = below(span);
+      switch (below(5)) {
+        case 0:
+          v[at] ^= uint8_t(1u << below(8));
+          break;
+        case 1:
+          v[at] = uint8_t(rng.next());
+          break;
+        case 2: {
+          const uint64_t x = extremes[below(std::size(extremes))];
+          const size_t width = below(2) ? 8 : 4;
+          if (at + width <= v.size()) std::memcpy(v.data() + (at & ~uint64_t{3}), &x, width);
+          break;
+        }
+        case 3:
+          v.resize(below(v.size() + 1));
+          break;
+        case 4:
+          v.resize(v.size() + 16 * (1 + below(4)), uint8_t(rng.next()));
+          break;
+      }
+      if (v.empty()) break;
+    }
+    if (iteration % 2 == 0) reseal(v);
+    Result<Scene> r = parsePack(v.data(), v.size(), "fuzz.vbp");
+    if (r) {
+      ++successes;
+      EXPECT_TRUE(validateScene(*r));
+    } else {
+      ++failures;
+      EXPECT_FALSE(r.error().message.empty());
+      EXPECT_EQ(r.error().message.rfind("fuzz.vbp: ", 0), 0u) << r.error().message;
+      if (r.error().message.find("checksum") == std::string::npos) ++deep;
+    }
+  }
+  EXPECT_EQ(failures + successes, 2000u);
+  EXPECT_GT(deep, 500u);  // the resealed half really exercises the structural and content checks
+  std::printf("[          ] %zu rejected (%zu past the checksums), %zu accepted\n", failures, deep,
+              successes);
+}
+
+}  // namespace
+}  // namespace visbuf

@@ -1,0 +1,171 @@
+// visbuf bake: glTF 2.0 -> pack (engine/asset/pack_format.h). Import keeps the node hierarchy as instances
+// (importGltfScene), every mesh is optimised with its LOD chain (buildImportedScene -> buildMesh), the scene
+// is framed by a default camera, and the pack is written atomically (writePack: temporary file + rename).
+//
+// Exit codes: 0 written; 1 bad input (unreadable / malformed glTF, a mesh that cannot be built, a write that
+// failed; the old OUT, if any, is untouched); 2 usage (option values out of range, --quantize).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "asset/gltf_import.h"
+#include "asset/pack_reader.h"
+#include "asset/pack_writer.h"
+#include "asset/scene_bake.h"
+#include "commands.h"
+#include "stats_output.h"
+
+namespace visbuf::tools {
+
+void addBakeCommand(CLI::App& app, BakeCommand& c) {
+  CLI::App* sub = app.add_subcommand("bake", "bake a glTF 2.0 file (.gltf/.glb) into a visbuf pack (.vbp)");
+  sub->add_option("input", c.input, "glTF 2.0 file to bake (.gltf or .glb)");
+  sub->add_option("-o,--output", c.output, "pack to write (.vbp); replaced atomically");
+  sub->add_option("--lod-count", c.lodCount,
+                  fmt::format("LOD levels per mesh including the full mesh, 1..{}", MAX_LODS))
+      ->capture_default_str();
+  sub->add_option("--lod-min-triangles", c.lodMinTriangles,
+                  "stop a mesh's LOD chain once a level has this few triangles")
+      ->capture_default_str();
+  sub->add_flag("--quantize", c.quantize,
+                "quantise vertex attributes (not implemented yet: reported as an error)");
+  sub->add_option("--json", c.json, "also write the summary as JSON");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+int usage(const std::string& message) {
+  std::fprintf(stderr, "visbuf bake: %s (see visbuf bake --help)\n", message.c_str());
+  return 2;
+}
+
+int badInput(const Error& e) {
+  std::fprintf(stderr, "visbuf bake: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  return 1;
+}
+
+// Progress on stderr: at most 4 updates per second plus the last one; rewritten in place on a terminal.
+class Progress {
+ public:
+  Progress() : tty_(isatty(STDERR_FILENO) != 0) {}
+  void update(size_t done, size_t total, const std::string& what) {
+    const auto now = Clock::now();
+    if (done < total && now - last_ < std::chrono::milliseconds(250)) return;
+    last_ = now;
+    std::fprintf(stderr, "%sbake: built mesh %zu/%zu (%s)%s", tty_ ? "\r\033[K" : "", done, total,
+                 what.c_str(), tty_ && done < total ? "" : "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool tty_;
+  Clock::time_point last_{};
+};
+
+}  // namespace
+
+int runBake(const BakeCommand& c) {
+  if (c.input.empty()) return usage("missing the input glTF file");
+  if (c.output.empty()) return usage("missing -o OUT (the pack to write)");
+  if (c.lodCount < 1 || c.lodCount > MAX_LODS)
+    return usage(fmt::format("--lod-count {}: must be 1..{}", c.lodCount, MAX_LODS));
+  if (c.lodMinTriangles < 1) return usage("--lod-min-triangles must be at least 1");
+  if (c.quantize) {
+    return usage(
+        "--quantize is not implemented yet (pack version 1 stores full-precision 32-byte vertices); "
+        "bake without it");
+  }
+  if (isPackFile(c.input)) {
+    return badInput(
+        {ErrorCode::InvalidArgument, c.input + ": is already a visbuf pack; bake takes a .gltf/.glb file"});
+  }
+  const auto start = Clock::now();
+
+  std::fprintf(stderr, "bake: importing %s\n", c.input.c_str());
+  GltfImportReport report;
+  Result<ImportedScene> imported = importGltfScene(c.input, {}, &report);
+  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf bake: warning: %s\n", w.c_str());
+  if (!imported) return badInput(imported.error());
+  const double importSeconds = secondsSince(start);
+
+  MeshBuildOptions options;
+  options.maxLods = c.lodCount;
+  options.minTriangles = c.lodMinTriangles;
+  Progress progress;
+  const auto buildStart = Clock::now();
+  Result<Scene> scene = buildImportedScene(
+      *imported, options,
+      [&](size_t done, size_t total, const std::string& mesh) { progress.update(done, total, mesh); });
+  if (!scene) return badInput(scene.error());
+  const double buildSeconds = secondsSince(buildStart);
+
+  std::fprintf(stderr, "bake: writing %s\n", c.output.c_str());
+  const auto writeStart = Clock::now();
+  PackWriteReport written;
+  if (Status s = writePack(*scene, c.output, &written); !s) return badInput(s.error());
+  const double writeSeconds = secondsSince(writeStart);
+  const double totalSeconds = secondsSince(start);
+
+  // Summary: per mesh, triangles in (the imported source) and out per LOD with its recorded error.
+  nlohmann::json json;
+  json["input"] = c.input;
+  json["output"] = c.output;
+  std::printf("visbuf bake: %s -> %s\n", c.input.c_str(), c.output.c_str());
+  std::vector<size_t> instances(scene->meshes.size(), 0);
+  for (const Object& o : scene->objects) ++instances[o.mesh];
+  uint64_t trianglesIn = 0, trianglesLod0 = 0, trianglesAllLods = 0;
+  for (size_t i = 0; i < scene->meshes.size(); ++i) {
+    const Mesh& m = scene->meshes[i];
+    const uint64_t in = imported->meshes[i].source.indices.size() / 3;
+    trianglesIn += in;
+    trianglesLod0 += m.triangleCount(0);
+    std::printf("  mesh %zu '%s': %zu instance(s), %zu vertices, %llu triangles in\n", i, m.name.c_str(),
+                instances[i], m.vertices.size(), static_cast<unsigned long long>(in));
+    nlohmann::json jm = {{"name", m.name},
+                         {"instances", instances[i]},
+                         {"vertices", m.vertices.size()},
+                         {"trianglesIn", in},
+                         {"lods", nlohmann::json::array()}};
+    for (size_t l = 0; l < m.lods.size(); ++l) {
+      const uint32_t t = m.triangleCount(l);
+      trianglesAllLods += t;
+      std::printf("    LOD %zu: %9u triangles (%5.1f %%)  error %.3g\n", l, t,
+                  in ? 100.0 * t / double(in) : 0.0, double(m.lods[l].error));
+      jm["lods"].push_back({{"triangles", t}, {"error", m.lods[l].error}});
+    }
+    json["meshes"].push_back(jm);
+  }
+  std::printf(
+      "  total: %zu mesh(es), %zu object(s), %zu material(s); triangles in %llu, LOD 0 %llu, all LODs %llu\n",
+      scene->meshes.size(), scene->objects.size(), scene->materials.size(),
+      static_cast<unsigned long long>(trianglesIn), static_cast<unsigned long long>(trianglesLod0),
+      static_cast<unsigned long long>(trianglesAllLods));
+  std::string sections;
+  for (const PackSectionInfo& s : written.sections)
+    sections += fmt::format("{}{} {}", sections.empty() ? "" : ", ", s.name, s.size);
+  std::printf("  pack: %llu bytes (%s)\n", static_cast<unsigned long long>(written.fileBytes),
+              sections.c_str());
+  std::printf("  time: import %.3f s, build %.3f s, write %.3f s, total %.3f s\n", importSeconds,
+              buildSeconds, writeSeconds, totalSeconds);
+  json["objects"] = scene->objects.size();
+  json["materials"] = scene->materials.size();
+  json["trianglesIn"] = trianglesIn;
+  json["trianglesLod0"] = trianglesLod0;
+  json["bytes"] = written.fileBytes;
+  json["seconds"] = {
+      {"import", importSeconds}, {"build", buildSeconds}, {"write", writeSeconds}, {"total", totalSeconds}};
+  if (!c.json.empty()) {
+    if (Status s = writeJsonFile(c.json, json); !s) return badInput(s.error());
+  }
+  return 0;
+}
+
+}  // namespace visbuf::tools
