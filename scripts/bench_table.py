@@ -21,19 +21,22 @@ for path in sys.argv[1:]:
         f'{j["objects"]:,}',
         f'{j["drawsRendered"]:,}',
         f'{j["trianglesDrawn"]:,}',
-        ms(p.get("cull", 0)), ms(p.get("visibility", 0)), ms(p.get("shade", 0)),
+        ms(sum(v for k, v in p.items() if k.startswith("cull"))),
+        ms(sum(v for k, v in p.items() if k.startswith("raster") or k == "visibility")),
+        ms(p.get("shade", 0)),
         ms(vis_ms),
     ]
     if ref:
         fwd_ms = ref["gpuMs"] + ref["cpuRecordMs"]
         e = ref["error"]
-        row += [ms(fwd_ms), f"{fwd_ms / vis_ms:.2f}x", f'{e["psnr"]:.1f} / {e["maxAbs"]:.4f}']
+        row += [f'{ms(fwd_ms)} ({ref.get("kind", "forward")})', f"{fwd_ms / vis_ms:.2f}x",
+                f'{e["psnr"]:.1f} / {e["maxAbs"]:.4f}']
     else:
         row += ["", "", ""]
     rows.append(row)
 
-head = ["config", "size", "objects", "drawn", "triangles", "cull ms", "visibility ms", "shade ms",
-        "visbuf frame ms", "forward frame ms", "forward/visbuf", "PSNR dB / max err vs forward"]
+head = ["config", "size", "objects", "drawn", "triangles", "cull ms", "raster ms", "shade ms",
+        "visbuf frame ms", "reference frame ms", "reference/visbuf", "PSNR dB / max err vs reference"]
 print("| " + " | ".join(head) + " |")
 print("|" + "---|" * len(head))
 for r in rows:

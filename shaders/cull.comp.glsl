@@ -54,6 +54,7 @@ uint occlusionTest(vec3 c, float r) {
   a = max(a, ivec2(0));
   b = min(b, ivec2(size) - 1);
   if (a.x > b.x || a.y > b.y) return 2u;  // no pixel centre can be covered
+  if (frame.pyramidLevels == 0u) return 0u;  // pyramid skipped this frame (it occluded nothing lately)
   // Level whose texels span the rectangle in at most 2x2 texels: 2^k >= extent (never floor(log2)).
   int extent = max(b.x - a.x + 1, b.y - a.y + 1);
   int level = min(int(ceil(log2(float(extent)))), int(frame.pyramidLevels) - 1);

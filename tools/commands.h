@@ -26,6 +26,7 @@ struct RenderCommand {
   std::string idsOut;
   std::string json;
   bool reference = false;  // also render the forward path and report the error against it
+  bool referenceFull = false;  // also render visbuf with no culling and no LOD and report the error against it
   std::string view = "shaded";  // debug view written to -o instead of the shaded image
   int pyramidLevel = -1;        // --view pyramid: the level to show
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it

@@ -42,6 +42,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_flag("--reference", c.reference,
                 "also render the forward path (same culling and LOD rule, hardware interpolation) over the same "
                 "frames and report the error against it beside both times");
+  sub->add_flag("--reference-full", c.referenceFull,
+                "also render visbuf with no culling and no LOD (the exact image) and report the error of this "
+                "configuration against it: what LOD and culling cost");
   sub->add_option("--view", c.view, "image written to -o: shaded | objects | triangles | lod | culled | pyramid")
       ->check(CLI::IsMember(debugViewNames()))
       ->capture_default_str();
@@ -123,7 +126,9 @@ int runRender(const RenderCommand& c) {
     }
     return stats;
   };
-  const bool compare = c.reference && fo.path == RenderPath::Visbuf;
+  const bool compare = (c.reference || c.referenceFull) && fo.path == RenderPath::Visbuf;
+  if (c.reference && c.referenceFull)
+    return fail({ErrorCode::InvalidArgument, "--reference and --reference-full are exclusive"});
   if (c.freezeCulling) {
     if (fo.path != RenderPath::Visbuf) return fail({ErrorCode::InvalidArgument, "--freeze-culling needs --path visbuf"});
     FrameOptions cullFrame = fo;
@@ -158,17 +163,24 @@ int runRender(const RenderCommand& c) {
   nlohmann::json referenceJson;
   if (compare) {
     FrameOptions ref = fo;
-    ref.path = RenderPath::Forward;
+    if (c.referenceFull) {
+      ref.cull = CullMode::None;
+      ref.lodErrorPixels = 0.0f;
+    } else {
+      ref.path = RenderPath::Forward;
+    }
+    const char* refName = c.referenceFull ? "full (no culling, no LOD)" : "forward";
     Result<FrameResult> refFrame = makeError(ErrorCode::InvalidArgument, "no frame");
     FrameStats refStats = run(ref, true, refFrame);
     if (!refFrame) return fail(refFrame.error());
     ImageError e = compareColor(frame->color, refFrame->color);
     const double refMs = refStats.gpuMs + refStats.cpuRecordMs, visMs = stats.gpuMs + stats.cpuRecordMs;
-    std::printf("reference     forward: gpu %.3f ms + cpu %.3f ms (visbuf %.3f ms; forward/visbuf = %.2f)\n", refStats.gpuMs,
-                refStats.cpuRecordMs, visMs, refMs / std::max(visMs, 1e-9));
-    std::printf("error         vs forward: max %.5f, mean %.6f, PSNR %.1f dB, %.4f%% pixels > 1/255\n", e.maxAbs,
+    std::printf("reference     %s: gpu %.3f ms + cpu %.3f ms (this %.3f ms; reference/this = %.2f)\n", refName,
+                refStats.gpuMs, refStats.cpuRecordMs, visMs, refMs / std::max(visMs, 1e-9));
+    std::printf("error         vs %s: max %.5f, mean %.6f, PSNR %.1f dB, %.4f%% pixels > 1/255\n", refName, e.maxAbs,
                 e.meanAbs, e.psnr, 100.0 * e.differingFraction);
     referenceJson = statsToJson(refStats);
+    referenceJson["kind"] = c.referenceFull ? "full" : "forward";
     referenceJson["error"] = {{"maxAbs", e.maxAbs},
                               {"meanAbs", e.meanAbs},
                               {"psnr", std::isfinite(e.psnr) ? e.psnr : 999.0},

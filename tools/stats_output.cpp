@@ -22,7 +22,9 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("lod histogram [{}]\n", lods);
   if (s.path == RenderPath::Visbuf) {
     if (s.cullingFrozen) out += "culling       FROZEN: draw lists of an earlier frame\n";
-    out += fmt::format("pyramid       {}\n", s.pyramidLevels ? fmt::format("{} levels", s.pyramidLevels) : "not built");
+    out += fmt::format("pyramid       {}\n", s.pyramidLevels  ? fmt::format("{} levels", s.pyramidLevels)
+                                            : s.pyramidSkipped ? std::string("skipped (the last one hid nothing)")
+                                                               : std::string("not built"));
     out += fmt::format("ids           {}\n", s.ids.describe());
     out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
                        s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
@@ -50,6 +52,7 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["drawsLate"] = s.drawsLate;
   j["cullingFrozen"] = s.cullingFrozen;
   j["pyramidLevels"] = s.pyramidLevels;
+  j["pyramidSkipped"] = s.pyramidSkipped;
   j["drawsAppended"] = s.drawsAppended;
   j["drawsRendered"] = s.drawsRendered;
   j["drawCapacity"] = s.drawCapacity;

@@ -54,6 +54,8 @@ namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
 constexpr uint32_t kCommandBuffers = 8;
+// A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
+constexpr uint32_t kPyramidProbeInterval = 16;
 
 }  // namespace
 
@@ -83,6 +85,8 @@ struct Renderer::Impl {
   bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
   CullMode lastCull = CullMode::Frustum;
   gpu::Buffer pyramidReadback;
+  uint32_t pyramidSkipFrames = 0;  // frames left before the pyramid is probed again
+  bool usePyramid = true;          // this frame builds the pyramid (set in render())
 
   gpu::Buffer frameBuffer;  // FrameData, host visible
   gpu::Buffer draws;        // DrawCommand[capacity]
@@ -242,7 +246,7 @@ struct Renderer::Impl {
     f.view = glm::mat4(math.view);
     f.projX = float(math.proj[0][0]);
     f.projY = float(math.proj[1][1]);
-    f.pyramidLevels = pyramid.levels();
+    f.pyramidLevels = usePyramid ? pyramid.levels() : 0;
     f.cameraOffset = glm::vec4(glm::vec3(scene.anchor - camera.position), 0.0f);
     for (int i = 0; i < 5; ++i) f.frustum[i] = glm::vec4(math.planes[size_t(i)]);
     f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), 0.85f);
@@ -333,7 +337,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                          VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                          VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      if (frozen)
+      if (frozen || !usePyramid)  // the depth stayed an attachment
         gpu::memoryBarrier(cmd, kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kDepthStages, kDepthAccess);
       else
         gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
@@ -364,6 +368,12 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   } else {
     recordCull(CULL_PHASE_EARLY, 0, "cull early");
     recordRaster(0, STAT_DRAW_COUNT, true, "raster early");
+    if (!usePyramid) {  // the late phase runs frustum + sub-pixel tests only
+      recordCull(CULL_PHASE_LATE, capacity, "cull late");
+      recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, "raster late");
+    }
+  }
+  if (!frozen && occlusion && usePyramid) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
     gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
@@ -413,6 +423,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
 
   const auto t0 = Clock::now();
   const uint32_t w = config.width, h = config.height;
+  const bool frozen = options.path == RenderPath::Visbuf && options.freezeCulling && haveDraws;
+  const bool occlusionFrame = options.path == RenderPath::Visbuf && !frozen && options.cull == CullMode::Occlusion;
+  usePyramid = occlusionFrame && !(options.skipUselessPyramid && pyramidSkipFrames > 0);
   FrameMath math = computeFrameMath(camera, w, h);
   gpu::FrameData fd = frameData(camera, math, options);
   std::memcpy(frameBuffer.mapped(), &fd, sizeof(fd));
@@ -433,7 +446,6 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   timestamps->reset(cmd);
-  const bool frozen = options.path == RenderPath::Visbuf && options.freezeCulling && haveDraws;
   if (!frozen) vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);  // frozen: keep the counts
   if (historyDirty) {
     vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
@@ -443,7 +455,8 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
 
   const gpu::Image* colorSource = &color;
   const CullMode effectiveCull = frozen ? lastCull : options.cull;
-  const bool builtPyramid = options.path == RenderPath::Visbuf && !frozen && options.cull == CullMode::Occlusion;
+  const bool builtPyramid = usePyramid;
+  st.pyramidSkipped = occlusionFrame && !usePyramid;
   st.cullingFrozen = frozen;
   st.pyramidLevels = builtPyramid ? pyramid.levels() : 0;
   if (options.path == RenderPath::Visbuf) {
@@ -558,6 +571,11 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.drawOverflow = s[STAT_DRAW_OVERFLOW];
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
     st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
+    // "Skip what the scene does not need": a pyramid that hid nothing is not built again for a while.
+    if (usePyramid)
+      pyramidSkipFrames = options.skipUselessPyramid && st.occlusionCulled == 0 ? kPyramidProbeInterval : 0;
+    else if (pyramidSkipFrames > 0)
+      --pyramidSkipFrames;
   }
   while (!st.lodHistogram.empty() && st.lodHistogram.back() == 0) st.lodHistogram.pop_back();
 
@@ -670,6 +688,7 @@ Status Renderer::resize(uint32_t width, uint32_t height) {
   if (width == 0 || height == 0 || width > 16384 || height > 16384)
     return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
   impl_->createTargets(width, height);
+  impl_->pyramidSkipFrames = 0;  // a new size: probe the pyramid again
   return {};  // the draw lists stay valid (they do not depend on the size): freezeCulling still works
 }
 
@@ -679,6 +698,9 @@ Result<FrameResult> Renderer::renderFrame(const Camera& camera, const FrameOptio
 
 const IdEncoding& Renderer::idEncoding() const { return impl_->encoding; }
 
-void Renderer::clearHistory() { impl_->historyDirty = true; }
+void Renderer::clearHistory() {
+  impl_->historyDirty = true;
+  impl_->pyramidSkipFrames = 0;  // a cut: probe the pyramid again at once
+}
 
 }  // namespace visbuf

@@ -43,6 +43,8 @@ struct FrameOptions {
   bool freezeCulling = false;   // visbuf: redraw the last culled frame's draw lists (no cull, no pyramid), so
                                 // the camera can move on and show what that frame culled
   bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
+  bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
+                                   // occlusion test) for the next kPyramidProbeInterval frames
 };
 
 // How the visibility target's bits are split (DESIGN.md property 4).
@@ -73,6 +75,7 @@ struct FrameStats {
   IdEncoding ids;
   bool cullingFrozen = false;   // this frame reused an earlier frame's draw lists
   uint32_t pyramidLevels = 0;   // depth pyramid levels built this frame (0: no pyramid pass)
+  bool pyramidSkipped = false;  // occlusion mode, but the last pyramid hid nothing: skipped this frame
   std::vector<std::pair<std::string, double>> passMs;  // GPU time per pass, recording order
   double gpuMs = 0.0;           // sum of pass times
   double cpuRecordMs = 0.0;     // CPU time to cull (forward) and record

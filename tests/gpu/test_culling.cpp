@@ -214,6 +214,7 @@ TEST(Occlusion, DepthPyramidMatchesCpuReduction) {
     FrameOptions fo;
     fo.readColor = false;
     fo.readPyramid = true;
+    fo.skipUselessPyramid = false;  // build it every frame, even where it hides nothing
     (*renderer)->renderFrame(city.defaultCamera, fo).value();  // history settles: early depth non-empty
     auto f = (*renderer)->renderFrame(city.defaultCamera, fo);
     ASSERT_TRUE(f.ok());
@@ -274,5 +275,36 @@ TEST(Occlusion, FrozenCullingRedrawsTheFrozenDrawLists) {
   auto live = (*renderer)->renderFrame(elsewhere, fo);
   ASSERT_TRUE(live.ok());
   EXPECT_NE(sorted(live->drawnObjects), sorted(culled->drawnObjects)) << "the moved camera sees other objects";
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// Skipping what the scene does not need: a pyramid that hid nothing is not built on the next frames,
+// and the image stays identical to no culling while it is skipped.
+TEST(Occlusion, UselessPyramidIsSkippedAndProbedAgain) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene field = fieldScene(40, true);  // 40 thin knots in a 600-unit cube: nothing occludes anything
+  auto renderer = Renderer::create(dev, field, {.width = 160, .height = 90});
+  ASSERT_TRUE(renderer.ok());
+  FrameOptions fo, none;
+  fo.readColor = none.readColor = false;
+  fo.readIds = none.readIds = true;
+  fo.lodErrorPixels = none.lodErrorPixels = 0.0f;
+  none.cull = CullMode::None;
+  uint32_t built = 0, skipped = 0;
+  for (int i = 0; i < 40; ++i) {
+    auto f = (*renderer)->renderFrame(field.defaultCamera, fo);
+    ASSERT_TRUE(f.ok());
+    if (f->stats.pyramidLevels) {
+      ++built;
+      EXPECT_EQ(f->stats.occlusionCulled, 0u);
+    }
+    skipped += f->stats.pyramidSkipped;
+    auto ref = (*renderer)->renderFrame(field.defaultCamera, none);
+    ASSERT_EQ(f->ids, ref->ids) << "frame " << i;
+  }
+  EXPECT_EQ(built + skipped, 40u);
+  EXPECT_GE(skipped, 30u);
+  EXPECT_GE(built, 2u) << "the pyramid is probed again";
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
