@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <meshoptimizer.h>
 
+#include "scene/mesh_error.h"
 #include "scene/scene.h"
 
 namespace visbuf {
@@ -102,6 +103,12 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
 
   const float scale = meshopt_simplifyScale(pos, unique, stride);
   std::vector<uint32_t> scratch(indexCount);
+  // Position-only welding: attribute seams (UV or normal splits) are borders to meshopt_simplify and
+  // stall it early; simplifying the shadow index buffer lets coarse levels cross them (a level then
+  // uses one representative vertex's attributes at a seam, which the measured error does not see but
+  // only coarse, distant levels are affected).
+  std::vector<uint32_t> shadow(indexCount);
+  meshopt_generateShadowIndexBuffer(shadow.data(), lod0.data(), indexCount, pos, unique, sizeof(float) * 3, stride);
   size_t previous = indexCount;
   float previousError = 0.0f;
   while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
@@ -110,13 +117,22 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
                                     &err);
     if (count > previous * options.minReduction) {
-      // Topology-preserving simplification stalled (seams, small islands): fall back to sloppy.
+      count = meshopt_simplify(scratch.data(), shadow.data(), indexCount, pos, unique, stride, target, 1.0f, 0, &err);
+    }
+    if (count > previous * options.minReduction) {
+      // Topology-preserving simplification stalled (small islands): fall back to sloppy.
       count = meshopt_simplifySloppy(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f,
                                      &err);
     }
     if (count == 0 || count > previous * options.minReduction) break;  // no real reduction: chain ends
     meshopt_optimizeVertexCache(scratch.data(), scratch.data(), count, unique);
-    float error = std::max(err * scale, previousError);  // non-decreasing, object-space units
+    // Record the measured two-sided deviation from the full surface (meshoptimizer's estimate, in
+    // particular simplifySloppy's, can be far below what the silhouette really loses), never less than
+    // the simplifier's own figure; non-decreasing along the chain; object-space units.
+    std::vector<glm::vec3> positions(unique);
+    for (size_t v = 0; v < unique; ++v) positions[v] = mesh.position(uint32_t(v));
+    const double measured = measureSimplificationError(positions, lod0, std::span(scratch.data(), count));
+    float error = std::max({float(measured), err * scale, previousError});
     mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
     mesh.indices.insert(mesh.indices.end(), scratch.begin(), scratch.begin() + std::ptrdiff_t(count));
     previous = count;

@@ -200,3 +200,37 @@ TEST(Scene, ValidationRejectsNonFiniteAndZeroScale) {
   bad.objects[2].transform = glm::dmat4(0.0);
   EXPECT_NE(validateScene(bad).error().message.find("zero-scale"), std::string::npos);
 }
+
+#include "scene/mesh_error.h"
+
+// The recorded LOD error is a real bound: every vertex of the full mesh lies within it of the level's
+// surface, checked by brute force over all triangles (independent of the grid used to measure it).
+TEST(MeshBuild, RecordedLodErrorBoundsTheRealDeviation) {
+  Result<Mesh> mesh = buildMesh(makeTorusKnot(48, 12));
+  ASSERT_TRUE(mesh.ok());
+  const Mesh& m = *mesh;
+  ASSERT_GE(m.lods.size(), 3u);
+  for (size_t l = 1; l < m.lods.size(); ++l) {
+    const Lod& lod = m.lods[l];
+    double worst = 0.0;
+    for (uint32_t v = 0; v < m.vertices.size(); ++v) {
+      glm::dvec3 p(m.position(v));
+      double best = INFINITY;
+      for (uint32_t t = 0; t < lod.indexCount; t += 3) {
+        const uint32_t* i = &m.indices[lod.firstIndex + t];
+        best = std::min(best, pointTriangleDistance(p, glm::dvec3(m.position(i[0])), glm::dvec3(m.position(i[1])),
+                                                    glm::dvec3(m.position(i[2]))));
+      }
+      worst = std::max(worst, best);
+    }
+    EXPECT_LE(worst, double(lod.error) * (1 + 1e-6) + 1e-7) << "level " << l;
+  }
+}
+
+TEST(MeshError, PointTriangleDistanceRegions) {
+  const glm::dvec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_NEAR(pointTriangleDistance({0.2, 0.2, 3.0}, a, b, c), 3.0, 1e-12);   // face
+  EXPECT_NEAR(pointTriangleDistance({-1, -1, 0}, a, b, c), std::sqrt(2.0), 1e-12);  // vertex a
+  EXPECT_NEAR(pointTriangleDistance({0.5, -2, 0}, a, b, c), 2.0, 1e-12);  // edge ab
+  EXPECT_NEAR(pointTriangleDistance({1, 1, 0}, a, b, c), std::sqrt(0.5), 1e-12);  // edge bc
+}
