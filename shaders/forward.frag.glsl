@@ -5,9 +5,18 @@
 layout(location = 0) in vec3 inNormal;
 layout(location = 1) in vec4 inColor;
 layout(location = 2) flat in uint inMaterial;
+layout(location = 3) flat in uint inObject;
 layout(location = 0) out vec4 outColor;
+#if WRITE_IDS
+// Test/diagnostic variant: the same (object + 1, triangle) the visibility path decodes, so coverage can be
+// compared pixel for pixel with the visibility buffer.
+layout(location = 1) out uvec2 outId;
+#endif
 
 void main() {
   vec4 baseColor = materials[inMaterial].baseColor * inColor;
   outColor = vec4(shadeSurface(normalize(inNormal), baseColor.rgb), 1.0);
+#if WRITE_IDS
+  outId = uvec2(inObject + 1u, uint(gl_PrimitiveID));
+#endif
 }

@@ -7,6 +7,7 @@
 layout(location = 0) out vec3 outNormal;  // world, not normalised (interpolation commutes with it)
 layout(location = 1) out vec4 outColor;
 layout(location = 2) flat out uint outMaterial;
+layout(location = 3) flat out uint outObject;
 
 void main() {
   ObjectData o = objects[gl_InstanceIndex];
@@ -15,4 +16,5 @@ void main() {
   outNormal = normalToWorld(o, octDecode(v.normal));
   outColor = unpackColor(v.color);
   outMaterial = o.materialIndex;
+  outObject = gl_InstanceIndex;
 }

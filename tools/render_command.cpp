@@ -67,8 +67,6 @@ int runRender(const RenderCommand& c) {
   auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
   if (!devOptions) return fail(devOptions.error());
   if (!(c.lodError >= 0.0f)) return fail({ErrorCode::InvalidArgument, "--lod-error must be >= 0"});
-  if (c.path == "forward" && !c.idsOut.empty())
-    return fail({ErrorCode::InvalidArgument, "--ids-out needs --path visbuf (IDs come from the visibility target)"});
 
   auto scene = loadScene(c.scene);
   if (!scene) return fail(scene.error());
@@ -95,7 +93,7 @@ int runRender(const RenderCommand& c) {
     for (uint32_t i = 0; i < c.frames; ++i) {
       const bool last = i + 1 == c.frames;
       options.readColor = last && readColor;
-      options.readIds = last && !c.idsOut.empty() && options.path == RenderPath::Visbuf;
+      options.readIds = last && !c.idsOut.empty();
       options.readDraws = false;
       options.readPyramid = false;
       if (last && c.view != "shaded" && options.path == RenderPath::Visbuf) prepareViewOptions(c.view, options);

@@ -10,6 +10,7 @@
 #include "cull.comp.h"
 #include "depth_pyramid.comp.h"
 #include "forward.frag.h"
+#include "forward_ids.frag.h"
 #include "forward.vert.h"
 #include "shade.comp.h"
 #include "visibility.frag.h"
@@ -29,6 +30,7 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)
+  VB_SHADER("forward_ids.frag", spv_forward_ids_frag)
 #undef VB_SHADER
   std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
   std::abort();

@@ -18,13 +18,16 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
 }
 
 void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
-                    bool load) {
-  VkRenderingAttachmentInfo ca{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  ca.imageView = color.view();
-  ca.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  ca.loadOp = load ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
-  ca.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  ca.clearValue.color = clear;
+                    bool load, const gpu::Image* second, VkClearColorValue secondClear) {
+  VkRenderingAttachmentInfo cas[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                      {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+  for (int i = 0; i < 2; ++i) {
+    cas[i].imageView = i == 0 ? color.view() : second ? second->view() : VK_NULL_HANDLE;
+    cas[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    cas[i].loadOp = load ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
+    cas[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    cas[i].clearValue.color = i == 0 ? clear : secondClear;
+  }
   VkRenderingAttachmentInfo da{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   da.imageView = depth.view();
   da.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
@@ -34,8 +37,8 @@ void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorVa
   VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
   ri.renderArea = {{0, 0}, {color.width(), color.height()}};
   ri.layerCount = 1;
-  ri.colorAttachmentCount = 1;
-  ri.pColorAttachments = &ca;
+  ri.colorAttachmentCount = second ? 2 : 1;
+  ri.pColorAttachments = cas;
   ri.pDepthAttachment = &da;
   vkCmdBeginRendering(cmd, &ri);
   VkViewport vp{0.0f, 0.0f, float(color.width()), float(color.height()), 0.0f, 1.0f};

@@ -30,6 +30,6 @@ struct VisibilityPass {
 // Begins dynamic rendering on colour + depth, cleared (depth to 0, reverse-Z) or loaded; shared by the
 // visibility and forward passes.
 void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
-                    bool load = false);
+                    bool load = false, const gpu::Image* second = nullptr, VkClearColorValue secondClear = {});
 
 }  // namespace visbuf::passes

@@ -93,6 +93,7 @@ struct Renderer::Impl {
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Buffer statsReadback;
   gpu::Image ids, depth, color;
+  gpu::Image forwardIds;  // forward path with readIds only (rg32ui: object + 1, triangle); lazily created
   gpu::Buffer colorReadback, idsReadback, drawsReadback;
   std::unique_ptr<gpu::TimestampPool> timestamps;
 
@@ -179,7 +180,8 @@ struct Renderer::Impl {
                        VK_IMAGE_ASPECT_COLOR_BIT);
     const VkDeviceSize pixels = VkDeviceSize(width) * height;
     colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
-    idsReadback = gpu::Buffer(device, pixels * gpu::formatBytes(idFormat), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+    forwardIds.reset();
+    idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::HostVisible);
     config.width = width;
     config.height = height;
@@ -425,7 +427,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   const uint32_t w = config.width, h = config.height;
   const bool frozen = options.path == RenderPath::Visbuf && options.freezeCulling && haveDraws;
   const bool occlusionFrame = options.path == RenderPath::Visbuf && !frozen && options.cull == CullMode::Occlusion;
-  usePyramid = occlusionFrame && !(options.skipUselessPyramid && pyramidSkipFrames > 0);
+  usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
   FrameMath math = computeFrameMath(camera, w, h);
   gpu::FrameData fd = frameData(camera, math, options);
   std::memcpy(frameBuffer.mapped(), &fd, sizeof(fd));
@@ -484,7 +486,17 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
                       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
     uint32_t t = timestamps->begin(cmd, "forward");
-    forward.record(cmd, pipelineLayout, set, color, kBackground, depth, gpuScene.indices.handle(), fdraws);
+    if (options.readIds) {
+      if (!forwardIds)
+        forwardIds = gpu::Image(device, VK_FORMAT_R32G32_UINT, w, h,
+                                VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                VK_IMAGE_ASPECT_COLOR_BIT);
+      gpu::imageBarrier(cmd, forwardIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                        VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    }
+    forward.record(cmd, pipelineLayout, set, color, kBackground, depth, gpuScene.indices.handle(), fdraws,
+                   options.readIds ? &forwardIds : nullptr);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
     st.targetBytesPerPixel = 4 /*depth*/ + 8 /*colour*/;
@@ -503,7 +515,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                       VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
     copyImageToBuffer(cmd, *colorSource, colorReadback);
   }
-  const bool readIds = options.readIds && options.path == RenderPath::Visbuf;
+  const bool readIds = options.readIds;
   const bool readDraws = (readIds || options.readDraws) && options.path == RenderPath::Visbuf;
   if (readDraws) {
     if (!drawsReadback)
@@ -539,11 +551,16 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                       VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   }
-  if (readIds) {
+  if (readIds && options.path == RenderPath::Visbuf) {
     gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
                       VK_ACCESS_2_TRANSFER_READ_BIT);
     copyImageToBuffer(cmd, ids, idsReadback);
+  } else if (readIds) {
+    gpu::imageBarrier(cmd, forwardIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, forwardIds, idsReadback);
   }
   VK_CHECK(vkEndCommandBuffer(cmd));
 
@@ -572,8 +589,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
     st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
     // "Skip what the scene does not need": a pyramid that hid nothing is not built again for a while.
+    // Only a pyramid built from a non-empty early phase is evidence (a first frame or a cut has none).
     if (usePyramid)
-      pyramidSkipFrames = options.skipUselessPyramid && st.occlusionCulled == 0 ? kPyramidProbeInterval : 0;
+      pyramidSkipFrames =
+          options.skipUselessPyramid && st.drawsEarly > 0 && st.occlusionCulled == 0 ? kPyramidProbeInterval : 0;
     else if (pyramidSkipFrames > 0)
       --pyramidSkipFrames;
   }
@@ -606,7 +625,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
       p += size_t(lw) * lh;
     }
   }
-  if (readIds) {
+  if (readIds && options.path == RenderPath::Forward) {  // already (object + 1, triangle)
+    const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
+    result.ids.assign(raw, raw + pixels * 2);
+  } else if (readIds) {
     result.ids.assign(pixels * 2, 0);
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());

@@ -38,7 +38,8 @@ struct FrameOptions {
   CullMode cull = CullMode::Occlusion;
   float lodErrorPixels = 1.0f;  // <= 0: LOD off (always the full mesh)
   bool readColor = true;        // read the colour image back (RGBA float, linear)
-  bool readIds = false;         // visbuf path: decode IDs per pixel (object + 1, triangle in its LOD)
+  bool readIds = false;         // IDs per pixel (object + 1, triangle in its LOD): visbuf decodes its target;
+                                // the forward path then writes them from a second pipeline variant
   bool readDraws = false;       // return the IDs of the objects drawn (visbuf: from the GPU's commands)
   bool freezeCulling = false;   // visbuf: redraw the last culled frame's draw lists (no cull, no pyramid), so
                                 // the camera can move on and show what that frame culled

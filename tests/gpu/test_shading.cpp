@@ -25,13 +25,35 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
   FrameOptions fo;
   fo.lodErrorPixels = 0.0f;
+  fo.readIds = true;
   fo.path = RenderPath::Visbuf;
   auto vis = (*renderer)->renderFrame(cam, fo);
   fo.path = RenderPath::Forward;
   auto fwd = (*renderer)->renderFrame(cam, fo);
   ASSERT_TRUE(vis.ok() && fwd.ok());
   EXPECT_EQ(vis->stats.trianglesDrawn, fwd->stats.trianglesDrawn) << "both paths draw the same triangles";
-  test::ImageError e = test::compareColor(vis->color, fwd->color);
+  // Coverage: which (object, triangle) each pixel shows, in both paths. The two pipelines share the
+  // vertex math, so the rasteriser must make the same decisions; colour is then compared where it did.
+  size_t coverageMismatch = 0, covered = 0;
+  std::vector<float> visSame = vis->color, fwdSame = fwd->color;
+  for (size_t p = 0; p < vis->ids.size() / 2; ++p) {
+    covered += vis->ids[2 * p] != 0;
+    if (vis->ids[2 * p] != fwd->ids[2 * p] || vis->ids[2 * p + 1] != fwd->ids[2 * p + 1]) {
+      ++coverageMismatch;
+      for (int c = 0; c < 4; ++c) visSame[p * 4 + c] = fwdSame[p * 4 + c] = 0.0f;
+    }
+  }
+  test::ImageError all = test::compareColor(vis->color, fwd->color);
+  test::ImageError e = test::compareColor(visSame, fwdSame);  // interpolation only
+  std::printf("%s: %zu of %zu covered pixels show a different triangle in the two paths; all pixels: max %.5f, "
+              "PSNR %.1f dB\n", name.c_str(), coverageMismatch, covered, all.maxAbs, all.psnr);
+  // Lavapipe rasterises both pipelines identically (0 mismatches measured). A GPU may resolve depth
+  // ties between the differently compiled pipelines differently at a handful of pixels: allowed up to
+  // 0.1% of the covered pixels, never more.
+  EXPECT_LE(double(coverageMismatch), 1e-3 * double(covered));
+  if (dev.isCpu()) {
+    EXPECT_EQ(coverageMismatch, 0u);
+  }
   size_t background = 0;
   for (size_t p = 0; p < vis->color.size(); p += 4)
     background += vis->color[p] == fwd->color[p] && std::abs(vis->color[p] - 0.10f) < 1e-3f;
