@@ -1486,17 +1486,20 @@ Result<ImportedScene> Importer::runScene() {
 
 }  // namespace
 
-Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptions& options,
-                                  GltfImportReport* report) {
+namespace {
+// Shared by both entry points: load, run one importer method, report, and keep every exception from
+// tinygltf/nlohmann (allocation failure, pathological JSON) inside the engine boundary.
+template <typename T>
+Result<T> importWith(const std::string& path, const GltfImportOptions& options, GltfImportReport* report,
+                     Result<T> (Importer::*run)()) {
   GltfImportReport localReport;
   GltfImportReport& rep = report ? *report : localReport;
   rep = GltfImportReport{};
-  // tinygltf and nlohmann may throw (allocation failure, pathological JSON); nothing may escape.
   try {
     tinygltf::Model model;
     if (Status s = loadModel(path, &model, &rep.warnings); !s) return s.error();
     Importer importer(path, model, options, &rep.warnings);
-    Result<MeshSource> result = importer.run();
+    Result<T> result = (importer.*run)();
     rep.primitivesImported = importer.primitivesImported;
     rep.primitivesSkipped = importer.primitivesSkipped;
     return result;
@@ -1506,25 +1509,16 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
     return malformed(path + ": " + e.what());
   }
 }
+}  // namespace
+
+Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptions& options,
+                                  GltfImportReport* report) {
+  return importWith<MeshSource>(path, options, report, &Importer::run);
+}
 
 Result<ImportedScene> importGltfScene(const std::string& path, const GltfImportOptions& options,
                                       GltfImportReport* report) {
-  GltfImportReport localReport;
-  GltfImportReport& rep = report ? *report : localReport;
-  rep = GltfImportReport{};
-  try {
-    tinygltf::Model model;
-    if (Status s = loadModel(path, &model, &rep.warnings); !s) return s.error();
-    Importer importer(path, model, options, &rep.warnings);
-    Result<ImportedScene> result = importer.runScene();
-    rep.primitivesImported = importer.primitivesImported;
-    rep.primitivesSkipped = importer.primitivesSkipped;
-    return result;
-  } catch (const std::bad_alloc&) {
-    return makeError(ErrorCode::CapacityExceeded, path + ": out of memory while importing");
-  } catch (const std::exception& e) {
-    return malformed(path + ": " + e.what());
-  }
+  return importWith<ImportedScene>(path, options, report, &Importer::runScene);
 }
 
 }  // namespace visbuf
