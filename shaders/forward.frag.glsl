@@ -7,6 +7,10 @@ layout(location = 1) in vec4 inColor;
 layout(location = 2) flat in uint inMaterial;
 layout(location = 3) flat in uint inObject;
 layout(location = 0) out vec4 outColor;
+#if COUNT_OVERDRAW
+layout(early_fragment_tests) in;
+layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+#endif
 #if WRITE_IDS
 // Test/diagnostic variant: the same (object + 1, triangle) the visibility path decodes, so coverage can be
 // compared pixel for pixel with the visibility buffer.
@@ -14,6 +18,9 @@ layout(location = 1) out uvec2 outId;
 #endif
 
 void main() {
+#if COUNT_OVERDRAW
+  imageAtomicAdd(overdraw, ivec2(gl_FragCoord.xy), 1u);
+#endif
   vec4 baseColor = materials[inMaterial].baseColor * inColor;
   outColor = vec4(shadeSurface(normalize(inNormal), baseColor.rgb), 1.0);
 #if WRITE_IDS

@@ -6,6 +6,11 @@
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
+#if COUNT_OVERDRAW
+// Debug variant: count the raster writes per pixel (fragments that pass the depth test when they run).
+layout(early_fragment_tests) in;
+layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+#endif
 layout(location = 0) flat in uint inDrawSlot;
 #if WIDE_IDS
 layout(location = 0) out uvec2 outId;
@@ -14,6 +19,9 @@ layout(location = 0) out uint outId;
 #endif
 
 void main() {
+#if COUNT_OVERDRAW
+  imageAtomicAdd(overdraw, ivec2(gl_FragCoord.xy), 1u);
+#endif
   uint tri = uint(gl_PrimitiveID);
 #if WIDE_IDS
   outId = uvec2(inDrawSlot + 1u, tri);

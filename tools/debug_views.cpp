@@ -1,6 +1,7 @@
 #include "debug_views.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <unordered_map>
 
@@ -39,7 +40,7 @@ void put(std::vector<float>& img, size_t pixel, glm::vec3 c) {
 }  // namespace
 
 const std::vector<std::string>& debugViewNames() {
-  static const std::vector<std::string> names = {"shaded", "objects", "triangles", "lod", "culled", "pyramid"};
+  static const std::vector<std::string> names = {"shaded", "objects", "triangles", "lod", "culled", "pyramid", "overdraw"};
   return names;
 }
 
@@ -48,6 +49,7 @@ void prepareViewOptions(const std::string& view, FrameOptions& o) {
   if (view == "lod" || view == "culled") o.readDraws = true;
   if (view == "culled") o.readColor = true;
   if (view == "pyramid") o.readPyramid = true;
+  if (view == "overdraw") o.countOverdraw = true;
 }
 
 Result<std::vector<float>> buildDebugView(const std::string& view, const FrameResult& f, const Scene& scene,
@@ -71,6 +73,22 @@ Result<std::vector<float>> buildDebugView(const std::string& view, const FrameRe
       else if (view == "triangles") put(img, p, hashColor((uint64_t(object) << 32) | tri));
       else put(img, p, ramp(float(lodOf[object - 1]) / float(maxLod)));
     }
+    return img;
+  }
+  if (view == "overdraw") {
+    // Raster writes per pixel (fragments passing the depth test when they ran): black 0, then a ramp
+    // from blue (1) to red (>= 8). The mean over covered pixels goes to stdout.
+    if (f.overdraw.size() != pixels) return makeError(ErrorCode::InvalidArgument, "--view overdraw: no counts read back");
+    uint64_t sum = 0, covered = 0;
+    for (size_t p = 0; p < pixels; ++p) {
+      const uint32_t n = f.overdraw[p];
+      if (n == 0) continue;
+      sum += n;
+      ++covered;
+      put(img, p, ramp(float(n - 1) / 7.0f));
+    }
+    std::printf("overdraw      %.2f raster writes per covered pixel (%llu pixels)\n",
+                covered ? double(sum) / double(covered) : 0.0, (unsigned long long)covered);
     return img;
   }
   if (view == "pyramid") {

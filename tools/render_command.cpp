@@ -45,7 +45,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_flag("--reference-full", c.referenceFull,
                 "also render visbuf with no culling and no LOD (the exact image) and report the error of this "
                 "configuration against it: what LOD and culling cost");
-  sub->add_option("--view", c.view, "image written to -o: shaded | objects | triangles | lod | culled | pyramid")
+  sub->add_option("--view", c.view, "image written to -o: shaded | objects | triangles | lod | culled | pyramid | overdraw")
       ->check(CLI::IsMember(debugViewNames()))
       ->capture_default_str();
   sub->add_option("--pyramid-level", c.pyramidLevel, "--view pyramid: depth pyramid level (0 = full resolution)");
@@ -96,7 +96,8 @@ int runRender(const RenderCommand& c) {
       options.readIds = last && !c.idsOut.empty();
       options.readDraws = false;
       options.readPyramid = false;
-      if (last && c.view != "shaded" && options.path == RenderPath::Visbuf) prepareViewOptions(c.view, options);
+      if (last && c.view != "shaded" && (options.path == RenderPath::Visbuf || c.view == "overdraw"))
+        prepareViewOptions(c.view, options);
       frame = (*renderer)->renderFrame(*camera, options);
       if (!frame) return {};
       runs.push_back(frame->stats);

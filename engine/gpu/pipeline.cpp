@@ -11,6 +11,9 @@
 #include "depth_pyramid.comp.h"
 #include "forward.frag.h"
 #include "forward_ids.frag.h"
+#include "forward_overdraw.frag.h"
+#include "visibility_overdraw.frag.h"
+#include "visibility_wide_overdraw.frag.h"
 #include "forward.vert.h"
 #include "shade.comp.h"
 #include "visibility.frag.h"
@@ -31,6 +34,9 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)
   VB_SHADER("forward_ids.frag", spv_forward_ids_frag)
+  VB_SHADER("forward_overdraw.frag", spv_forward_overdraw_frag)
+  VB_SHADER("visibility_overdraw.frag", spv_visibility_overdraw_frag)
+  VB_SHADER("visibility_wide_overdraw.frag", spv_visibility_wide_overdraw_frag)
 #undef VB_SHADER
   std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
   std::abort();

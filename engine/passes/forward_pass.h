@@ -20,11 +20,12 @@ struct ForwardDraw {
 struct ForwardPass {
   gpu::Pipeline pipeline;
   gpu::Pipeline pipelineWithIds;  // also writes (object + 1, triangle) to an rg32ui target (diagnostics, tests)
+  gpu::Pipeline pipelineOverdraw; // debug: counts raster writes per pixel into BINDING_OVERDRAW
   static ForwardPass create(gpu::Device& device, VkPipelineLayout layout);
   // ids: optional rg32ui target (cleared to 0) written with the same IDs the visibility path decodes.
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
               VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
-              const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr) const;
+              const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr, bool countOverdraw = false) const;
 };
 
 }  // namespace visbuf::passes

@@ -14,6 +14,11 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
   d.fragmentShader = "visibility_wide.frag";
   d.colorFormats = {VK_FORMAT_R32G32_UINT};
   p.wide = gpu::createGraphicsPipeline(device, layout, d);
+  d.fragmentShader = "visibility_wide_overdraw.frag";
+  p.wideOverdraw = gpu::createGraphicsPipeline(device, layout, d);
+  d.fragmentShader = "visibility_overdraw.frag";
+  d.colorFormats = {VK_FORMAT_R32_UINT};
+  p.narrowOverdraw = gpu::createGraphicsPipeline(device, layout, d);
   return p;
 }
 
@@ -54,7 +59,8 @@ void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDesc
   nothing.uint32[1] = VIS_NOTHING;
   beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear);
   const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, (isWide ? wide : narrow).handle());
+  const gpu::Pipeline& pipeline = in.countOverdraw ? (isWide ? wideOverdraw : narrowOverdraw) : (isWide ? wide : narrow);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   gpu::PassConstants pc{0, in.drawBase, 0, 0};

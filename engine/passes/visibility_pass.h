@@ -18,11 +18,13 @@ struct VisibilityInputs {
   uint32_t maxDraws = 0;
   uint32_t drawBase = 0;  // first slot of this phase: commands are read from draws at drawBase * 20 bytes
   bool clear = true;      // early/only phase clears IDs and depth; the late phase loads them
+  bool countOverdraw = false;  // debug: the variant that counts raster writes into BINDING_OVERDRAW
 };
 
 struct VisibilityPass {
   gpu::Pipeline narrow;  // r32ui
   gpu::Pipeline wide;    // rg32ui
+  gpu::Pipeline narrowOverdraw, wideOverdraw;  // debug variants counting raster writes per pixel
   static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
 };

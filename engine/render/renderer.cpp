@@ -85,6 +85,7 @@ struct Renderer::Impl {
   bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
   CullMode lastCull = CullMode::Frustum;
   gpu::Buffer pyramidReadback;
+  gpu::Buffer overdrawReadback;
   uint32_t pyramidSkipFrames = 0;  // frames left before the pyramid is probed again
   bool usePyramid = true;          // this frame builds the pyramid (set in render())
 
@@ -93,6 +94,7 @@ struct Renderer::Impl {
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Buffer statsReadback;
   gpu::Image ids, depth, color;
+  gpu::Image overdraw;    // r32ui, GENERAL: raster writes per pixel (countOverdraw)
   gpu::Image forwardIds;  // forward path with readIds only (rg32ui: object + 1, triangle); lazily created
   gpu::Buffer colorReadback, idsReadback, drawsReadback;
   std::unique_ptr<gpu::TimestampPool> timestamps;
@@ -125,6 +127,7 @@ struct Renderer::Impl {
         {BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -140,7 +143,7 @@ struct Renderer::Impl {
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1}};
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = 4;
@@ -181,6 +184,16 @@ struct Renderer::Impl {
     const VkDeviceSize pixels = VkDeviceSize(width) * height;
     colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
     forwardIds.reset();
+    overdrawReadback.reset();
+    overdraw = gpu::Image(device, VK_FORMAT_R32_UINT, width, height,
+                          VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                          VK_IMAGE_ASPECT_COLOR_BIT);
+    {
+      VkCommandBuffer one = device.beginOneShot();
+      gpu::imageBarrier(one, overdraw, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                        VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
+      device.submitOneShot(one);
+    }
     idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::HostVisible);
     config.width = width;
@@ -219,6 +232,11 @@ struct Renderer::Impl {
     x.dstBinding = BINDING_COLOR;
     x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
     x.pImageInfo = &colorInfo;
+    w.push_back(x);
+    VkDescriptorImageInfo overdrawInfo{VK_NULL_HANDLE, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL};
+    x.dstBinding = BINDING_OVERDRAW;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    x.pImageInfo = &overdrawInfo;
     w.push_back(x);
     VkDescriptorImageInfo pyramidInfo{sampler, pyramid.pyramid().view(), VK_IMAGE_LAYOUT_GENERAL};
     x.dstBinding = BINDING_PYRAMID;
@@ -356,6 +374,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     in.maxDraws = capacity;
     in.drawBase = drawBase;
     in.clear = clear;
+    in.countOverdraw = options.countOverdraw;
     visibility.record(cmd, pipelineLayout, set, in);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
@@ -449,6 +468,14 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   beginCmd(cmd);
   timestamps->reset(cmd);
   if (!frozen) vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);  // frozen: keep the counts
+  if (options.countOverdraw) {
+    VkClearColorValue zero{};
+    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, overdraw.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
   if (historyDirty) {
     vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
     historyDirty = false;
@@ -496,7 +523,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
     }
     forward.record(cmd, pipelineLayout, set, color, kBackground, depth, gpuScene.indices.handle(), fdraws,
-                   options.readIds ? &forwardIds : nullptr);
+                   options.readIds ? &forwardIds : nullptr, options.countOverdraw);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
     st.targetBytesPerPixel = 4 /*depth*/ + 8 /*colour*/;
@@ -550,6 +577,18 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
                       VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  if (options.countOverdraw) {
+    if (!overdrawReadback)
+      overdrawReadback = gpu::Buffer(device, VkDeviceSize(w) * h * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                     gpu::MemoryUse::HostVisible);
+    gpu::imageBarrier(cmd, overdraw, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, overdraw, overdrawReadback);
+    gpu::imageBarrier(cmd, overdraw, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
   }
   if (readIds && options.path == RenderPath::Visbuf) {
     gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
@@ -624,6 +663,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
       result.pyramid.push_back({lw, lh, std::vector<float>(p, p + size_t(lw) * lh)});
       p += size_t(lw) * lh;
     }
+  }
+  if (options.countOverdraw) {
+    const uint32_t* o = static_cast<const uint32_t*>(overdrawReadback.mapped());
+    result.overdraw.assign(o, o + pixels);
   }
   if (readIds && options.path == RenderPath::Forward) {  // already (object + 1, triangle)
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());

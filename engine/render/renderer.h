@@ -44,6 +44,7 @@ struct FrameOptions {
   bool freezeCulling = false;   // visbuf: redraw the last culled frame's draw lists (no cull, no pyramid), so
                                 // the camera can move on and show what that frame culled
   bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
+  bool countOverdraw = false;   // debug: count raster writes per pixel (FrameResult.overdraw)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };
@@ -96,6 +97,7 @@ struct FrameResult {
     std::vector<float> depth;        // reverse-Z, row-major
   };
   std::vector<PyramidLevel> pyramid;   // with readPyramid: level 0 (full resolution) first
+  std::vector<uint32_t> overdraw;      // with countOverdraw: depth-test-passing fragments per pixel
   FrameStats stats;
 };
 

@@ -52,5 +52,6 @@
 #define BINDING_COLOR 9      // rgba16f output image
 #define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
 #define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
+#define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
 
 #endif

@@ -158,3 +158,32 @@ TEST(Renderer, WideAndNarrowIdsAgree) {
   EXPECT_EQ(a->color, b->color);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
+
+// The overdraw debug counter agrees with the IDs: every covered pixel was written at least once,
+// uncovered pixels never, in both paths.
+TEST(Renderer, OverdrawCountsAgreeWithCoverage) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
+  auto r = Renderer::create(dev, scene, {.width = 160, .height = 120});
+  ASSERT_TRUE(r.ok());
+  for (RenderPath path : {RenderPath::Visbuf, RenderPath::Forward}) {
+    FrameOptions fo;
+    fo.path = path;
+    fo.readIds = path == RenderPath::Visbuf;  // (the forward ID variant and the counter are exclusive)
+    fo.countOverdraw = true;
+    fo.readColor = false;
+    auto f = (*r)->renderFrame(scene.defaultCamera, fo);
+    ASSERT_TRUE(f.ok());
+    ASSERT_EQ(f->overdraw.size(), size_t(160) * 120);
+    uint64_t writes = 0;
+    for (size_t p = 0; p < f->overdraw.size(); ++p) {
+      writes += f->overdraw[p];
+      if (path == RenderPath::Visbuf) {
+        EXPECT_EQ(f->ids[2 * p] != 0, f->overdraw[p] != 0) << "pixel " << p;
+      }
+    }
+    EXPECT_GT(writes, 160u * 60u);
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
