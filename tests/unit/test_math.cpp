@@ -234,3 +234,32 @@ TEST(MeshError, PointTriangleDistanceRegions) {
   EXPECT_NEAR(pointTriangleDistance({0.5, -2, 0}, a, b, c), 2.0, 1e-12);  // edge ab
   EXPECT_NEAR(pointTriangleDistance({1, 1, 0}, a, b, c), std::sqrt(0.5), 1e-12);  // edge bc
 }
+
+// Slivers: triangles 1000x longer than wide, seen in perspective. The reconstruction must stay close to
+// the double-precision solve where a pixel centre actually lies inside.
+TEST(Barycentrics, SliverTrianglesStayAccurate) {
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), wdist(0.5, 20.0);
+  const glm::dvec2 pixel(2.0 / 1920.0, 2.0 / 1080.0);
+  double worst = 0.0;
+  for (int t = 0; t < 2000; ++t) {
+    glm::dvec2 a(u(rng), u(rng)), dir = glm::normalize(glm::dvec2(u(rng), u(rng)));
+    glm::dvec2 n(-dir.y, dir.x);
+    glm::dvec2 s0 = a, s1 = a + dir * 0.5, s2 = a + dir * 0.25 + n * 0.0005;  // 1000:1
+    glm::dvec4 c[3];
+    glm::dvec2 s[3] = {s0, s1, s2};
+    for (int i = 0; i < 3; ++i) {
+      double w = wdist(rng);
+      c[i] = glm::dvec4(s[i] * w, 0.1, w);
+    }
+    glm::dvec3 b(std::abs(u(rng)) + 0.1, std::abs(u(rng)) + 0.1, std::abs(u(rng)) + 0.1);
+    b /= b.x + b.y + b.z;
+    glm::dvec2 ndc = b.x * s0 + b.y * s1 + b.z * s2;
+    glm::dvec3 ref = referenceBarycentrics(c, ndc);
+    gpu::Barycentrics g = gpu::computeBarycentrics(glm::vec4(c[0]), glm::vec4(c[1]), glm::vec4(c[2]), glm::vec2(ndc),
+                                                   glm::vec2(pixel));
+    for (int i = 0; i < 3; ++i) worst = std::max(worst, std::abs(double(g.lambda[i]) - ref[i]));
+  }
+  std::printf("sliver barycentric worst error: %.3g\n", worst);
+  EXPECT_LT(worst, 2e-2);
+}
