@@ -48,4 +48,29 @@ struct BakeCommand {
 void addBakeCommand(CLI::App& app, BakeCommand& cmd);
 int runBake(const BakeCommand& cmd);
 
+// visbuf bench (tools/bench_command.cpp): run time against error over a camera path and a matrix of
+// path x culling x LOD, one scene per object count. Exit codes: 0 ok, 1 bad input / failure, 2 usage,
+// 3 validation messages.
+struct BenchCommand {
+  std::string scene = "field";
+  std::string mesh;                                    // field: instanced mesh file; empty = torus knot
+  uint64_t seed = 1;
+  std::vector<uint32_t> objects;                       // empty: 100,1000 (field, city) or the file's own
+  std::string size = "640x360";
+  uint32_t frames = 4;                                 // measured frames (one path camera each)
+  uint32_t warmup = 1;
+  std::string device = "auto";
+  std::vector<std::string> paths{"visbuf", "forward"};
+  std::vector<std::string> cull{"none", "frustum", "occlusion"};
+  std::vector<std::string> lod{"off", "0.5", "1", "2", "4"};
+  std::string reference = "auto";                      // auto | forward | visbuf-full
+  uint64_t referenceMaxTriangles = 50'000'000;         // auto: forward reference up to this many triangles
+  bool validation = false;
+  std::string output = "bench-out";
+  std::string commandLine;                             // as typed, recorded in the outputs
+};
+
+void addBenchCommand(CLI::App& app, BenchCommand& cmd, int argc, char** argv);
+int runBench(const BenchCommand& cmd);
+
 }  // namespace visbuf::tools

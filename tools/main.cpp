@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   visbuf::tools::addRenderCommand(app, render);
   visbuf::tools::BakeCommand bake;
   visbuf::tools::addBakeCommand(app, bake);
+  visbuf::tools::BenchCommand bench;
+  visbuf::tools::addBenchCommand(app, bench, argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -20,5 +22,6 @@ int main(int argc, char** argv) {
   }
   if (app.got_subcommand("render")) return visbuf::tools::runRender(render);
   if (app.got_subcommand("bake")) return visbuf::tools::runBake(bake);
+  if (app.got_subcommand("bench")) return visbuf::tools::runBench(bench);
   return 2;
 }

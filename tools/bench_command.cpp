@@ -1,0 +1,608 @@
+// visbuf bench: run time against error. One scene per object count, a deterministic camera path, and the
+// matrix path x cull x LOD rendered in one process on one device (one Renderer per scene size, the
+// occlusion history cleared between configurations). Every configuration's measured frames are compared
+// with a reference rendered once per camera of the path (forward path, no culling, no LOD; visbuf with no
+// culling and no LOD when that would draw too many triangles). Writes bench.json, bench.csv, bench.md and
+// bench.svg (time-vs-PSNR plot with the Pareto front) to the output folder, each atomically.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include "bench_plot.h"
+#include "commands.h"
+#include "core/image_compare.h"
+#include "core/image_io.h"
+#include "gpu/device.h"
+#include "render/renderer.h"
+#include "stats_output.h"
+
+namespace visbuf::tools {
+
+namespace {
+
+std::string shellQuote(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=./,:@%") ==
+                        std::string::npos)
+    return s;
+  std::string out = "'";
+  for (char ch : s) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return out + "'";
+}
+
+}  // namespace
+
+void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
+  for (int i = 0; i < argc; ++i) c.commandLine += (i ? " " : "") + shellQuote(argv[i]);
+  CLI::App* sub = app.add_subcommand(
+      "bench", "time against error: a camera path through a matrix of path x culling x LOD, per scene size");
+  sub->add_option("--scene", c.scene, "field | city | a .gltf/.glb file | a baked pack (.vbp)")->capture_default_str();
+  sub->add_option("--objects", c.objects,
+                  "object counts, one scene each (default: 100,1000 for field and city; a file's own objects)")
+      ->delimiter(',');
+  sub->add_option("--seed", c.seed, "scene generator seed")->capture_default_str();
+  sub->add_option("--mesh", c.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
+  sub->add_option("--size", c.size, "image size WxH")->capture_default_str();
+  sub->add_option("--frames", c.frames, "measured frames per configuration (one camera of the path each)")
+      ->check(CLI::Range(1u, 10000u))
+      ->capture_default_str();
+  sub->add_option("--warmup", c.warmup, "warm-up frames before them (the path's preceding cameras)")
+      ->check(CLI::Range(0u, 10000u))
+      ->capture_default_str();
+  sub->add_option("--device", c.device, "auto | cpu | gpu | N")->capture_default_str();
+  sub->add_option("--paths", c.paths, "render paths: visbuf,forward")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"visbuf", "forward"}));
+  sub->add_option("--cull", c.cull, "culling modes: none,frustum,occlusion (forward: no occlusion, skipped)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"none", "frustum", "occlusion"}));
+  sub->add_option("--lod", c.lod, "LOD thresholds in pixels of projected error; off = full detail")->delimiter(',');
+  sub->add_option("--reference", c.reference,
+                  "auto (forward with no culling and no LOD unless the scene has more than --reference-max-triangles "
+                  "triangles, then visbuf with no culling and no LOD) | forward | visbuf-full")
+      ->check(CLI::IsMember({"auto", "forward", "visbuf-full"}))
+      ->capture_default_str();
+  sub->add_option("--reference-max-triangles", c.referenceMaxTriangles,
+                  "--reference auto: full-detail triangles above which the forward reference is too slow")
+      ->capture_default_str();
+  sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
+  sub->add_option("-o,--output", c.output, "output folder (bench.json, bench.csv, bench.md, bench.svg)")
+      ->capture_default_str();
+}
+
+namespace {
+
+int fail(const Error& e) {
+  std::fprintf(stderr, "visbuf bench: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  return 1;
+}
+
+// ---- camera path ---------------------------------------------------------------------------------------
+
+// Cameras for frames -warmup .. frames-1 (index 0 of the result is the first warm-up frame). The path is a
+// function of t = frame / frames only, so it is reproducible and the warm-up frames lead into it.
+// city: a walk down the default camera's avenue, looking left and right. Anything else: a 90-degree arc
+// around the centre of the scene's bounds, starting at the default camera and spiralling in to 55% of its
+// horizontal distance, rising by up to 20% of it mid-path, always looking at the centre.
+std::vector<Camera> cameraPath(const Scene& scene, uint32_t warmup, uint32_t frames) {
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (const Object& o : scene.objects) {
+    glm::dvec4 s = objectBoundsWorld(scene, o);
+    lo = glm::min(lo, glm::dvec3(s) - s.w);
+    hi = glm::max(hi, glm::dvec3(s) + s.w);
+  }
+  if (scene.objects.empty()) lo = hi = glm::dvec3(0.0);
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double boundsRadius = std::max(0.5 * glm::length(hi - lo), 1e-3);
+  const Camera& base = scene.defaultCamera;
+  std::vector<Camera> path;
+  for (int i = -int(warmup); i < int(frames); ++i) {
+    const double t = double(i) / double(frames);
+    Camera c = base;
+    if (scene.name == "city") {
+      glm::dvec3 dir = base.target - base.position;
+      dir.y = 0.0;
+      dir = glm::length(dir) > 0 ? glm::normalize(dir) : glm::dvec3(0, 0, -1);
+      const double walk = std::min(150.0, 0.3 * boundsRadius);
+      c.position = base.position + dir * (walk * t) + glm::dvec3(0.0, 0.5 * std::sin(6.283185307 * t), 0.0);
+      const double yaw = 0.6 * std::sin(6.283185307 * t);
+      const glm::dvec3 look(dir.x * std::cos(yaw) - dir.z * std::sin(yaw), 0.05,
+                            dir.x * std::sin(yaw) + dir.z * std::cos(yaw));
+      c.target = c.position + look;
+    } else {
+      glm::dvec3 rel = base.position - centre;
+      double r0 = glm::length(glm::dvec2(rel.x, rel.z));
+      if (r0 < 1e-6 * boundsRadius) r0 = 2.0 * boundsRadius, rel = glm::dvec3(0, 0, r0);
+      const double az0 = std::atan2(rel.x, rel.z);
+      const double az = az0 + 1.5707963268 * t;
+      const double r = r0 * (1.0 - 0.45 * t);
+      const double y = rel.y + 0.2 * r0 * std::sin(3.14159265359 * t);
+      c.position = centre + glm::dvec3(r * std::sin(az), y, r * std::cos(az));
+      c.target = centre;
+    }
+    path.push_back(c);
+  }
+  return path;
+}
+
+// ---- statistics -----------------------------------------------------------------------------------------
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+double p95(std::vector<double> v) {  // nearest rank
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  size_t rank = size_t(std::ceil(0.95 * double(v.size())));
+  return v[std::clamp<size_t>(rank, 1, v.size()) - 1];
+}
+
+nlohmann::json dbJson(double db) { return std::isfinite(db) ? nlohmann::json(db) : nlohmann::json("inf"); }
+std::string dbText(double db) { return std::isfinite(db) ? fmt::format("{:.2f}", db) : std::string("inf"); }
+
+struct Config {
+  RenderPath path;
+  CullMode cull;
+  float lod;          // <= 0: off
+  std::string lodLabel;
+};
+
+struct Row {
+  uint32_t objects = 0;
+  Config config;
+  std::vector<std::pair<std::string, std::pair<double, double>>> passMs;  // name -> median, p95
+  double frameMedian = 0, frameP95 = 0, gpuMedian = 0, gpuP95 = 0, cpuMedian = 0, wallMedian = 0;
+  double trianglesMedian = 0, drawnMedian = 0;
+  uint64_t sceneBytes = 0, targetBytesPerPixel = 0;
+  double psnrMean = INFINITY, psnrWorst = INFINITY, maxAbs = 0, meanAbs = 0, differingFraction = 0;
+  std::optional<uint64_t> idMismatches;  // pixels over all measured frames; empty: not comparable
+  uint64_t idPixels = 0;
+  std::string reference;
+  bool pareto = false;
+};
+
+struct SceneInfo {
+  uint32_t objects = 0;  // as asked (0: the file's own)
+  uint32_t sceneObjects = 0;
+  uint64_t triangles = 0;
+  std::string reference;
+  std::string referenceReason;
+  double referenceFrameMsMedian = 0;
+};
+
+std::string lodText(float lod) { return lod > 0 ? fmt::format("{:g}", lod) : std::string("off"); }
+
+Status writeTextFile(const std::string& path, const std::string& text) {
+  const std::string tmp = path + fmt::format(".tmp{}", getpid());
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) return makeError(ErrorCode::IoError, fmt::format("{}: cannot open for writing", path));
+    f << text;
+    if (!f.flush()) return makeError(ErrorCode::IoError, fmt::format("{}: write failed", path));
+  }
+  return commitFile(tmp, path);
+}
+
+std::string utcNow() {
+  std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+uint64_t countIdMismatches(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
+  if (a.size() != b.size()) return std::max(a.size(), b.size()) / 2;
+  uint64_t n = 0;
+  for (size_t i = 0; i + 1 < a.size(); i += 2) n += (a[i] != b[i] || a[i + 1] != b[i + 1]) ? 1 : 0;
+  return n;
+}
+
+}  // namespace
+
+int runBench(const BenchCommand& c) {
+  auto size = parseSize(c.size);
+  if (!size) return fail(size.error());
+  auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
+  if (!devOptions) return fail(devOptions.error());
+  if (c.paths.empty() || c.cull.empty() || c.lod.empty())
+    return fail({ErrorCode::InvalidArgument, "--paths, --cull and --lod need at least one value each"});
+
+  // The configuration matrix.
+  std::vector<float> lods;
+  for (const std::string& s : c.lod) {
+    if (s == "off") {
+      lods.push_back(0.0f);
+      continue;
+    }
+    char* end = nullptr;
+    const float v = std::strtof(s.c_str(), &end);
+    if (s.empty() || *end != '\0' || !std::isfinite(v) || v < 0.0f)
+      return fail({ErrorCode::InvalidArgument, fmt::format("--lod '{}': expected off or a threshold >= 0 px", s)});
+    lods.push_back(v);
+  }
+  std::vector<Config> configs;
+  nlohmann::json skipped = nlohmann::json::array();
+  for (const std::string& p : c.paths)
+    for (const std::string& cu : c.cull) {
+      const RenderPath path = p == "forward" ? RenderPath::Forward : RenderPath::Visbuf;
+      const CullMode cull = cu == "none" ? CullMode::None : cu == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
+      if (path == RenderPath::Forward && cull == CullMode::Occlusion) {
+        skipped.push_back({{"path", p}, {"cull", cu},
+                           {"reason", "the forward path culls on the CPU by frustum only (would repeat frustum)"}});
+        continue;
+      }
+      for (float l : lods) configs.push_back({path, cull, l, lodText(l)});
+    }
+  if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
+
+  std::vector<uint32_t> objectCounts = c.objects;
+  if (objectCounts.empty()) {
+    if (c.scene == "field" || c.scene == "city")
+      objectCounts = {100, 1000};
+    else
+      objectCounts = {0};
+  }
+
+  std::error_code ec;
+  std::filesystem::create_directories(c.output, ec);
+  if (ec) return fail({ErrorCode::IoError, fmt::format("{}: cannot create the output folder", c.output)});
+
+  auto device = gpu::Device::create(*devOptions);
+  if (!device) return fail(device.error());
+  const std::string deviceName = (*device)->name();
+  std::printf("visbuf bench: %s, %zu configurations x %zu scene sizes, %u+%u frames each, device %s\n",
+              c.scene.c_str(), configs.size(), objectCounts.size(), c.warmup, c.frames, deviceName.c_str());
+  for (const auto& s : skipped)
+    std::printf("  skipped %s/%s: %s\n", s["path"].get<std::string>().c_str(), s["cull"].get<std::string>().c_str(),
+                s["reason"].get<std::string>().c_str());
+
+  std::vector<Row> rows;
+  std::vector<SceneInfo> scenes;
+  const uint32_t pixels = size->first * size->second;
+  for (uint32_t objects : objectCounts) {
+    SceneOptions so;
+    so.scene = c.scene;
+    so.objects = objects;
+    so.seed = c.seed;
+    so.mesh = c.mesh;
+    auto scene = loadScene(so);
+    if (!scene) return fail(scene.error());
+    RendererConfig rc;
+    rc.width = size->first;
+    rc.height = size->second;
+    auto renderer = Renderer::create(**device, *scene, rc);
+    if (!renderer) return fail(renderer.error());
+    Renderer& r = **renderer;
+    const std::vector<Camera> path = cameraPath(*scene, c.warmup, c.frames);
+
+    SceneInfo info;
+    info.objects = objects;
+    info.sceneObjects = uint32_t(scene->objects.size());
+    info.triangles = scene->totalTriangles();
+    const bool forwardRef = c.reference == "forward" ||
+                            (c.reference == "auto" && info.triangles <= c.referenceMaxTriangles);
+    info.reference = forwardRef ? "forward-full" : "visbuf-full";
+    info.referenceReason = c.reference != "auto" ? "asked for (--reference)"
+                           : forwardRef
+                               ? fmt::format("{} triangles <= --reference-max-triangles {}", info.triangles,
+                                             c.referenceMaxTriangles)
+                               : fmt::format("{} triangles > --reference-max-triangles {}: forward would be too slow",
+                                             info.triangles, c.referenceMaxTriangles);
+    const bool needFullIds = std::any_of(configs.begin(), configs.end(), [](const Config& k) {
+      return k.path == RenderPath::Visbuf && k.lod <= 0.0f;
+    });
+    std::printf("scene %s, %u objects, %llu full-detail triangles; reference: %s (%s)\n", scene->name.c_str(),
+                info.sceneObjects, (unsigned long long)info.triangles, info.reference.c_str(),
+                info.referenceReason.c_str());
+
+    // References, once per measured camera.
+    std::vector<std::vector<float>> refColor(c.frames);
+    std::vector<std::vector<uint32_t>> fullIds(c.frames);
+    std::vector<double> refMs;
+    r.clearHistory();
+    for (uint32_t f = 0; f < c.frames; ++f) {
+      const Camera& cam = path[c.warmup + f];
+      FrameOptions ro;
+      ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
+      ro.cull = CullMode::None;
+      ro.lodErrorPixels = 0.0f;
+      ro.readColor = true;
+      ro.readIds = !forwardRef && needFullIds;
+      auto frame = r.renderFrame(cam, ro);
+      if (!frame) return fail(frame.error());
+      refColor[f] = std::move(frame->color);
+      if (ro.readIds) fullIds[f] = std::move(frame->ids);
+      refMs.push_back(frame->stats.gpuMs + frame->stats.cpuRecordMs);
+      if (forwardRef && needFullIds) {
+        FrameOptions io = ro;
+        io.path = RenderPath::Visbuf;
+        io.readColor = false;
+        io.readIds = true;
+        auto idFrame = r.renderFrame(cam, io);
+        if (!idFrame) return fail(idFrame.error());
+        fullIds[f] = std::move(idFrame->ids);
+      }
+    }
+    info.referenceFrameMsMedian = median(refMs);
+
+    for (const Config& k : configs) {
+      r.clearHistory();
+      const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f;
+      std::vector<FrameStats> measured;
+      std::vector<ImageError> errors;
+      uint64_t mismatches = 0;
+      for (size_t i = 0; i < path.size(); ++i) {
+        const bool measure = i >= c.warmup;
+        FrameOptions fo;
+        fo.path = k.path;
+        fo.cull = k.cull;
+        fo.lodErrorPixels = k.lod;
+        fo.readColor = measure;
+        fo.readIds = measure && idComparable;
+        auto frame = r.renderFrame(path[i], fo);
+        if (!frame) return fail(frame.error());
+        if (!measure) continue;
+        const size_t f = i - c.warmup;
+        measured.push_back(frame->stats);
+        errors.push_back(compareColor(frame->color, refColor[f]));
+        if (idComparable) mismatches += countIdMismatches(frame->ids, fullIds[f]);
+      }
+      Row row;
+      row.objects = objects;
+      row.config = k;
+      row.reference = info.reference;
+      std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
+      std::vector<std::string> passNames;
+      for (const FrameStats& s : measured) {
+        frameMs.push_back(s.gpuMs + s.cpuRecordMs);
+        gpu.push_back(s.gpuMs);
+        cpu.push_back(s.cpuRecordMs);
+        wall.push_back(s.wallMs);
+        tris.push_back(double(s.trianglesDrawn));
+        drawn.push_back(double(s.drawsRendered));
+        for (const auto& [name, ms] : s.passMs)
+          if (std::find(passNames.begin(), passNames.end(), name) == passNames.end()) passNames.push_back(name);
+      }
+      for (const std::string& name : passNames) {  // a pass a frame did not run (a skipped pyramid) took 0 ms
+        std::vector<double> v;
+        for (const FrameStats& s : measured) {
+          double ms = 0.0;
+          for (const auto& [n, t] : s.passMs)
+            if (n == name) ms += t;
+          v.push_back(ms);
+        }
+        row.passMs.push_back({name, {median(v), p95(v)}});
+      }
+      row.frameMedian = median(frameMs);
+      row.frameP95 = p95(frameMs);
+      row.gpuMedian = median(gpu);
+      row.gpuP95 = p95(gpu);
+      row.cpuMedian = median(cpu);
+      row.wallMedian = median(wall);
+      row.trianglesMedian = median(tris);
+      row.drawnMedian = median(drawn);
+      row.sceneBytes = measured.back().sceneBytes;
+      row.targetBytesPerPixel = measured.back().targetBytesPerPixel;
+      // PSNR over all measured frames = that of their mean squared error; worst = lowest frame.
+      double mseSum = 0.0;
+      row.psnrWorst = INFINITY;
+      for (const ImageError& e : errors) {
+        mseSum += std::isfinite(e.psnr) ? std::pow(10.0, -e.psnr / 10.0) : 0.0;
+        row.psnrWorst = std::min(row.psnrWorst, e.psnr);
+        row.maxAbs = std::max(row.maxAbs, e.maxAbs);
+        row.meanAbs += e.meanAbs / double(errors.size());
+        row.differingFraction += e.differingFraction / double(errors.size());
+      }
+      const double mse = mseSum / double(errors.size());
+      row.psnrMean = mse > 0 ? 10.0 * std::log10(1.0 / mse) : INFINITY;
+      if (idComparable) {
+        row.idMismatches = mismatches;
+        row.idPixels = uint64_t(pixels) * measured.size();
+      }
+      std::printf("  %-7s %-9s lod %-4s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+                  renderPathName(k.path), cullModeName(k.cull), k.lodLabel.c_str(), row.frameMedian, row.frameP95,
+                  row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
+                  row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
+      std::fflush(stdout);
+      rows.push_back(std::move(row));
+    }
+    scenes.push_back(info);
+  }
+
+  // Pareto front per scene size: lower frame time, higher PSNR (mean; within 0.1 dB counts as equal).
+  for (uint32_t objects : objectCounts) {
+    std::vector<size_t> idx;
+    std::vector<double> t, q;
+    for (size_t i = 0; i < rows.size(); ++i)
+      if (rows[i].objects == objects) {
+        idx.push_back(i);
+        t.push_back(rows[i].frameMedian);
+        q.push_back(std::isfinite(rows[i].psnrMean) ? rows[i].psnrMean : 1e300);
+      }
+    std::vector<bool> front = paretoFront(t, q);
+    for (size_t j = 0; j < idx.size(); ++j) rows[idx[j]].pareto = front[j];
+  }
+
+  // Every pass name, in first-seen order (CSV columns).
+  std::vector<std::string> passNames;
+  for (const Row& row : rows)
+    for (const auto& p : row.passMs)
+      if (std::find(passNames.begin(), passNames.end(), p.first) == passNames.end()) passNames.push_back(p.first);
+  auto passOf = [](const Row& row, const std::string& name) -> const std::pair<double, double>* {
+    for (const auto& p : row.passMs)
+      if (p.first == name) return &p.second;
+    return nullptr;
+  };
+  auto objectsLabel = [](uint32_t n) { return n ? fmt::format("{}", n) : std::string("file"); };
+
+  const std::string date = utcNow();
+  // bench.json
+  nlohmann::json j;
+  j["command"] = c.commandLine;
+  j["device"] = deviceName;
+  j["date"] = date;
+  j["scene"] = c.scene;
+  j["mesh"] = c.mesh;
+  j["seed"] = c.seed;
+  j["width"] = size->first;
+  j["height"] = size->second;
+  j["frames"] = c.frames;
+  j["warmup"] = c.warmup;
+  j["cameraPath"] = c.scene == "city"
+                        ? "walk from the default camera along its avenue (min(150, 0.3 x bounds radius)), yaw +-0.6 rad"
+                        : "90-degree arc around the bounds centre from the default camera, radius 100% -> 55%, "
+                          "height +20% at mid-path";
+  j["frameMs"] = "GPU time of all passes + CPU time to cull (forward) and record; medians over measured frames";
+  j["psnrMean"] = "PSNR of the mean squared error over the measured frames (\"inf\": identical)";
+  j["skipped"] = skipped;
+  nlohmann::json sj = nlohmann::json::array();
+  for (const SceneInfo& s : scenes)
+    sj.push_back({{"objects", s.objects},
+                  {"sceneObjects", s.sceneObjects},
+                  {"fullDetailTriangles", s.triangles},
+                  {"reference", s.reference},
+                  {"referenceReason", s.referenceReason},
+                  {"referenceFrameMsMedian", s.referenceFrameMsMedian}});
+  j["scenes"] = sj;
+  nlohmann::json rj = nlohmann::json::array();
+  for (const Row& row : rows) {
+    nlohmann::json x;
+    x["objects"] = row.objects;
+    x["path"] = renderPathName(row.config.path);
+    x["cull"] = cullModeName(row.config.cull);
+    x["lod"] = row.config.lodLabel;
+    x["lodErrorPixels"] = row.config.lod;
+    nlohmann::json passes = nlohmann::json::object();
+    for (const auto& [name, v] : row.passMs) passes[name] = {{"median", v.first}, {"p95", v.second}};
+    x["passMs"] = passes;
+    x["frameMs"] = {{"median", row.frameMedian}, {"p95", row.frameP95}};
+    x["gpuMs"] = {{"median", row.gpuMedian}, {"p95", row.gpuP95}};
+    x["cpuRecordMs"] = {{"median", row.cpuMedian}};
+    x["wallMs"] = {{"median", row.wallMedian}};
+    x["trianglesDrawn"] = row.trianglesMedian;
+    x["objectsDrawn"] = row.drawnMedian;
+    x["sceneBytes"] = row.sceneBytes;
+    x["targetBytesPerPixel"] = row.targetBytesPerPixel;
+    x["error"] = {{"psnrMean", dbJson(row.psnrMean)},
+                  {"psnrWorst", dbJson(row.psnrWorst)},
+                  {"maxAbs", row.maxAbs},
+                  {"meanAbs", row.meanAbs},
+                  {"differingFraction", row.differingFraction}};
+    if (row.idMismatches) {
+      x["idMismatches"] = *row.idMismatches;
+      x["idPixelsCompared"] = row.idPixels;
+    } else {
+      x["idMismatches"] = "n/a";
+    }
+    x["reference"] = row.reference;
+    x["pareto"] = row.pareto;
+    rj.push_back(x);
+  }
+  j["rows"] = rj;
+
+  // bench.csv
+  std::string csv =
+      "scene,objects,path,cull,lod_px,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
+      "cpu_record_ms_median,wall_ms_median,triangles_median,objects_drawn_median,scene_bytes,"
+      "target_bytes_per_pixel,psnr_mean_db,psnr_worst_db,max_abs_error,mean_abs_error,differing_fraction,"
+      "id_mismatches,reference,pareto";
+  for (std::string n : passNames) {  // "depth pyramid" -> pass_depth_pyramid_ms_median
+    std::replace(n.begin(), n.end(), ' ', '_');
+    csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
+  }
+  csv += "\n";
+  for (const Row& row : rows) {
+    csv += fmt::format("{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
+                       c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
+                       renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel, c.frames,
+                       row.frameMedian, row.frameP95, row.gpuMedian, row.gpuP95, row.cpuMedian, row.wallMedian,
+                       row.trianglesMedian, row.drawnMedian, row.sceneBytes, row.targetBytesPerPixel,
+                       dbText(row.psnrMean), dbText(row.psnrWorst), row.maxAbs, row.meanAbs, row.differingFraction,
+                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"), row.reference,
+                       row.pareto ? 1 : 0);
+    for (const std::string& n : passNames) {
+      const auto* p = passOf(row, n);
+      csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
+    }
+    csv += "\n";
+  }
+
+  // bench.md
+  std::string md = fmt::format("`{}`\n\n", c.commandLine);
+  md += fmt::format("{} ({} measured frames after {} warm-up along the camera path, {}x{}), {}. ", deviceName, c.frames,
+                    c.warmup, size->first, size->second, date);
+  md += "frame ms = GPU passes + CPU cull/record (median, p95); PSNR vs the reference: over all measured frames / worst "
+        "frame; ID mism. = pixels whose decoded (object, triangle) differ from visbuf with no culling and no LOD; "
+        "P = on the Pareto front (time vs PSNR; PSNRs within 0.1 dB count as equal).\n\n";
+  for (const SceneInfo& s : scenes)
+    md += fmt::format("- {} objects: {} objects, {} full-detail triangles; reference {} ({:.1f} ms a frame)\n",
+                      objectsLabel(s.objects), s.sceneObjects, s.triangles, s.reference, s.referenceFrameMsMedian);
+  md += "\n| objects | path | cull | LOD px | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | drawn | "
+        "scene MiB | B/px | PSNR dB | worst dB | max err | px > 1/255 | ID mism. | P |\n";
+  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const Row& row : rows) {
+    std::string passes;
+    for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
+    md += fmt::format("| {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} | {} | {} | "
+                      "{:.4f} | {:.3f}% | {} | {} |\n",
+                      objectsLabel(row.objects), renderPathName(row.config.path), cullModeName(row.config.cull),
+                      row.config.lodLabel, row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
+                      row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, dbText(row.psnrMean),
+                      dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
+                      row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),
+                      row.pareto ? "P" : "");
+  }
+  if (!skipped.empty()) {
+    md += "\nSkipped: ";
+    for (size_t i = 0; i < skipped.size(); ++i)
+      md += fmt::format("{}{}/{}: {}", i ? "; " : "", skipped[i]["path"].get<std::string>(),
+                        skipped[i]["cull"].get<std::string>(), skipped[i]["reason"].get<std::string>());
+    md += ".\n";
+  }
+
+  // bench.svg
+  std::vector<PlotPanel> panels;
+  for (const SceneInfo& s : scenes) {
+    PlotPanel panel;
+    panel.title = fmt::format("{}, {} objects, {}x{}, reference {}", c.scene, objectsLabel(s.objects), size->first,
+                              size->second, s.reference);
+    for (const Row& row : rows)
+      if (row.objects == s.objects)
+        panel.points.push_back({renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel,
+                                row.frameMedian, row.psnrMean, row.pareto});
+    panels.push_back(std::move(panel));
+  }
+  const std::string svg = renderBenchSvg(panels, fmt::format("visbuf bench: frame time against error ({})", deviceName),
+                                         fmt::format("{}   [{}]", c.commandLine, date));
+
+  const std::filesystem::path out(c.output);
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"bench.csv", csv}, {"bench.md", md}, {"bench.svg", svg}}) {
+    Status s = writeTextFile((out / name).string(), text);
+    if (!s) return fail(s.error());
+  }
+  Status s = writeJsonFile((out / "bench.json").string(), j);
+  if (!s) return fail(s.error());
+  std::printf("wrote %s/bench.{json,csv,md,svg}: %zu rows\n", c.output.c_str(), rows.size());
+
+  if ((*device)->validationEnabled() && (*device)->validationMessages() > 0) {
+    std::fprintf(stderr, "visbuf bench: %u validation message(s)\n", (*device)->validationMessages());
+    return 3;
+  }
+  return 0;
+}
+
+}  // namespace visbuf::tools
