@@ -3,6 +3,7 @@
 // against the original surface, not accumulated guesswork.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include <fmt/format.h>
 #include <meshoptimizer.h>
@@ -42,6 +43,41 @@ glm::vec3 octDecode(uint32_t packed) {
   n.y += n.y >= 0.0f ? -t : t;
   return glm::normalize(n);
 }
+
+namespace {
+
+// meshopt_simplifySloppy (and simplification across welded seams) may keep, at a corner shared by faces
+// with different normals, the vertex of another face: a box's top face would then be lit with the
+// front face's normal while its geometry (and so the measured error) is exact. Each corner is moved to
+// the vertex at the same position whose normal best matches the triangle's own geometric normal.
+void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std::vector<uint32_t>& positionShadow,
+                            uint32_t* indices, size_t indexCount) {
+  // Group the vertices sharing a position (shadow index = first vertex with that position).
+  std::vector<std::vector<uint32_t>> groups(vertices.size());
+  for (uint32_t v = 0; v < vertices.size(); ++v) groups[positionShadow[v]].push_back(v);
+  auto pos = [&](uint32_t v) { return glm::vec3(vertices[v].px, vertices[v].py, vertices[v].pz); };
+  for (size_t t = 0; t + 2 < indexCount; t += 3) {
+    glm::vec3 n = glm::cross(pos(indices[t + 1]) - pos(indices[t]), pos(indices[t + 2]) - pos(indices[t]));
+    if (!(glm::dot(n, n) > 0.0f)) continue;
+    n = glm::normalize(n);
+    for (int k = 0; k < 3; ++k) {
+      const std::vector<uint32_t>& group = groups[positionShadow[indices[t + k]]];
+      if (group.size() < 2) continue;
+      uint32_t best = indices[t + k];
+      float bestDot = glm::dot(octDecode(vertices[best].normal), n);
+      for (uint32_t c : group) {
+        float d = glm::dot(octDecode(vertices[c].normal), n);
+        if (d > bestDot + 1e-4f) {
+          best = c;
+          bestDot = d;
+        }
+      }
+      indices[t + k] = best;
+    }
+  }
+}
+
+}  // namespace
 
 Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options) {
   const size_t vertexCount = source.positions.size();
@@ -103,12 +139,23 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
 
   const float scale = meshopt_simplifyScale(pos, unique, stride);
   std::vector<uint32_t> scratch(indexCount);
-  // Position-only welding: attribute seams (UV or normal splits) are borders to meshopt_simplify and
-  // stall it early; simplifying the shadow index buffer lets coarse levels cross them (a level then
-  // uses one representative vertex's attributes at a seam, which the measured error does not see but
-  // only coarse, distant levels are affected).
+  // Welding by position + normal: UV/colour seams are borders to meshopt_simplify and stall it early;
+  // the shadow index buffer lets coarse levels cross them while vertices whose normals differ (hard
+  // edges, e.g. box corners) stay separate, so no level ever borrows another face's normal. Only UV and
+  // colour may come from a representative vertex along a crossed seam.
   std::vector<uint32_t> shadow(indexCount);
-  meshopt_generateShadowIndexBuffer(shadow.data(), lod0.data(), indexCount, pos, unique, sizeof(float) * 3, stride);
+  static_assert(offsetof(gpu::Vertex, normal) == 12, "position + normal are the first 16 bytes");
+  meshopt_generateShadowIndexBuffer(shadow.data(), lod0.data(), indexCount, mesh.vertices.data(), unique,
+                                    16, stride);
+  // Per vertex: the first vertex with the same position (for repairCornerAttributes).
+  std::vector<uint32_t> positionShadow((unique + 2) / 3 * 3);  // the API takes whole triangles
+  {
+    std::vector<uint32_t> identity(positionShadow.size(), 0);
+    for (uint32_t v = 0; v < unique; ++v) identity[v] = v;
+    meshopt_generateShadowIndexBuffer(positionShadow.data(), identity.data(), identity.size(), mesh.vertices.data(),
+                                      unique, sizeof(float) * 3, stride);
+    positionShadow.resize(unique);
+  }
   size_t previous = indexCount;
   float previousError = 0.0f;
   while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
@@ -125,6 +172,7 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
                                      &err);
     }
     if (count == 0 || count > previous * options.minReduction) break;  // no real reduction: chain ends
+    repairCornerAttributes(mesh.vertices, positionShadow, scratch.data(), count);
     meshopt_optimizeVertexCache(scratch.data(), scratch.data(), count, unique);
     // Record the measured two-sided deviation from the full surface (meshoptimizer's estimate, in
     // particular simplifySloppy's, can be far below what the silhouette really loses), never less than
