@@ -553,6 +553,15 @@ class Importer {
 
   Result<DecodedPrimitive> decodePrimitive(int mesh, int primitive);
   Result<const std::vector<DecodedPrimitive>*> decodedMesh(int mesh);
+  // The mesh node `nodeIndex` instances, decoded, with its effective morph weights (the node's own, else
+  // the mesh's defaults). mesh == nullptr when the node has no mesh.
+  struct NodeMesh {
+    std::string where;  // "file: node N 'name'" for messages
+    const tinygltf::Mesh* mesh = nullptr;
+    const std::vector<DecodedPrimitive>* prims = nullptr;
+    const std::vector<double>* weights = nullptr;
+  };
+  Result<NodeMesh> nodeMesh(int nodeIndex);
 
   Result<glm::dmat4> localMatrix(int node);
   Status emitNode(int node, const glm::dmat4& world, MeshSource* out);
@@ -1215,18 +1224,32 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
   return {};
 }
 
-Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* out) {
+Result<Importer::NodeMesh> Importer::nodeMesh(int nodeIndex) {
   const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
-  if (node.mesh < 0) return {};
-  const std::string nodeWhere = path_ + ": node " + str(nodeIndex) + named(node.name);
+  NodeMesh out;
+  out.where = path_ + ": node " + str(nodeIndex) + named(node.name);
+  if (node.mesh < 0) return out;
   if (static_cast<size_t>(node.mesh) >= model_.meshes.size()) {
-    return malformed(nodeWhere + ": mesh " + str(node.mesh) + " does not exist");
+    return malformed(out.where + ": mesh " + str(node.mesh) + " does not exist");
   }
-  const tinygltf::Mesh& mesh = model_.meshes[static_cast<size_t>(node.mesh)];
+  out.mesh = &model_.meshes[static_cast<size_t>(node.mesh)];
   auto prims = decodedMesh(node.mesh);
   if (!prims) return prims.error();
-  const std::vector<double>& weights = node.weights.empty() ? mesh.weights : node.weights;
-  if (!allFinite(weights)) return malformed(nodeWhere + ": non-finite morph weights");
+  out.prims = *prims;
+  out.weights = node.weights.empty() ? &out.mesh->weights : &node.weights;
+  if (!allFinite(*out.weights)) return malformed(out.where + ": non-finite morph weights");
+  return out;
+}
+
+Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* out) {
+  auto resolved = nodeMesh(nodeIndex);
+  if (!resolved) return resolved.error();
+  if (!resolved->mesh) return {};
+  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+  const std::string& nodeWhere = resolved->where;
+  const tinygltf::Mesh& mesh = *resolved->mesh;
+  const std::vector<DecodedPrimitive>* const* prims = &resolved->prims;
+  const std::vector<double>& weights = *resolved->weights;
   for (size_t p = 0; p < (*prims)->size(); ++p) {
     const DecodedPrimitive& prim = (**prims)[p];
     if (prim.skipped) {
@@ -1372,17 +1395,14 @@ Status Importer::importMaterials(ImportedScene* scene) {
 
 // Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
 Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
+  auto resolved = nodeMesh(nodeIndex);
+  if (!resolved) return resolved.error();
+  if (!resolved->mesh) return {};
   const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
-  if (node.mesh < 0) return {};
-  const std::string nodeWhere = path_ + ": node " + str(nodeIndex) + named(node.name);
-  if (static_cast<size_t>(node.mesh) >= model_.meshes.size()) {
-    return malformed(nodeWhere + ": mesh " + str(node.mesh) + " does not exist");
-  }
-  const tinygltf::Mesh& mesh = model_.meshes[static_cast<size_t>(node.mesh)];
-  auto prims = decodedMesh(node.mesh);
-  if (!prims) return prims.error();
-  const std::vector<double>& weights = node.weights.empty() ? mesh.weights : node.weights;
-  if (!allFinite(weights)) return malformed(nodeWhere + ": non-finite morph weights");
+  const std::string& nodeWhere = resolved->where;
+  const tinygltf::Mesh& mesh = *resolved->mesh;
+  const std::vector<DecodedPrimitive>* const* prims = &resolved->prims;
+  const std::vector<double>& weights = *resolved->weights;
 
   const double det = glm::determinant(glm::dmat3(world));
   if (!(std::abs(det) > 0.0)) {
