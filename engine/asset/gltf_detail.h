@@ -1,0 +1,52 @@
+// Internal to engine/asset: tinygltf configured once for the importer's translation units, the small
+// message/range helpers they share, and the container loader. Not installed as public API.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/result.h"
+
+// tinygltf is compiled without image codecs (stb is not a dependency; a geometry importer needs no pixels)
+// and never reads external image files. gltf_container.cpp defines TINYGLTF_IMPLEMENTATION before this
+// include: it is the one translation unit that compiles tinygltf (do NOT link Debian's libtinygltf too).
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wunused-variable"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wdeprecated-declarations"
+#include <tiny_gltf.h>
+#pragma GCC diagnostic pop
+
+namespace visbuf::gltf_detail {
+
+inline constexpr const char* kMeshoptExt = "EXT_meshopt_compression";
+
+// True when [offset, offset + size) lies within [0, limit).
+inline bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
+  return offset <= limit && size <= limit - offset;
+}
+inline std::string str(uint64_t v) { return std::to_string(v); }
+inline std::string str(int v) { return std::to_string(v); }
+// " 'Name'" when the object has a name, "" otherwise: "node 3 'Foo'" / "node 3".
+inline std::string named(const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; }
+inline Error malformed(std::string message) { return makeError(ErrorCode::MalformedInput, std::move(message)); }
+
+// Reads the file ourselves (FileNotFound / IoError), checks and re-packs a GLB container, refuses JSON nested
+// deeper than 512 levels, neutralises EXT_meshopt_compression fallback buffers (tinygltf 2.7 cannot load a
+// buffer without data), then lets tinygltf parse the JSON and load external/data-URI buffers. tinygltf's
+// warnings are appended to `warnings`.
+Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<std::string>* warnings);
+
+}  // namespace visbuf::gltf_detail
