@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 
 namespace visbuf {
@@ -128,21 +129,8 @@ json triangleMesh(int position, std::optional<int> indices = std::nullopt, int m
 
 const std::vector<glm::vec3> kTriangle = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};  // counter-clockwise seen from +Z
 
-class GltfImportTest : public ::testing::Test {
+class GltfImportTest : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    dir_ =
-        fs::temp_directory_path() /
-        ("visbuf_gltf_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-         "_" + std::to_string(rd()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
   std::string writeText(const std::string& name, const std::string& text) {
     const fs::path path = dir_ / name;
     std::ofstream(path, std::ios::binary) << text;
@@ -156,7 +144,6 @@ class GltfImportTest : public ::testing::Test {
   }
   std::string write(const std::string& name, const json& doc) { return writeText(name, doc.dump(1)); }
 
-  fs::path dir_;
 };
 
 glm::vec3 geometricNormal(const MeshSource& m, size_t triangle) {

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 
 namespace visbuf {
@@ -137,17 +138,8 @@ TEST(GltfScene, AlphaBlendModeTest) {
 
 // A synthetic file: one mesh with three primitives (material 0, material 1, no material) used by a plain node
 // and by a mirrored node (scale -1 in x), plus a second plain node using the same mesh.
-class GltfSceneSynthetic : public ::testing::Test {
+class GltfSceneSynthetic : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    dir_ = fs::temp_directory_path() / ("visbuf_gltf_scene_" + std::to_string(rd()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
   fs::path write() {
     // Triangle (0,0,0) (1,0,0) (0,1,0): counter-clockwise seen from +Z, normals +Z.
     const float data[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1};
@@ -195,7 +187,6 @@ class GltfSceneSynthetic : public ::testing::Test {
     std::ofstream(path) << doc.dump();
     return path;
   }
-  fs::path dir_;
 };
 
 TEST_F(GltfSceneSynthetic, MaterialGroupsMirroredVariantsAndDefaultMaterial) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 #include "asset/pack_format.h"
 #include "asset/pack_reader.h"
@@ -181,25 +182,14 @@ Result<Scene> parse(const std::vector<uint8_t>& bytes) {
   return ::testing::AssertionSuccess();
 }
 
-class PackFileTest : public ::testing::Test {
+class PackFileTest : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    dir_ = fs::temp_directory_path() / ("visbuf_pack_test_" + std::to_string(rd()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::permissions(dir_, fs::perms::owner_all, ec);
-    fs::remove_all(dir_, ec);
-  }
   std::vector<std::string> listing() const {
     std::vector<std::string> names;
     for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
   }
-  fs::path dir_;
 };
 
 TEST(PackFormat, Crc32MatchesTheStandardCheckValue) {
