@@ -299,13 +299,14 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
   for (uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& o = scene.objects[i];
     const Mesh& mesh = scene.meshes[o.mesh];
-    glm::dvec4 s = objectBoundsWorld(scene, o);
+    const double scale = maxScaleOf(o.transform);
+    glm::dvec4 s = objectBoundsWorld(scene, o, scale);
     if (options.cull != CullMode::None && !sphereInFrustum(math, camera, glm::dvec3(s), s.w)) {
       ++st.frustumCulled;
       continue;
     }
     double dist = glm::length(glm::dvec3(s) - camera.position) - s.w;
-    uint32_t lod = selectLod(mesh, maxScaleOf(o.transform), dist, math, camera.nearPlane, options.lodErrorPixels);
+    uint32_t lod = selectLod(mesh, scale, dist, math, camera.nearPlane, options.lodErrorPixels);
     const gpu::MeshData& md = gpuScene.meshTable[o.mesh];
     out.push_back({md.lods[lod].indexCount, md.lods[lod].firstIndex, int32_t(md.vertexOffset), i});
     st.trianglesDrawn += md.lods[lod].indexCount / 3;

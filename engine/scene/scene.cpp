@@ -25,9 +25,13 @@ double maxScaleOf(const glm::dmat4& m) {
 }
 
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object) {
+  return objectBoundsWorld(scene, object, maxScaleOf(object.transform));
+}
+
+glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object, double maxScale) {
   const glm::vec4 s = scene.meshes[object.mesh].boundsSphere;
   glm::dvec3 c = glm::dvec3(object.transform * glm::dvec4(glm::dvec3(s), 1.0));
-  return {c, double(s.w) * maxScaleOf(object.transform)};
+  return {c, double(s.w) * maxScale};
 }
 
 Status validateScene(const Scene& scene) {

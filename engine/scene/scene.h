@@ -97,6 +97,8 @@ Status validateScene(const Scene& scene);
 // World-space bounding sphere of an object (double precision, conservative: uses the largest
 // column norm of the 3x3 part as the scale).
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object);
+// The same with maxScaleOf(object.transform) already computed (per-object loops need it twice).
+glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object, double maxScale);
 double maxScaleOf(const glm::dmat4& m);
 
 // Octahedral encoding of a unit normal into 2 x snorm16 (matches octDecode in shaders/common.glsl).
