@@ -12,6 +12,22 @@ layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { 
 layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
 layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
 layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+#if WRITE_ATTRIBUTES
+layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
+
+// The reconstruction itself, for the stress suite's double-precision comparison (config.h: layout).
+void writeAttributes(ivec2 p, ObjectData o, Vertex v0, Vertex v1, Vertex v2, Barycentrics b, vec3 normal) {
+  vec3 l = b.lambda;
+  vec3 pos = l.x * objectToCamera(o, vertexPosition(v0)) + l.y * objectToCamera(o, vertexPosition(v1)) +
+             l.z * objectToCamera(o, vertexPosition(v2));
+  vec4 clip = frame.viewProj * vec4(pos, 1.0);
+  vec2 uv = l.x * vec2(v0.u, v0.v) + l.y * vec2(v1.u, v1.v) + l.z * vec2(v2.u, v2.v);
+  float a[ATTRIBUTE_FLOATS] = float[](pos.x, pos.y, pos.z, clip.z / clip.w, normal.x, normal.y, normal.z, 1.0,
+                                      uv.x, uv.y, l.y, l.z, b.ddx.y, b.ddy.y, b.ddx.z, b.ddy.z);
+  uint base = (uint(p.y) * uint(frame.viewport.x) + uint(p.x)) * ATTRIBUTE_FLOATS;
+  for (int i = 0; i < ATTRIBUTE_FLOATS; ++i) attributes[base + uint(i)] = a[i];
+}
+#endif
 
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -45,4 +61,7 @@ void main() {
   vec4 vc = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
   vec4 baseColor = materials[o.materialIndex].baseColor * vc;
   imageStore(colorOut, p, vec4(shadeSurface(normal, baseColor.rgb), 1.0));
+#if WRITE_ATTRIBUTES
+  writeAttributes(p, o, v0, v1, v2, b, normal);
+#endif
 }

@@ -64,6 +64,9 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   sub->add_option("--cull", c.cull, "culling modes: none,frustum,occlusion (forward: no occlusion, skipped)")
       ->delimiter(',')
       ->check(CLI::IsMember({"none", "frustum", "occlusion"}));
+  sub->add_option("--ids", c.ids, "visbuf ID target: auto (32 bits where they fit), wide (64 bits forced)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"auto", "wide"}));
   sub->add_option("--lod", c.lod, "LOD thresholds in pixels of projected error; off = full detail")->delimiter(',');
   sub->add_option("--reference", c.reference,
                   "auto (forward with no culling and no LOD unless the scene has more than --reference-max-triangles "
@@ -156,7 +159,9 @@ struct Config {
   CullMode cull;
   float lod;          // <= 0: off
   std::string lodLabel;
+  bool wideIds = false;  // visbuf: the 64-bit ID target forced where the renderer would pick 32 bits
 };
+
 
 struct Row {
   uint32_t objects = 0;
@@ -169,6 +174,7 @@ struct Row {
   std::optional<uint64_t> idMismatches;  // pixels over all measured frames; empty: not comparable
   uint64_t idPixels = 0;
   std::string reference;
+  std::string idBits;  // "32" / "64": bits per pixel of the visbuf ID target; "-": forward (none)
   bool pareto = false;
 };
 
@@ -182,17 +188,6 @@ struct SceneInfo {
 };
 
 std::string lodText(float lod) { return lod > 0 ? fmt::format("{:g}", lod) : std::string("off"); }
-
-Status writeTextFile(const std::string& path, const std::string& text) {
-  const std::string tmp = path + fmt::format(".tmp{}", getpid());
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) return makeError(ErrorCode::IoError, fmt::format("{}: cannot open for writing", path));
-    f << text;
-    if (!f.flush()) return makeError(ErrorCode::IoError, fmt::format("{}: write failed", path));
-  }
-  return commitFile(tmp, path);
-}
 
 std::string utcNow() {
   std::time_t now = std::time(nullptr);
@@ -244,7 +239,11 @@ int runBench(const BenchCommand& c) {
                            {"reason", "the forward path culls on the CPU by frustum only (would repeat frustum)"}});
         continue;
       }
-      for (float l : lods) configs.push_back({path, cull, l, lodText(l)});
+      for (float l : lods)
+        for (const std::string& ids : c.ids) {
+          if (path == RenderPath::Forward && ids != c.ids.front()) continue;  // no ID target to vary
+          configs.push_back({path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide"});
+        }
     }
   if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
 
@@ -286,6 +285,14 @@ int runBench(const BenchCommand& c) {
     auto renderer = Renderer::create(**device, *scene, rc);
     if (!renderer) return fail(renderer.error());
     Renderer& r = **renderer;
+    std::unique_ptr<Renderer> wideRenderer;  // --ids wide: the same scene with the 64-bit ID target forced
+    if (std::any_of(configs.begin(), configs.end(), [](const Config& k) { return k.wideIds; })) {
+      RendererConfig wc = rc;
+      wc.forceWideIds = true;
+      auto wr = Renderer::create(**device, *scene, wc);
+      if (!wr) return fail(wr.error());
+      wideRenderer = std::move(*wr);
+    }
     const std::vector<Camera> path = cameraPath(*scene, c.warmup, c.frames);
 
     SceneInfo info;
@@ -339,7 +346,8 @@ int runBench(const BenchCommand& c) {
     info.referenceFrameMsMedian = median(refMs);
 
     for (const Config& k : configs) {
-      r.clearHistory();
+      Renderer& rk = k.wideIds ? *wideRenderer : r;
+      rk.clearHistory();
       const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f;
       std::vector<FrameStats> measured;
       std::vector<ImageError> errors;
@@ -352,7 +360,7 @@ int runBench(const BenchCommand& c) {
         fo.lodErrorPixels = k.lod;
         fo.readColor = measure;
         fo.readIds = measure && idComparable;
-        auto frame = r.renderFrame(path[i], fo);
+        auto frame = rk.renderFrame(path[i], fo);
         if (!frame) return fail(frame.error());
         if (!measure) continue;
         const size_t f = i - c.warmup;
@@ -364,6 +372,7 @@ int runBench(const BenchCommand& c) {
       row.objects = objects;
       row.config = k;
       row.reference = info.reference;
+      row.idBits = k.path != RenderPath::Visbuf ? "-" : rk.idEncoding().wide ? "64" : "32";
       std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
       std::vector<std::string> passNames;
       for (const FrameStats& s : measured) {
@@ -412,8 +421,9 @@ int runBench(const BenchCommand& c) {
         row.idMismatches = mismatches;
         row.idPixels = uint64_t(pixels) * measured.size();
       }
-      std::printf("  %-7s %-9s lod %-4s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
-                  renderPathName(k.path), cullModeName(k.cull), k.lodLabel.c_str(), row.frameMedian, row.frameP95,
+      std::printf("  %-7s %-9s lod %-4s ids %-2s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+                  renderPathName(k.path), cullModeName(k.cull), k.lodLabel.c_str(),
+                  row.idBits.c_str(), row.frameMedian, row.frameP95,
                   row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
                   row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
       std::fflush(stdout);
@@ -485,6 +495,7 @@ int runBench(const BenchCommand& c) {
     x["cull"] = cullModeName(row.config.cull);
     x["lod"] = row.config.lodLabel;
     x["lodErrorPixels"] = row.config.lod;
+    x["idBits"] = row.idBits;
     nlohmann::json passes = nlohmann::json::object();
     for (const auto& [name, v] : row.passMs) passes[name] = {{"median", v.first}, {"p95", v.second}};
     x["passMs"] = passes;
@@ -515,7 +526,7 @@ int runBench(const BenchCommand& c) {
 
   // bench.csv
   std::string csv =
-      "scene,objects,path,cull,lod_px,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
+      "scene,objects,path,cull,lod_px,id_bits,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
       "cpu_record_ms_median,wall_ms_median,triangles_median,objects_drawn_median,scene_bytes,"
       "target_bytes_per_pixel,psnr_mean_db,psnr_worst_db,max_abs_error,mean_abs_error,differing_fraction,"
       "id_mismatches,reference,pareto";
@@ -525,9 +536,10 @@ int runBench(const BenchCommand& c) {
   }
   csv += "\n";
   for (const Row& row : rows) {
-    csv += fmt::format("{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
+    csv += fmt::format("{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
-                       renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel, c.frames,
+                       renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel,
+                       row.idBits, c.frames,
                        row.frameMedian, row.frameP95, row.gpuMedian, row.gpuP95, row.cpuMedian, row.wallMedian,
                        row.trianglesMedian, row.drawnMedian, row.sceneBytes, row.targetBytesPerPixel,
                        dbText(row.psnrMean), dbText(row.psnrWorst), row.maxAbs, row.meanAbs, row.differingFraction,
@@ -550,16 +562,16 @@ int runBench(const BenchCommand& c) {
   for (const SceneInfo& s : scenes)
     md += fmt::format("- {} objects: {} objects, {} full-detail triangles; reference {} ({:.1f} ms a frame)\n",
                       objectsLabel(s.objects), s.sceneObjects, s.triangles, s.reference, s.referenceFrameMsMedian);
-  md += "\n| objects | path | cull | LOD px | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | drawn | "
+  md += "\n| objects | path | cull | LOD px | IDs | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | drawn | "
         "scene MiB | B/px | PSNR dB | worst dB | max err | px > 1/255 | ID mism. | P |\n";
-  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Row& row : rows) {
     std::string passes;
     for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
-    md += fmt::format("| {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} | {} | {} | "
+    md += fmt::format("| {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} | {} | {} | "
                       "{:.4f} | {:.3f}% | {} | {} |\n",
                       objectsLabel(row.objects), renderPathName(row.config.path), cullModeName(row.config.cull),
-                      row.config.lodLabel, row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
+                      row.config.lodLabel, row.idBits, row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
                       row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),

@@ -63,6 +63,7 @@ struct BenchCommand {
   std::vector<std::string> paths{"visbuf", "forward"};
   std::vector<std::string> cull{"none", "frustum", "occlusion"};
   std::vector<std::string> lod{"off", "0.5", "1", "2", "4"};
+  std::vector<std::string> ids{"auto"};                // visbuf ID target: auto (32 bits where they fit), wide
   std::string reference = "auto";                      // auto | forward | visbuf-full
   uint64_t referenceMaxTriangles = 50'000'000;         // auto: forward reference up to this many triangles
   bool validation = false;
@@ -72,5 +73,20 @@ struct BenchCommand {
 
 void addBenchCommand(CLI::App& app, BenchCommand& cmd, int argc, char** argv);
 int runBench(const BenchCommand& cmd);
+
+// visbuf stress (tools/stress_command.cpp): named numerical-stability and scale cases with explicit bounds.
+// Exit codes: 0 every bound holds, 1 a bound failed / bad input, 2 usage, 3 validation messages.
+struct StressCommand {
+  std::vector<std::string> cases;  // empty: all
+  bool reduced = false;
+  std::string device = "auto";
+  bool validation = false;
+  std::string assets = VISBUF_DEFAULT_ASSETS_DIR;
+  std::string output = "stress-out";
+  std::string commandLine;
+};
+
+void addStressCommand(CLI::App& app, StressCommand& cmd, int argc, char** argv);
+int runStress(const StressCommand& cmd);
 
 }  // namespace visbuf::tools

@@ -72,15 +72,19 @@ nlohmann::json statsToJson(const FrameStats& s) {
   return j;
 }
 
-Status writeJsonFile(const std::string& path, const nlohmann::json& json) {
+Status writeTextFile(const std::string& path, const std::string& text) {
   const std::string tmp = path + fmt::format(".tmp{}", getpid());
   {
-    std::ofstream f(tmp);
+    std::ofstream f(tmp, std::ios::binary);
     if (!f) return makeError(ErrorCode::IoError, fmt::format("{}: cannot open for writing", path));
-    f << json.dump(2) << "\n";
+    f << text;
     if (!f.flush()) return makeError(ErrorCode::IoError, fmt::format("{}: write failed", path));
   }
   return commitFile(tmp, path);
+}
+
+Status writeJsonFile(const std::string& path, const nlohmann::json& json) {
+  return writeTextFile(path, json.dump(2) + "\n");
 }
 
 }  // namespace visbuf::tools

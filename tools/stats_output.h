@@ -12,7 +12,8 @@ namespace visbuf::tools {
 
 std::string formatStats(const FrameStats& stats);
 nlohmann::json statsToJson(const FrameStats& stats);
-// Atomic write (temporary file + rename).
+// Atomic writes (temporary file in the same folder + rename).
+Status writeTextFile(const std::string& path, const std::string& text);
 Status writeJsonFile(const std::string& path, const nlohmann::json& json);
 
 }  // namespace visbuf::tools

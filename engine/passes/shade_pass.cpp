@@ -5,12 +5,14 @@
 namespace visbuf::passes {
 
 ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout) {
-  return ShadePass{gpu::createComputePipeline(device, layout, "shade.comp")};
+  return ShadePass{gpu::createComputePipeline(device, layout, "shade.comp"),
+                   gpu::createComputePipeline(device, layout, "shade_attributes.comp")};
 }
 
 void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
-                       uint32_t height) const {
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+                       uint32_t height, bool writeAttributes) const {
+  const gpu::Pipeline& p = writeAttributes ? attributesPipeline : pipeline;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
   vkCmdDispatch(cmd, (width + SHADE_TILE_X - 1) / SHADE_TILE_X, (height + SHADE_TILE_Y - 1) / SHADE_TILE_Y, 1);
 }

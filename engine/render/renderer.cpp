@@ -86,6 +86,8 @@ struct Renderer::Impl {
   CullMode lastCull = CullMode::Frustum;
   gpu::Buffer pyramidReadback;
   gpu::Buffer overdrawReadback;
+  gpu::Buffer attributes;           // float[ATTRIBUTE_FLOATS] per pixel; a 64-byte placeholder until asked for
+  gpu::Buffer attributesReadback;
   uint32_t pyramidSkipFrames = 0;  // frames left before the pyramid is probed again
   bool usePyramid = true;          // this frame builds the pyramid (set in render())
 
@@ -128,6 +130,7 @@ struct Renderer::Impl {
         {BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+        {BINDING_ATTRIBUTES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -141,7 +144,7 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 9},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -185,6 +188,7 @@ struct Renderer::Impl {
     colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
     forwardIds.reset();
     overdrawReadback.reset();
+    resizeAttributes(ATTRIBUTE_FLOATS * sizeof(float));
     overdraw = gpu::Image(device, VK_FORMAT_R32_UINT, width, height,
                           VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                           VK_IMAGE_ASPECT_COLOR_BIT);
@@ -201,17 +205,26 @@ struct Renderer::Impl {
     writeDescriptors();
   }
 
+  // The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
+  void resizeAttributes(VkDeviceSize bytes) {
+    attributes = gpu::Buffer(device, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                                                VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                             gpu::MemoryUse::DeviceLocal);
+    attributesReadback.reset();
+  }
+
   void writeDescriptors() {
-    VkDescriptorBufferInfo bufs[9] = {
+    VkDescriptorBufferInfo bufs[10] = {
         {frameBuffer.handle(), 0, VK_WHOLE_SIZE},        {gpuScene.objects.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    {gpuScene.vertices.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
-        {history.handle(), 0, VK_WHOLE_SIZE}};
-    const uint32_t bufBindings[9] = {BINDING_FRAME,   BINDING_OBJECTS, BINDING_MESHES, BINDING_VERTICES, BINDING_INDICES,
-                                     BINDING_DRAWS,   BINDING_STATS,   BINDING_MATERIALS, BINDING_HISTORY};
+        {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[10] = {BINDING_FRAME, BINDING_OBJECTS,   BINDING_MESHES,  BINDING_VERTICES,
+                                      BINDING_INDICES, BINDING_DRAWS,   BINDING_STATS,   BINDING_MATERIALS,
+                                      BINDING_HISTORY, BINDING_ATTRIBUTES};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 9; ++i) {
+    for (int i = 0; i < 10; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -427,7 +440,12 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  shade.record(cmd, pipelineLayout, set, w, h);
+  if (options.readAttributes) {
+    vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  shade.record(cmd, pipelineLayout, set, w, h, options.readAttributes);
   timestamps->end(cmd, t);
   VK_CHECK(vkEndCommandBuffer(cmd));
 }
@@ -448,6 +466,12 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   const bool frozen = options.path == RenderPath::Visbuf && options.freezeCulling && haveDraws;
   const bool occlusionFrame = options.path == RenderPath::Visbuf && !frozen && options.cull == CullMode::Occlusion;
   usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
+  const bool readAttributes = options.readAttributes && options.path == RenderPath::Visbuf;
+  const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
+  if (readAttributes && attributes.size() < attributeBytes) {  // no frame is in flight: safe to rewrite the set
+    resizeAttributes(attributeBytes);
+    writeDescriptors();
+  }
   FrameMath math = computeFrameMath(camera, w, h);
   gpu::FrameData fd = frameData(camera, math, options);
   std::memcpy(frameBuffer.mapped(), &fd, sizeof(fd));
@@ -490,7 +514,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.cullingFrozen = frozen;
   st.pyramidLevels = builtPyramid ? pyramid.levels() : 0;
   if (options.path == RenderPath::Visbuf) {
-    recordVisbuf(options, used);
+    FrameOptions visbufOptions = options;
+    visbufOptions.readAttributes = readAttributes;
+    recordVisbuf(visbufOptions, used);
     haveDraws = true;
     lastCull = effectiveCull;
     st.targetBytesPerPixel = gpu::formatBytes(ids.format()) + 4 /*depth*/ + 8 /*colour*/;
@@ -591,6 +617,13 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                       VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                       VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
   }
+  if (readAttributes) {
+    if (!attributesReadback)
+      attributesReadback = gpu::Buffer(device, attributes.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                       gpu::MemoryUse::HostVisible);
+    VkBufferCopy ac{0, 0, attributeBytes};
+    vkCmdCopyBuffer(cmd, attributes.handle(), attributesReadback.handle(), 1, &ac);
+  }
   if (readIds && options.path == RenderPath::Visbuf) {
     gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
@@ -668,6 +701,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (options.countOverdraw) {
     const uint32_t* o = static_cast<const uint32_t*>(overdrawReadback.mapped());
     result.overdraw.assign(o, o + pixels);
+  }
+  if (readAttributes) {
+    const float* a = static_cast<const float*>(attributesReadback.mapped());
+    result.attributes.assign(a, a + pixels * ATTRIBUTE_FLOATS);
   }
   if (readIds && options.path == RenderPath::Forward) {  // already (object + 1, triangle)
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());

@@ -45,6 +45,7 @@ struct FrameOptions {
                                 // the camera can move on and show what that frame culled
   bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
   bool countOverdraw = false;   // debug: count raster writes per pixel (FrameResult.overdraw)
+  bool readAttributes = false;  // visbuf: read the shading pass's reconstruction per pixel (FrameResult.attributes)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };
@@ -98,6 +99,9 @@ struct FrameResult {
   };
   std::vector<PyramidLevel> pyramid;   // with readPyramid: level 0 (full resolution) first
   std::vector<uint32_t> overdraw;      // with countOverdraw: depth-test-passing fragments per pixel
+  // With readAttributes: ATTRIBUTE_FLOATS (shaders/shared/config.h) floats per pixel, all 0 where nothing was
+  // drawn: camera-relative position, depth, normal, uv, barycentrics and their per-pixel derivatives.
+  std::vector<float> attributes;
   FrameStats stats;
 };
 

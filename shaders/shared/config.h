@@ -53,5 +53,11 @@
 #define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
 #define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
 #define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
+#define BINDING_ATTRIBUTES 13  // float[ATTRIBUTE_FLOATS] per pixel: the shading pass's reconstruction (stress only)
+
+// Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
+//  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),
+//  8..9 TEXCOORD_0, 10..11 lambda1, lambda2, 12..13 d(lambda1)/dx,dy, 14..15 d(lambda2)/dx,dy (per pixel).
+#define ATTRIBUTE_FLOATS 16
 
 #endif
