@@ -7,6 +7,18 @@
 
 layout(set = 0, binding = BINDING_FRAME) uniform FrameBlock { FrameData frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
+layout(std430, set = 0, binding = BINDING_OBJECTS_HIGH) readonly buffer ObjectBlockHigh { ObjectData objectsHigh[]; };
+
+// Object records live in one buffer seen through two descriptor windows (each at most maxStorageBufferRange).
+// (if/else, not ?: -- glslang emits an invalid store for a ternary over two blocks' structs.)
+ObjectData objectAt(uint i) {
+  if (i < frame.objectSplit) {
+    ObjectData o = objects[i];
+    return o;
+  }
+  ObjectData o = objectsHigh[i - frame.objectSplit];
+  return o;
+}
 layout(std430, set = 0, binding = BINDING_MESHES) readonly buffer MeshBlock { MeshData meshes[]; };
 layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer VertexBlock { Vertex vertices[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };

@@ -78,7 +78,7 @@ void main() {
   if (valid) {
     // Only the fields needed are loaded: copying the whole 224-byte MeshData per thread made the pass
     // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
-    ObjectData o = objects[id];
+    ObjectData o = objectAt(id);
     meshIndex = o.meshIndex;
     vec4 sphere = meshes[meshIndex].boundsSphere;
     vec3 c = objectToCamera(o, sphere.xyz);

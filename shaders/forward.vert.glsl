@@ -10,7 +10,7 @@ layout(location = 2) flat out uint outMaterial;
 layout(location = 3) flat out uint outObject;
 
 void main() {
-  ObjectData o = objects[gl_InstanceIndex];
+  ObjectData o = objectAt(gl_InstanceIndex);
   Vertex v = vertices[gl_VertexIndex];
   gl_Position = clipPosition(o, vertexPosition(v));
   outNormal = normalToWorld(o, octDecode(v.normal));

@@ -44,7 +44,7 @@ void main() {
     tri = v & ((1u << frame.triangleBits) - 1u);
   }
   DrawCommand d = draws[slot];
-  ObjectData o = objects[d.firstInstance];
+  ObjectData o = objectAt(d.firstInstance);
   uint base = d.firstIndex + 3u * tri;
   Vertex v0 = vertices[indices[base + 0u] + uint(d.vertexOffset)];
   Vertex v1 = vertices[indices[base + 1u] + uint(d.vertexOffset)];

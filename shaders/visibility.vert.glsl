@@ -9,7 +9,7 @@ layout(location = 0) flat out uint outDrawSlot;
 layout(push_constant) uniform Push { PassConstants pc; };
 
 void main() {
-  ObjectData o = objects[gl_InstanceIndex];
+  ObjectData o = objectAt(gl_InstanceIndex);
   gl_Position = clipPosition(o, vertexPosition(vertices[gl_VertexIndex]));
   outDrawSlot = pc.drawBase + gl_DrawIDARB;  // late-phase draws follow the early ones
 }

@@ -40,7 +40,9 @@ std::optional<PixelReference> referenceAtPixel(const Scene& scene, const Camera&
 // bounded measures are therefore the well-conditioned ones: where on the screen the reconstructed point lies
 // (position_px), how far off the triangle's plane (off_surface_rel), the barycentric error expressed as the
 // screen displacement that explains it (lambda_px = |J^-1 dlambda|, J = d(lambda1, lambda2)/d(x, y)), and the derivatives relative to
-// the pixel's largest. The raw errors (position, depth, normal, uv, lambda) are reported beside them.
+// the pixel's largest, except on pixels of edge-on triangles, where they have a pole within the pixel. The raw errors (position, depth, normal, uv, lambda) are reported beside them.
+inline constexpr double kEdgeOnCosine = 0.02;  // |cos(ray, triangle normal)| below this: edge-on (< 1.15 deg)
+
 struct AttributeErrors {
   size_t pixels = 0;          // pixels compared
   double positionPixels = 0.0;  // screen distance (pixels) of the reconstructed point from the pixel centre
@@ -52,6 +54,8 @@ struct AttributeErrors {
   double uv = 0.0;            // largest |uv - uv_ref| component
   double lambda = 0.0;        // largest |lambda - lambda_ref| (lambda1, lambda2)
   double derivative = 0.0;    // largest |d - d_ref| / max(|d_ref| over the pixel's 4 derivatives, 1e-6)
+  size_t edgeOnPixels = 0;    // pixels whose triangle is within kEdgeOnCosine of edge-on (ray . normal)
+  double derivativeEdgeOn = 0.0;  // the derivative error over those pixels alone
   void merge(const AttributeErrors& o);
   nlohmann::ordered_json toJson() const;
 };

@@ -7,6 +7,7 @@
 // crashed on a dispatch + barrier + timestamps in one command buffer).
 #include "render/renderer.h"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <chrono>
@@ -66,6 +67,7 @@ struct Renderer::Impl {
   GpuScene gpuScene;
   IdEncoding encoding;
   uint32_t capacity = 0;
+  uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
 
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
   VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
@@ -131,6 +133,7 @@ struct Renderer::Impl {
         {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
         {BINDING_ATTRIBUTES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_OBJECTS_HIGH, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -144,7 +147,7 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 9},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 10},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -214,17 +217,22 @@ struct Renderer::Impl {
   }
 
   void writeDescriptors() {
-    VkDescriptorBufferInfo bufs[10] = {
-        {frameBuffer.handle(), 0, VK_WHOLE_SIZE},        {gpuScene.objects.handle(), 0, VK_WHOLE_SIZE},
+    // Objects: two windows of one buffer, split where one descriptor range would end (objectWindowSplit).
+    const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
+    const bool highUsed = objectSplit < gpuScene.objectCount;
+    VkDescriptorBufferInfo bufs[11] = {
+        {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
+        {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
         {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    {gpuScene.vertices.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
-        {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE}};
-    const uint32_t bufBindings[10] = {BINDING_FRAME, BINDING_OBJECTS,   BINDING_MESHES,  BINDING_VERTICES,
-                                      BINDING_INDICES, BINDING_DRAWS,   BINDING_STATS,   BINDING_MATERIALS,
-                                      BINDING_HISTORY, BINDING_ATTRIBUTES};
+        {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
+        {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[11] = {BINDING_FRAME,   BINDING_OBJECTS,    BINDING_MESHES,      BINDING_VERTICES,
+                                      BINDING_INDICES, BINDING_DRAWS,      BINDING_STATS,       BINDING_MATERIALS,
+                                      BINDING_HISTORY, BINDING_ATTRIBUTES, BINDING_OBJECTS_HIGH};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 10; ++i) {
+    for (int i = 0; i < 11; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -294,6 +302,7 @@ struct Renderer::Impl {
                                                      : CULL_OCCLUSION;
     f.triangleBits = encoding.triangleBits;
     f.wideIds = encoding.wide ? 1u : 0u;
+    f.objectSplit = objectSplit;
     return f;
   }
 
@@ -753,7 +762,13 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   Result<GpuScene> g = uploadScene(device, scene);
   if (!g) return g.error();
   impl->gpuScene = std::move(g.value());
-  impl->capacity = config.drawCapacity ? config.drawCapacity : std::max<uint32_t>(1, impl->gpuScene.objectCount);
+  // Default capacity: one draw per object, as far as one descriptor range holds both phases' draw lists
+  // (beyond that, overflow is counted and reported like any capacity overflow).
+  const uint64_t maxRange = device.properties().limits.maxStorageBufferRange;
+  impl->objectSplit = objectWindowSplit(maxRange, impl->gpuScene.objectCount);
+  impl->capacity = config.drawCapacity ? config.drawCapacity
+                                       : uint32_t(std::clamp<uint64_t>(impl->gpuScene.objectCount, 1,
+                                                                       maxRange / (2 * sizeof(gpu::DrawCommand))));
   // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
   const uint64_t drawBytes = 2 * uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
   if (drawBytes > device.properties().limits.maxStorageBufferRange)

@@ -1,5 +1,7 @@
 #include "scene/gpu_scene.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 namespace visbuf {
@@ -16,6 +18,11 @@ gpu::ObjectData packObject(const Object& object, const Scene& scene) {
   d.maxScale = float(maxScaleOf(m) * (1.0 + 1e-6));
   d.flags = 0;
   return d;
+}
+
+uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount) {
+  const uint64_t perWindow = maxRange / sizeof(gpu::ObjectData) / 4 * 4;
+  return uint32_t(std::min<uint64_t>(objectCount, perWindow));
 }
 
 Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
@@ -53,7 +60,9 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   };
   for (auto [what, bytes] : {std::pair{"vertex", vertices.size() * sizeof(gpu::Vertex)},
                              std::pair{"index", indices.size() * sizeof(uint32_t)},
-                             std::pair{"object", objects.size() * sizeof(gpu::ObjectData)}}) {
+                             std::pair{"object (second window)",
+                                       (objects.size() - objectWindowSplit(limit, uint32_t(objects.size()))) *
+                                           sizeof(gpu::ObjectData)}}) {
     Status s = check(what, bytes);
     if (!s) return s.error();
   }

@@ -23,11 +23,17 @@ struct GpuScene {
   uint64_t bytes = 0;                // GPU memory of the mirror
 };
 
+// The first object of the second descriptor window (BINDING_OBJECTS_HIGH): as many objects as one window of
+// at most `maxRange` bytes holds, rounded down to a multiple of 4 (so the second window's offset is 256-byte
+// aligned, the largest minStorageBufferOffsetAlignment Vulkan allows); `objectCount` when they all fit.
+uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount);
+
 // Packs an object into its 64-byte record, translation relative to `anchor`.
 gpu::ObjectData packObject(const Object& object, const Scene& scene);
 
 // Validates and uploads. Fails with CapacityExceeded when a buffer would exceed the device's
-// maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit.
+// maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit; the object records are read
+// through two descriptor windows (objectWindowSplit), so they may take twice that.
 Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene);
 
 }  // namespace visbuf

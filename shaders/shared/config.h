@@ -53,6 +53,8 @@
 #define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
 #define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
 #define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
+#define BINDING_OBJECTS_HIGH 14  // ObjectData[] from FrameData.objectSplit on (one descriptor range is capped by
+                                 // maxStorageBufferRange: 2M objects on lavapipe)
 #define BINDING_ATTRIBUTES 13  // float[ATTRIBUTE_FLOATS] per pixel: the shading pass's reconstruction (stress only)
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):

@@ -90,7 +90,7 @@ struct FrameData {
   float projX;          // proj[0][0]: ndc.x = projX * x / -z
   float projY;          // proj[1][1] (negative: Vulkan y down): ndc.y = projY * y / -z
   uint pyramidLevels;   // valid levels of the depth pyramid (0 when occlusion is off)
-  uint pad0;
+  uint objectSplit;     // objects [0, objectSplit) are in BINDING_OBJECTS, the rest in BINDING_OBJECTS_HIGH
 };
 
 // Push constants of the cull, visibility and depth pyramid passes (16 bytes).
