@@ -1,12 +1,16 @@
 // visbuf bake: glTF 2.0 -> pack (engine/asset/pack_format.h). Import keeps the node hierarchy as instances
 // (importGltfScene), every mesh is optimised with its LOD chain (buildImportedScene -> buildMesh), the scene
-// is framed by a default camera, and the pack is written atomically (writePack: temporary file + rename).
+// is framed by a default camera, the materials' images are baked into size classes with mip chains
+// (bakeTextures; skipped with --no-textures), and the pack is written atomically (writePack: temporary file +
+// rename).
 //
-// Exit codes: 0 written; 1 bad input (unreadable / malformed glTF, a mesh that cannot be built, a write that
-// failed; the old OUT, if any, is untouched); 2 usage (option values out of range, --quantize).
+// Exit codes: 0 written; 1 bad input (unreadable / malformed glTF, a mesh that cannot be built, an image that
+// is missing or cannot be decoded, a write that failed; the old OUT, if any, is untouched); 2 usage (option
+// values out of range, --quantize).
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <bit>
 #include <chrono>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -16,6 +20,7 @@
 #include "asset/pack_reader.h"
 #include "asset/pack_writer.h"
 #include "asset/scene_bake.h"
+#include "asset/texture_bake.h"
 #include "commands.h"
 #include "stats_output.h"
 
@@ -33,6 +38,10 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
       ->capture_default_str();
   sub->add_flag("--quantize", c.quantize,
                 "quantise vertex attributes (not implemented yet: reported as an error)");
+  sub->add_option("--max-texture-size", c.maxTextureSize,
+                  "largest baked texture side (power of two, 1..16384); larger images are downscaled")
+      ->capture_default_str();
+  sub->add_flag("--no-textures", c.noTextures, "do not bake texture pixels (materials keep their references)");
   sub->add_option("--json", c.json, "also write the summary as JSON");
 }
 
@@ -56,12 +65,13 @@ int badInput(const Error& e) {
 class Progress {
  public:
   Progress() : tty_(isatty(STDERR_FILENO) != 0) {}
-  void update(size_t done, size_t total, const std::string& what) {
+  // `stage` names what was done: "built mesh", "baked texture".
+  void update(const char* stage, size_t done, size_t total, const std::string& what) {
     const auto now = Clock::now();
     if (done < total && now - last_ < std::chrono::milliseconds(250)) return;
     last_ = now;
-    std::fprintf(stderr, "%sbake: built mesh %zu/%zu (%s)%s", tty_ ? "\r\033[K" : "", done, total,
-                 what.c_str(), tty_ && done < total ? "" : "\n");
+    std::fprintf(stderr, "%sbake: %s %zu/%zu (%s)%s", tty_ ? "\r\033[K" : "", stage, done, total, what.c_str(),
+                 tty_ && done < total ? "" : "\n");
     std::fflush(stderr);
   }
 
@@ -69,6 +79,30 @@ class Progress {
   bool tty_;
   Clock::time_point last_{};
 };
+
+const char* colorSpaceName(ColorSpace c) { return c == ColorSpace::Srgb ? "sRGB" : "linear"; }
+
+// "  textures: 5 (2 size classes, 27.9 MB with mips)" plus one line per class.
+void printTextureSummary(const Scene& scene, const TextureBakeReport& report, bool skipped, nlohmann::json& json) {
+  if (skipped) {
+    std::printf("  textures: not baked (--no-textures)\n");
+    return;
+  }
+  std::printf("  textures: %zu in %zu size class(es), %llu bytes with mips\n", scene.textures.size(),
+              scene.textureClasses.size(), static_cast<unsigned long long>(report.texelBytes));
+  json["textures"] = {
+      {"count", scene.textures.size()}, {"bytes", report.texelBytes}, {"classes", nlohmann::json::array()}};
+  for (size_t i = 0; i < scene.textureClasses.size(); ++i) {
+    const TextureClass& cls = scene.textureClasses[i];
+    std::printf("    class %zu: %ux%u %s, %u layer(s), %u mips, %zu bytes\n", i, cls.size, cls.size,
+                colorSpaceName(cls.colorSpace), cls.layers, cls.mipCount, cls.texels.size());
+    json["textures"]["classes"].push_back({{"size", cls.size},
+                                           {"srgb", cls.colorSpace == ColorSpace::Srgb},
+                                           {"layers", cls.layers},
+                                           {"mips", cls.mipCount},
+                                           {"bytes", cls.texels.size()}});
+  }
+}
 
 }  // namespace
 
@@ -78,9 +112,11 @@ int runBake(const BakeCommand& c) {
   if (c.lodCount < 1 || c.lodCount > MAX_LODS)
     return usage(fmt::format("--lod-count {}: must be 1..{}", c.lodCount, MAX_LODS));
   if (c.lodMinTriangles < 1) return usage("--lod-min-triangles must be at least 1");
+  if (c.maxTextureSize < 1 || c.maxTextureSize > 16384 || !std::has_single_bit(c.maxTextureSize))
+    return usage(fmt::format("--max-texture-size {}: must be a power of two in 1..16384", c.maxTextureSize));
   if (c.quantize) {
     return usage(
-        "--quantize is not implemented yet (pack version 1 stores full-precision 32-byte vertices); "
+        "--quantize is not implemented yet (packs store full-precision 32-byte vertices); "
         "bake without it");
   }
   if (isPackFile(c.input)) {
@@ -103,9 +139,23 @@ int runBake(const BakeCommand& c) {
   const auto buildStart = Clock::now();
   Result<Scene> scene = buildImportedScene(
       *imported, options,
-      [&](size_t done, size_t total, const std::string& mesh) { progress.update(done, total, mesh); });
+      [&](size_t done, size_t total, const std::string& mesh) { progress.update("built mesh", done, total, mesh); });
   if (!scene) return badInput(scene.error());
   const double buildSeconds = secondsSince(buildStart);
+
+  const auto textureStart = Clock::now();
+  TextureBakeReport textureReport;
+  if (!c.noTextures) {
+    TextureBakeOptions textureOptions;
+    textureOptions.maxTextureSize = c.maxTextureSize;
+    Status baked = bakeTextures(*imported, textureOptions, &scene.value(), &textureReport,
+                                [&](size_t done, size_t total, const std::string& name) {
+                                  progress.update("baked texture", done, total, name);
+                                });
+    for (const std::string& note : textureReport.notes) std::fprintf(stderr, "bake: resized %s\n", note.c_str());
+    if (!baked) return badInput(baked.error());
+  }
+  const double textureSeconds = secondsSince(textureStart);
 
   std::fprintf(stderr, "bake: writing %s\n", c.output.c_str());
   const auto writeStart = Clock::now();
@@ -148,20 +198,22 @@ int runBake(const BakeCommand& c) {
       scene->meshes.size(), scene->objects.size(), scene->materials.size(),
       static_cast<unsigned long long>(trianglesIn), static_cast<unsigned long long>(trianglesLod0),
       static_cast<unsigned long long>(trianglesAllLods));
+  printTextureSummary(*scene, textureReport, c.noTextures, json);
   std::string sections;
   for (const PackSectionInfo& s : written.sections)
     sections += fmt::format("{}{} {}", sections.empty() ? "" : ", ", s.name, s.size);
   std::printf("  pack: %llu bytes (%s)\n", static_cast<unsigned long long>(written.fileBytes),
               sections.c_str());
-  std::printf("  time: import %.3f s, build %.3f s, write %.3f s, total %.3f s\n", importSeconds,
-              buildSeconds, writeSeconds, totalSeconds);
+  std::printf("  time: import %.3f s, build %.3f s, textures %.3f s, write %.3f s, total %.3f s\n", importSeconds,
+              buildSeconds, textureSeconds, writeSeconds, totalSeconds);
   json["objects"] = scene->objects.size();
   json["materials"] = scene->materials.size();
   json["trianglesIn"] = trianglesIn;
   json["trianglesLod0"] = trianglesLod0;
   json["bytes"] = written.fileBytes;
   json["seconds"] = {
-      {"import", importSeconds}, {"build", buildSeconds}, {"write", writeSeconds}, {"total", totalSeconds}};
+      {"import", importSeconds}, {"build", buildSeconds}, {"textures", textureSeconds},
+      {"write", writeSeconds},   {"total", totalSeconds}};
   if (!c.json.empty()) {
     if (Status s = writeJsonFile(c.json, json); !s) return badInput(s.error());
   }

@@ -43,6 +43,8 @@ struct BakeCommand {
   uint32_t lodMinTriangles = MeshBuildOptions{}.minTriangles;
   bool quantize = false;                               // not implemented yet: usage error
   std::string json;                                    // summary as JSON; empty: none
+  uint32_t maxTextureSize = 2048;                      // power of two, 1..16384
+  bool noTextures = false;                             // skip texture baking (materials keep their references)
 };
 
 void addBakeCommand(CLI::App& app, BakeCommand& cmd);

@@ -187,9 +187,16 @@ bool jsonDepthWithin(std::string_view text, int limit) {
   return true;
 }
 
-// Image loader that keeps nothing: geometry import needs no pixels, and this spares us libstb.
-bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
-               void*) {
+// Image "loader" that decodes nothing (texture_bake.cpp decodes with OpenImageIO). tinygltf calls it with the
+// base64-decoded bytes of a data: URI image, which are kept (nothing else holds them), and with the bytes of a
+// bufferView image *before* checking the view against its buffer, which are left alone: collectImages reads
+// those through a range-checked view.
+bool keepDataUriImage(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+  if (image->bufferView < 0 && bytes != nullptr && size > 0) {
+    image->image.assign(bytes, bytes + size);
+    image->as_is = true;
+  }
   return true;
 }
 
@@ -218,7 +225,7 @@ Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<st
 
   const std::string baseDir = std::filesystem::path(path).parent_path().string();
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(&skipImage, nullptr);
+  loader.SetImageLoader(&keepDataUriImage, nullptr);
   std::string err;
   std::string warn;
   bool ok = false;

@@ -3,13 +3,16 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/result.h"
 
-// tinygltf is compiled without image codecs (stb is not a dependency; a geometry importer needs no pixels)
-// and never reads external image files. gltf_container.cpp defines TINYGLTF_IMPLEMENTATION before this
+// tinygltf is compiled without image codecs (stb is not a dependency; texture_bake.cpp decodes images with
+// OpenImageIO) and never reads external image files; loadModel keeps the encoded bytes of data: URI images in
+// tinygltf::Image::image (bufferView images are read, range-checked, by collectImages).
+// gltf_container.cpp defines TINYGLTF_IMPLEMENTATION before this
 // include: it is the one translation unit that compiles tinygltf (do NOT link Debian's libtinygltf too).
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE
@@ -28,6 +31,11 @@
 #pragma GCC diagnostic ignored "-Wdeprecated-declarations"
 #include <tiny_gltf.h>
 #pragma GCC diagnostic pop
+
+namespace visbuf {
+struct Material;
+struct ImportedImage;
+}  // namespace visbuf
 
 namespace visbuf::gltf_detail {
 
@@ -48,5 +56,14 @@ inline Error malformed(std::string message) { return makeError(ErrorCode::Malfor
 // buffer without data), then lets tinygltf parse the JSON and load external/data-URI buffers. tinygltf's
 // warnings are appended to `warnings`.
 Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<std::string>* warnings);
+
+// gltf_materials.cpp (importGltfScene): materials, texture references, samplers, KHR_texture_transform.
+using WarnFn = std::function<void(const std::string&)>;
+// Appends every glTF material in file order (contract in gltf_import.h).
+Status importMaterials(const tinygltf::Model& model, const std::string& path, const WarnFn& warn,
+                       std::vector<Material>* out);
+// Appends one ImportedImage per glTF image, in file order: embedded bytes (bufferView, range-checked; data:
+// URI) or the resolved path of an external file (not read here).
+Status collectImages(const tinygltf::Model& model, const std::string& path, std::vector<ImportedImage>* out);
 
 }  // namespace visbuf::gltf_detail

@@ -10,7 +10,7 @@
 //      once); then transform, morph and append each primitive instance to the output MeshSource.
 //   2'. Importer::runScene() (importGltfScene): the same walk (walkScene), but each (mesh, material,
 //      mirrored, weights) group is emitted once in object space and every node becomes instances with world
-//      transforms.
+//      transforms. Materials and the images they use come from gltf_materials.cpp.
 //
 // Safety rule: tinygltf only parses; it does not validate ranges. Every index, offset, count and stride that
 // comes from the file is checked here with overflow-safe arithmetic before any byte is touched, and every
@@ -136,7 +136,7 @@ uint64_t indexComponentSize(int type) {
 }
 
 // What an attribute accessor may contain (glTF 2.0 core + KHR_mesh_quantization).
-enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta };
+enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta, Tangent };
 
 // Returns "" when the accessor's type/componentType/normalized combination suits `kind`, else the reason.
 std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a) {
@@ -176,6 +176,11 @@ std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a
       componentOk = isFloat || isSigned8or16;
       expected = "VEC3 of FLOAT or (normalized) BYTE/SHORT";
       break;
+    case AttributeKind::Tangent:
+      typeOk = a.type == TINYGLTF_TYPE_VEC4;
+      componentOk = isFloat || (isSigned8or16 && a.normalized);
+      expected = "VEC4 of FLOAT or normalized BYTE/SHORT";
+      break;
   }
   if (typeOk && componentOk) return {};
   return std::string("unsupported format (") + componentTypeName(ct) + (a.normalized ? " normalized" : "") +
@@ -203,6 +208,29 @@ bool isFinite(const glm::dmat4& m) {
 
 bool allFinite(const std::vector<double>& v) {
   return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+
+// Normalises tangents in place and snaps w to +-1. False (nothing usable) when any is non-finite, far from unit
+// length (quantisation error is ~1e-4; exporters that write zero tangents for degenerate uvs fail here) or has
+// |w| != 1.
+bool validateTangents(std::vector<glm::vec4>* tangents) {
+  for (glm::vec4& t : *tangents) {
+    const float len = glm::length(glm::vec3(t));
+    const bool unitish = std::isfinite(len) && std::abs(len - 1.0f) <= 0.1f;
+    if (!unitish || !std::isfinite(t.w) || std::abs(std::abs(t.w) - 1.0f) > 0.01f) return false;
+    t = glm::vec4(glm::vec3(t) / len, t.w < 0.0f ? -1.0f : 1.0f);
+  }
+  return true;
+}
+
+// A tangent follows the surface like a position difference (the linear part, not the normal matrix). Under a
+// mirroring transform cross(normal', tangent') flips relative to the transformed bitangent, so w flips too.
+glm::vec4 transformTangent(const glm::dmat3& linear, double det, const glm::vec4& t) {
+  if (t.w == 0.0f) return glm::vec4(0.0f);  // "none" marker of a padded vertex
+  const glm::dvec3 d = linear * glm::dvec3(t);
+  const double len = glm::length(d);
+  if (!(len > 0.0) || !std::isfinite(len)) return glm::vec4(0.0f);
+  return glm::vec4(glm::vec3(d / len), det < 0.0 ? -t.w : t.w);
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -237,6 +265,8 @@ struct DecodedPrimitive {
   std::vector<glm::vec3> normals;  // empty: generate
   std::vector<glm::vec2> uvs;      // empty: none
   std::vector<uint32_t> colors;    // empty: none
+  std::vector<glm::vec2> uvs1;     // TEXCOORD_1; empty: none
+  std::vector<glm::vec4> tangents; // xyz unit, w = +-1; empty: none (or dropped as invalid)
   // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
   std::vector<std::vector<glm::vec3>> positionDeltas;
   std::vector<std::vector<glm::vec3>> normalDeltas;
@@ -274,6 +304,8 @@ class Importer {
   Status readVec3(int accessor, AttributeKind kind, const std::string& where, bool requireFinite,
                   std::vector<glm::vec3>* out);
   Status readIndices(int accessor, const std::string& where, std::vector<uint32_t>* out);
+  Status readTexCoords(int accessor, const std::string& where, std::vector<glm::vec2>* out);
+  Status readTangents(int accessor, const std::string& where, std::vector<glm::vec4>* out);
 
   Result<DecodedPrimitive> decodePrimitive(int mesh, int primitive);
   Result<const std::vector<DecodedPrimitive>*> decodedMesh(int mesh);
@@ -293,7 +325,6 @@ class Importer {
                        const std::vector<double>& weights, const std::string& where, MeshSource* out);
   template <typename Visit>
   Status walkScene(Visit&& visit, std::string* sceneLabel);
-  Status importMaterials(ImportedScene* scene);
   Status emitSceneNode(int node, const glm::dmat4& world, ImportedScene* scene);
 
   // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights).
@@ -641,6 +672,34 @@ Status Importer::readIndices(int accessor, const std::string& where, std::vector
   });
 }
 
+Status Importer::readTexCoords(int accessor, const std::string& where, std::vector<glm::vec2>* out) {
+  std::vector<float> flat;
+  int n = 0;
+  if (Status s = readFloats(accessor, AttributeKind::TexCoord, where, &flat, &n); !s) return s;
+  out->resize(flat.size() / 2);
+  bool replaced = false;
+  for (size_t i = 0; i < out->size(); ++i) {
+    glm::vec2 uv(flat[2 * i], flat[2 * i + 1]);
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {  // uvs cannot corrupt geometry: repair, don't fail
+      uv = glm::vec2(0.0f);
+      replaced = true;
+    }
+    (*out)[i] = uv;
+  }
+  if (replaced) warn(where + ": non-finite texture coordinates replaced by (0, 0)");
+  return {};
+}
+
+Status Importer::readTangents(int accessor, const std::string& where, std::vector<glm::vec4>* out) {
+  std::vector<float> flat;
+  int n = 0;
+  if (Status s = readFloats(accessor, AttributeKind::Tangent, where, &flat, &n); !s) return s;
+  out->resize(flat.size() / 4);
+  for (size_t i = 0; i < out->size(); ++i)
+    (*out)[i] = glm::vec4(flat[4 * i], flat[4 * i + 1], flat[4 * i + 2], flat[4 * i + 3]);
+  return {};
+}
+
 Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex) {
   const tinygltf::Mesh& mesh = model_.meshes[static_cast<size_t>(meshIndex)];
   const tinygltf::Primitive& prim = mesh.primitives[static_cast<size_t>(primIndex)];
@@ -684,23 +743,20 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     if (Status s = readVec3(it->second, AttributeKind::Normal, w, true, &out.normals); !s) return s.error();
     if (Status s = checkCount(out.normals.size(), it->second, "NORMAL"); !s) return s.error();
   }
-  if (auto it = prim.attributes.find("TEXCOORD_0"); it != prim.attributes.end()) {
-    const std::string w = accessorWhere(it->second, "TEXCOORD_0");
-    std::vector<float> flat;
-    int n = 0;
-    if (Status s = readFloats(it->second, AttributeKind::TexCoord, w, &flat, &n); !s) return s.error();
-    if (Status s = checkCount(flat.size() / 2, it->second, "TEXCOORD_0"); !s) return s.error();
-    out.uvs.resize(vertexCount);
-    bool replaced = false;
-    for (uint64_t i = 0; i < vertexCount; ++i) {
-      glm::vec2 uv(flat[2 * i], flat[2 * i + 1]);
-      if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {  // uvs cannot corrupt geometry: repair, don't fail
-        uv = glm::vec2(0.0f);
-        replaced = true;
-      }
-      out.uvs[i] = uv;
+  for (auto [semantic, dst] : {std::pair{"TEXCOORD_0", &out.uvs}, std::pair{"TEXCOORD_1", &out.uvs1}}) {
+    auto it = prim.attributes.find(semantic);
+    if (it == prim.attributes.end()) continue;
+    if (Status s = readTexCoords(it->second, accessorWhere(it->second, semantic), dst); !s) return s.error();
+    if (Status s = checkCount(dst->size(), it->second, semantic); !s) return s.error();
+  }
+  if (auto it = prim.attributes.find("TANGENT"); it != prim.attributes.end()) {
+    const std::string w = accessorWhere(it->second, "TANGENT");
+    if (Status s = readTangents(it->second, w, &out.tangents); !s) return s.error();
+    if (Status s = checkCount(out.tangents.size(), it->second, "TANGENT"); !s) return s.error();
+    if (!validateTangents(&out.tangents)) {
+      warn(w + ": tangents are not finite unit vectors with w = +-1; dropped (the renderer derives them)");
+      out.tangents.clear();
     }
-    if (replaced) warn(w + ": non-finite texture coordinates replaced by (0, 0)");
   }
   if (auto it = prim.attributes.find("COLOR_0"); it != prim.attributes.end()) {
     const std::string w = accessorWhere(it->second, "COLOR_0");
@@ -945,6 +1001,14 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
     out->colors.resize(base, 0xFFFFFFFFu);
     out->colors.insert(out->colors.end(), prim.colors.begin(), prim.colors.end());
   }
+  if (!prim.uvs1.empty()) {
+    out->uvs1.resize(base, glm::vec2(0.0f));
+    out->uvs1.insert(out->uvs1.end(), prim.uvs1.begin(), prim.uvs1.end());
+  }
+  if (!prim.tangents.empty()) {
+    out->tangents.resize(base, glm::vec4(0.0f));
+    for (const glm::vec4& t : prim.tangents) out->tangents.push_back(transformTangent(linear, det, t));
+  }
   return {};
 }
 
@@ -1048,6 +1112,15 @@ Status Importer::walkScene(Visit&& visit, std::string* sceneLabel) {
   return {};
 }
 
+// Optional streams that some primitive had get their defaults for the vertices of the ones emitted after it.
+void padOptionalStreams(MeshSource* m) {
+  const size_t n = m->positions.size();
+  if (!m->uvs.empty()) m->uvs.resize(n, glm::vec2(0.0f));
+  if (!m->colors.empty()) m->colors.resize(n, 0xFFFFFFFFu);
+  if (!m->uvs1.empty()) m->uvs1.resize(n, glm::vec2(0.0f));
+  if (!m->tangents.empty()) m->tangents.resize(n, glm::vec4(0.0f));
+}
+
 Result<MeshSource> Importer::run() {
   MeshSource out;
   out.name = std::filesystem::path(path_).stem().string();
@@ -1060,62 +1133,12 @@ Result<MeshSource> Importer::run() {
     return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" +
                      str(uint64_t{primitivesSkipped}) + " primitive(s) skipped)");
   }
-  if (!out.uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0.0f));
-  if (!out.colors.empty()) out.colors.resize(out.positions.size(), 0xFFFFFFFFu);
+  padOptionalStreams(&out);
   return out;
 }
 
 // ---------------------------------------------------------------------------------------------------------
 // Scene import (instances)
-
-// Converts glTF materials 1:1 (index i stays i).
-Status Importer::importMaterials(ImportedScene* scene) {
-  for (size_t i = 0; i < model_.materials.size(); ++i) {
-    const tinygltf::Material& gm = model_.materials[i];
-    const std::string where = path_ + ": material " + str(uint64_t{i}) + named(gm.name);
-    Material m;
-    m.name = gm.name.empty() ? "material" + str(uint64_t{i}) : gm.name;
-    const std::vector<double>& f = gm.pbrMetallicRoughness.baseColorFactor;
-    if (f.size() != 4) return malformed(where + ": baseColorFactor must have 4 elements");
-    if (!allFinite(f)) return malformed(where + ": non-finite baseColorFactor");
-    bool clamped = false;
-    for (int c = 0; c < 4; ++c) {
-      const double v = std::clamp(f[static_cast<size_t>(c)], 0.0, 1.0);
-      clamped |= v != f[static_cast<size_t>(c)];
-      m.baseColor[c] = static_cast<float>(v);
-    }
-    if (clamped) warn(where + ": baseColorFactor outside [0,1] clamped");
-    if (gm.alphaMode == "MASK") {
-      m.alphaMode = AlphaMode::Mask;
-    } else if (gm.alphaMode == "BLEND") {
-      m.alphaMode = AlphaMode::Blend;
-    } else {
-      if (gm.alphaMode != "OPAQUE" && !gm.alphaMode.empty())
-        warn(where + ": unknown alphaMode '" + gm.alphaMode + "' treated as OPAQUE");
-      m.alphaMode = AlphaMode::Opaque;
-    }
-    if (!std::isfinite(gm.alphaCutoff)) return malformed(where + ": non-finite alphaCutoff");
-    m.alphaCutoff = static_cast<float>(gm.alphaCutoff);
-    m.doubleSided = gm.doubleSided;
-    const tinygltf::TextureInfo& tex = gm.pbrMetallicRoughness.baseColorTexture;
-    if (tex.index >= 0) {
-      if (static_cast<size_t>(tex.index) >= model_.textures.size()) {
-        return malformed(where + ": baseColorTexture " + str(tex.index) + " does not exist");
-      }
-      m.baseColorTexture.texture = tex.index;
-      m.baseColorTexture.texCoord = tex.texCoord >= 0 ? static_cast<uint32_t>(tex.texCoord) : 0;
-      const int source = model_.textures[static_cast<size_t>(tex.index)].source;
-      if (source >= 0 && static_cast<size_t>(source) < model_.images.size()) {
-        m.baseColorTexture.image = source;
-        m.baseColorTexture.uri = model_.images[static_cast<size_t>(source)].uri;
-      } else {
-        warn(where + ": baseColorTexture " + str(tex.index) + " has no usable image source");
-      }
-    }
-    scene->materials.push_back(std::move(m));
-  }
-  return {};
-}
 
 // Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
 Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
@@ -1179,11 +1202,12 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
             nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " + str(uint64_t{p});
         if (Status s = emitPrimitive(prim, glm::dmat4(1.0), weights, where, &im.source); !s) return s;
       }
-      if (!im.source.uvs.empty()) im.source.uvs.resize(im.source.positions.size(), glm::vec2(0.0f));
-      if (!im.source.colors.empty()) im.source.colors.resize(im.source.positions.size(), 0xFFFFFFFFu);
+      padOptionalStreams(&im.source);
       if (mirrored) {
         for (size_t i = 0; i + 2 < im.source.indices.size(); i += 3)
           std::swap(im.source.indices[i + 1], im.source.indices[i + 2]);
+        // The instance transform mirrors: see transformTangent. Baked here so shaders need no det sign.
+        for (glm::vec4& t : im.source.tangents) t.w = t.w == 0.0f ? 0.0f : -t.w;
       }
       if (im.source.indices.empty()) {
         meshIndex = std::numeric_limits<uint32_t>::max();  // every primitive of the group was skipped
@@ -1215,7 +1239,9 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
 Result<ImportedScene> Importer::runScene() {
   ImportedScene scene;
   scene.name = std::filesystem::path(path_).stem().string();
-  if (Status s = importMaterials(&scene); !s) return s.error();
+  const WarnFn warnFn = [this](const std::string& message) { warn(message); };
+  if (Status s = importMaterials(model_, path_, warnFn, &scene.materials); !s) return s.error();
+  if (Status s = collectImages(model_, path_, &scene.images); !s) return s.error();
   std::string sceneLabel;
   Status walked = walkScene(
       [&](int nodeIndex, const glm::dmat4& world) { return emitSceneNode(nodeIndex, world, &scene); },

@@ -5,7 +5,8 @@
 // node's world transform into the vertices and concatenates all primitives into a single indexed triangle
 // list.
 // Materials, textures, cameras, lights, skins and animations are ignored (meshes come out in rest pose, with
-// the mesh's default morph weights, or the node's weights where a node overrides them).
+// the mesh's default morph weights, or the node's weights where a node overrides them); importGltfScene reads
+// materials and collects the images they use.
 //
 // Supported:
 //   - .gltf (external .bin files and data: URIs) and .glb, told apart by the "glTF" magic, then by name.
@@ -21,8 +22,13 @@
 //   - Attributes: POSITION (required; primitives without it are skipped with a warning); NORMAL (transformed
 //     by the inverse-transpose of the world matrix and renormalised); TEXCOORD_0; COLOR_0 (vec3/vec4 of
 //     float, unorm8 or unorm16, packed to RGBA8 with R in the low byte, values stored as found, i.e. linear).
-//     uvs / colors are filled with (0,0) / 0xFFFFFFFF for primitives lacking them when another primitive has
-//     them, and left empty when no imported primitive has them.
+//     TEXCOORD_1 (as TEXCOORD_0, into uvs1). TANGENT (VEC4 of float or normalized byte/short): xyz transformed
+//     by the world matrix's linear part and renormalised, w (handedness) multiplied by the sign of its
+//     determinant; a primitive whose tangents are not all finite, of length 1 +- 0.1 with |w| = 1 +- 0.01 has
+//     them dropped with a warning (they are then renormalised and w snapped to +-1).
+//     uvs / colors / uvs1 / tangents are filled with (0,0) / 0xFFFFFFFF / (0,0) / (0,0,0,0) ("no tangent")
+//     for primitives lacking them when another primitive has them, and left empty when no imported primitive
+//     has them.
 //   - Morph targets: POSITION and NORMAL deltas weighted by node.weights or else mesh.weights.
 //   - Missing normals: area-weighted smooth normals per primitive instance, computed after the transform
 //     (options.generateNormalsIfMissing). When disabled, such vertices get (0,0,0) normals plus a warning.
@@ -45,8 +51,9 @@
 // Nothing in the file's contents can make the importer assert or crash.
 //
 // Not supported: KHR_draco_mesh_compression and EXT_mesh_gpu_instancing (Unsupported when required; when only
-// used, the plain nodes are imported), TEXCOORD_1+ / COLOR_1+ / TANGENT (ignored), skinning and animation,
-// KHR_texture_transform (quantized uvs that rely on it come out in their raw integer range).
+// used, the plain nodes are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas (the base
+// tangents are kept), skinning and animation. KHR_texture_transform is read into each TextureRef (scene
+// import), never applied to the vertex uvs (quantized uvs that rely on it come out in their raw integer range).
 #pragma once
 
 #include <cstdint>
@@ -92,18 +99,27 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     vertices and normals whose triangles have their 2nd and 3rd index swapped. Under the mirroring
 //     transform those triangles are counter-clockwise again, and the object-space normals (transformed with
 //     the instance) still point outwards. The variant is created once per (mesh, material, morph weights),
-//     shared by every mirrored instance of it; ImportedMesh::mirrored marks it.
+//     shared by every mirrored instance of it; ImportedMesh::mirrored marks it. Its tangents have w negated:
+//     a shader computes the world bitangent as cross(worldNormal, worldTangent) * w with worldTangent =
+//     M * tangent, and under a mirroring M that cross product flips, so the variant carries the flip.
 //   - Morph weights: a node whose weights differ from the mesh's gets its own mesh variant (weights are baked
 //     into the vertices, as importGltfMesh does).
 //   - Zero-determinant (degenerate) instances are skipped with a warning (they cover no pixels).
-//   - Materials: every glTF material, in file order (so glTF material i is materials[i]), with base colour
-//     factor (linear RGBA, clamped to [0,1] with a warning), alpha mode and cutoff, double-sided, and the
-//     base-colour texture reference (texture index, image index, image URI, TEXCOORD set; no pixels are
-//     read). Primitives without a material use a "default" material (glTF's: white, opaque) appended after
-//     the file's materials, only when needed. Skins and animations are ignored (rest pose, as in
-//     importGltfMesh).
-// Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist and
-// for non-finite material factors.
+//   - Materials: every glTF material, in file order (so glTF material i is materials[i]): base colour factor
+//     (linear RGBA), metallic and roughness factors, emissive factor, occlusion strength (all clamped to
+//     [0,1] with a warning), normal scale, KHR_materials_emissive_strength (finite, >= 0), alpha mode and
+//     cutoff, double-sided; and five texture references (base colour, metallic-roughness, normal, occlusion,
+//     emissive), each with texture index, image index, image URI, TEXCOORD set (0 or 1; higher sets warn and
+//     use 0), sampler (wrap S/T, mag/min/mip filter; undefined filters are trilinear) and
+//     KHR_texture_transform as a 3x2 matrix (its texCoord overrides the set). Primitives without a material
+//     use a "default" material (glTF's: white, opaque, metallic 1, roughness 1) appended after the file's
+//     materials, only when needed. Skins and animations are ignored (rest pose, as in importGltfMesh).
+//   - Images: every glTF image, in file order (glTF image i is images[i]), NOT decoded: the encoded bytes of
+//     embedded images (bufferView, range-checked, or data: URI) or, for external files, the path resolved
+//     against the glTF's folder (the file is not opened here; texture_bake.h decodes all of them).
+// Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist, for
+// non-finite material factors or texture transforms, for texture / sampler indices that do not exist, and for
+// an image bufferView that does not exist or runs past its buffer.
 struct ImportedMesh {
   MeshSource source;      // object space; name: "<mesh name>" [+ "/<material name>"] [+ " (mirrored)"]
   int32_t gltfMesh = -1;  // source glTF mesh index
@@ -118,11 +134,21 @@ struct ImportedInstance {
   int32_t node = -1;          // source glTF node index
 };
 
+// A glTF image as found in the file, not decoded.
+struct ImportedImage {
+  std::string name;            // the image's name, else its URI, else "image N"
+  std::string uri;             // as written in the glTF; empty for embedded images
+  std::string path;            // external file: the URI percent-decoded, resolved against the glTF's folder
+  std::string mimeType;        // as declared (may be empty)
+  std::vector<uint8_t> bytes;  // embedded image (bufferView or data: URI): the encoded file
+};
+
 struct ImportedScene {
   std::string name;  // file name without its extension
   std::vector<ImportedMesh> meshes;
   std::vector<Material> materials;
   std::vector<ImportedInstance> instances;
+  std::vector<ImportedImage> images;  // glTF image i is images[i]
 };
 
 // Imports the default scene of the glTF file at `path` as meshes + materials + instances (see above).

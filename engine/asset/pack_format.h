@@ -31,7 +31,7 @@ namespace visbuf::pack {
 static_assert(std::endian::native == std::endian::little, "packs are little-endian; add byte swapping");
 
 inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
-inline constexpr uint32_t kVersion = 1;
+inline constexpr uint32_t kVersion = 2;  // 2: full materials, textures, tangent / uv1 streams
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
 inline constexpr size_t kSectionNameSize = 16;
@@ -42,7 +42,7 @@ struct Header {
   uint32_t headerSize;        // sizeof(Header) = 64
   uint32_t sectionEntrySize;  // sizeof(SectionEntry) = 48
   uint32_t sectionCount;      // entries in the table at offset headerSize; 1..kMaxSections
-  uint32_t flags;             // 0 in version 1
+  uint32_t flags;             // 0 (none defined)
   uint64_t fileSize;          // total file size in bytes, multiple of kAlignment
   uint32_t reserved[7];       // 0
   uint32_t headerCrc;         // CRC-32 of header (this field = 0) + section table
@@ -111,21 +111,78 @@ static_assert(sizeof(gpu::Vertex) == 32);
 
 inline constexpr uint32_t kMaterialDoubleSided = 1u;  // MaterialRecord::flags
 
-// Section "materials": one record per Scene::materials entry.
+// One texture reference of a material (TextureRef).
+struct TextureSlotRecord {
+  int32_t texture;      // into "textures" (the baked image), -1: none / not baked
+  int32_t gltfTexture;  // source glTF texture index, -1: none
+  int32_t gltfImage;    // source glTF image index, -1: none
+  uint32_t texCoord;    // TEXCOORD_n: 0 or 1
+  uint8_t wrapS;        // WrapMode: 0 repeat, 1 clamp to edge, 2 mirrored repeat
+  uint8_t wrapT;
+  uint8_t magFilter;    // TextureFilter: 0 nearest, 1 linear
+  uint8_t minFilter;
+  uint8_t mipFilter;    // MipFilter: 0 none, 1 nearest, 2 linear
+  uint8_t reserved[3];  // 0
+  float transform[6];   // uv' = M * (u, v, 1), M 3x2 column-major (KHR_texture_transform), finite
+  StringRef uri;        // image URI relative to the source glTF, empty when embedded / none
+};
+static_assert(sizeof(TextureSlotRecord) == 56 && offsetof(TextureSlotRecord, transform) == 24 &&
+              offsetof(TextureSlotRecord, uri) == 48);
+
+// Section "materials": one record per Scene::materials entry. Factors are finite; colours linear.
 struct MaterialRecord {
   StringRef name;
-  float baseColor[4];          // linear RGBA, finite
+  float baseColor[4];          // linear RGBA
+  float emissive[3];           // linear RGB
+  float emissiveStrength;      // >= 0 (KHR_materials_emissive_strength)
+  float metallic;
+  float roughness;
+  float normalScale;
+  float occlusionStrength;
   uint32_t alphaMode;          // AlphaMode: 0 opaque, 1 mask, 2 blend
-  float alphaCutoff;           // finite
+  float alphaCutoff;
   uint32_t flags;              // kMaterialDoubleSided
-  uint32_t reserved0;          // 0
-  int32_t baseColorTexture;    // source glTF texture index, -1: none
-  int32_t baseColorImage;      // source glTF image index, -1: none
-  uint32_t baseColorTexCoord;  // TEXCOORD_n
-  uint32_t reserved1;          // 0
-  StringRef baseColorUri;      // image URI relative to the source glTF, empty when embedded / none
+  uint32_t reserved;           // 0
+  TextureSlotRecord textures[5];  // base colour, metallic-roughness, normal, occlusion, emissive (textureSlots())
 };
-static_assert(sizeof(MaterialRecord) == 64 && offsetof(MaterialRecord, baseColorUri) == 56);
+static_assert(sizeof(MaterialRecord) == 352 && offsetof(MaterialRecord, alphaMode) == 56 &&
+              offsetof(MaterialRecord, textures) == 72);
+
+// Section "textures" (optional, with "textureClasses" and "texels"): one record per baked image.
+struct TextureRecord {
+  StringRef name;
+  int32_t sourceImage;     // source glTF image index, -1: unknown
+  uint32_t colorSpace;     // ColorSpace: 0 linear, 1 sRGB; equals its class's
+  uint32_t sizeClass;      // into "textureClasses"
+  uint32_t layer;          // < that class's layers; (sizeClass, layer) unique
+  uint32_t originalWidth;  // of the source image, >= 1
+  uint32_t originalHeight;
+};
+static_assert(sizeof(TextureRecord) == 32);
+
+// Section "textureClasses": one 2D array texture each (TextureClass).
+struct TextureClassRecord {
+  uint32_t size;        // width = height, power of two in [1, 16384]
+  uint32_t colorSpace;  // ColorSpace
+  uint32_t layers;      // 1..256
+  uint32_t mipCount;    // log2(size) + 1
+  uint64_t firstByte;   // into "texels", multiple of 16
+  uint64_t byteCount;   // sum over mips m of layers * max(size >> m, 1)^2 * 4
+};
+static_assert(sizeof(TextureClassRecord) == 32 && offsetof(TextureClassRecord, firstByte) == 16);
+
+// Section "texels": bytes (elementSize 1); each class's RGBA8 texels at its firstByte, mip-major (all layers of
+// mip 0, then of mip 1, ...), zero padding between classes.
+
+inline constexpr uint64_t kNoStream = ~uint64_t{0};
+
+// Section "meshStreams" (optional; absent: no mesh has extra streams): one record per mesh, in mesh order.
+struct MeshStreamsRecord {
+  uint64_t firstTangent;  // into "tangents" (vertexCount records), kNoStream: none
+  uint64_t firstUv1;      // into "uvs1" (vertexCount records), kNoStream: none
+};
+static_assert(sizeof(MeshStreamsRecord) == 16);
+// Section "tangents": float[4] per vertex (xyz unit, w = +-1, or all 0: none). Section "uvs1": float[2].
 
 // Section "objects": one record per Scene::objects entry.
 struct ObjectRecord {
@@ -137,7 +194,7 @@ struct ObjectRecord {
 };
 static_assert(sizeof(ObjectRecord) == 144 && offsetof(ObjectRecord, mesh) == 128);
 
-// Section names of version 1, all required, each at most once.
+// Section names; these eight are required, each at most once.
 inline constexpr const char* kSceneSection = "scene";
 inline constexpr const char* kStringsSection = "strings";
 inline constexpr const char* kMeshesSection = "meshes";
@@ -146,6 +203,13 @@ inline constexpr const char* kVerticesSection = "vertices";
 inline constexpr const char* kIndicesSection = "indices";
 inline constexpr const char* kMaterialsSection = "materials";
 inline constexpr const char* kObjectsSection = "objects";
+// Optional sections (each at most once): textures (all three or none) and extra vertex streams.
+inline constexpr const char* kTexturesSection = "textures";
+inline constexpr const char* kTextureClassesSection = "textureClasses";
+inline constexpr const char* kTexelsSection = "texels";
+inline constexpr const char* kMeshStreamsSection = "meshStreams";
+inline constexpr const char* kTangentsSection = "tangents";
+inline constexpr const char* kUvs1Section = "uvs1";
 
 // CRC-32 (IEEE, as zlib's crc32()): crc32(b, crc32(a)) == crc32(a + b). Start with crc = 0.
 uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -47,6 +48,12 @@ uint32_t expectedElementSize(std::string_view name) {
   if (name == pack::kIndicesSection) return sizeof(uint32_t);
   if (name == pack::kMaterialsSection) return sizeof(pack::MaterialRecord);
   if (name == pack::kObjectsSection) return sizeof(pack::ObjectRecord);
+  if (name == pack::kTexturesSection) return sizeof(pack::TextureRecord);
+  if (name == pack::kTextureClassesSection) return sizeof(pack::TextureClassRecord);
+  if (name == pack::kTexelsSection) return 1;
+  if (name == pack::kMeshStreamsSection) return sizeof(pack::MeshStreamsRecord);
+  if (name == pack::kTangentsSection) return sizeof(float) * 4;
+  if (name == pack::kUvs1Section) return sizeof(float) * 2;
   return 0;
 }
 
@@ -78,6 +85,18 @@ class Parser {
   Status readMeshes(Scene* scene);
   Status readMaterials(Scene* scene);
   Status readObjects(Scene* scene);
+  Status readMeshStreams(Scene* scene);
+  Status readTextures(Scene* scene);
+  Result<TextureRef> readTextureSlot(const pack::TextureSlotRecord& r, size_t slot, const Scene& scene,
+                                     const std::string& where) const;
+  // An optional section, or an empty view named `name` when the pack has none.
+  SectionView optional(const char* name) const {
+    auto it = sections_.find(name);
+    if (it != sections_.end()) return it->second;
+    SectionView empty{};
+    empty.name = name;
+    return empty;
+  }
 
   const uint8_t* data_;
   size_t size_;
@@ -120,7 +139,7 @@ Status Parser::parseTable() {
                             sizeof(pack::SectionEntry)));
   }
   if (h.flags != 0)
-    return fail(fmt::format("header field 'flags' is {:#x}; version 1 defines none", h.flags));
+    return fail(fmt::format("header field 'flags' is {:#x}; none are defined", h.flags));
   if (h.sectionCount == 0 || h.sectionCount > pack::kMaxSections) {
     return fail(fmt::format("header field 'sectionCount' is {} (1..{})", h.sectionCount, pack::kMaxSections));
   }
@@ -332,6 +351,33 @@ Status Parser::readMeshes(Scene* scene) {
   return {};
 }
 
+Result<TextureRef> Parser::readTextureSlot(const pack::TextureSlotRecord& r, size_t slot, const Scene& scene,
+                                           const std::string& where) const {
+  auto uri = string(r.uri, where + " field 'uri'");
+  if (!uri) return uri.error();
+  if (r.texture < -1 || r.texture >= int64_t(scene.textures.size()))
+    return fail(fmt::format("{}: field 'texture' {} is not -1 or below the {} textures", where, r.texture,
+                            scene.textures.size()));
+  if (r.texture >= 0 && scene.textures[size_t(r.texture)].colorSpace != textureSlotColorSpace(slot))
+    return fail(fmt::format("{}: texture {} has the wrong colour space for this slot", where, r.texture));
+  if (r.gltfTexture < -1 || r.gltfImage < -1)
+    return fail(where + ": fields 'gltfTexture' / 'gltfImage' must be >= -1");
+  if (r.texCoord > 1 || r.wrapS > 2 || r.wrapT > 2 || r.magFilter > 1 || r.minFilter > 1 || r.mipFilter > 2)
+    return fail(fmt::format("{}: 'texCoord' {} / wrap {} {} / filters {} {} {} out of range", where, r.texCoord,
+                            r.wrapS, r.wrapT, r.magFilter, r.minFilter, r.mipFilter));
+  if (!allFinite(r.transform, 6)) return fail(where + ": field 'transform' is not finite");
+  TextureRef t;
+  t.baked = r.texture;
+  t.texture = r.gltfTexture;
+  t.image = r.gltfImage;
+  t.texCoord = r.texCoord;
+  t.uri = *uri;
+  t.sampler = {WrapMode(r.wrapS), WrapMode(r.wrapT), TextureFilter(r.magFilter), TextureFilter(r.minFilter),
+               MipFilter(r.mipFilter)};
+  std::memcpy(&t.transform[0][0], r.transform, sizeof(r.transform));
+  return t;
+}
+
 Status Parser::readMaterials(Scene* scene) {
   const SectionView& s = sections_.at(pack::kMaterialsSection);
   if (s.entry.count == 0) return fail("section 'materials' is empty: a pack needs at least one material");
@@ -341,27 +387,126 @@ Status Parser::readMaterials(Scene* scene) {
     const std::string where = fmt::format("section 'materials' record {}", i);
     auto name = string(r.name, where + " field 'name'");
     if (!name) return name.error();
-    auto uri = string(r.baseColorUri, where + " field 'baseColorUri'");
-    if (!uri) return uri.error();
-    if (!allFinite(r.baseColor, 4) || !std::isfinite(r.alphaCutoff))
-      return fail(where + ": non-finite 'baseColor' or 'alphaCutoff'");
+    const float factors[] = {r.alphaCutoff, r.emissiveStrength, r.metallic, r.roughness, r.normalScale,
+                             r.occlusionStrength};
+    if (!allFinite(r.baseColor, 4) || !allFinite(r.emissive, 3) || !allFinite(factors, 6))
+      return fail(where + ": non-finite colour, factor or 'alphaCutoff'");
     if (r.alphaMode > uint32_t(AlphaMode::Blend))
       return fail(fmt::format("{}: field 'alphaMode' is {} (0 opaque, 1 mask, 2 blend)", where, r.alphaMode));
     if ((r.flags & ~pack::kMaterialDoubleSided) != 0)
       return fail(fmt::format("{}: field 'flags' {:#x} has unknown bits", where, r.flags));
-    if (r.baseColorTexture < -1 || r.baseColorImage < -1)
-      return fail(where + ": fields 'baseColorTexture' / 'baseColorImage' must be >= -1");
     Material m;
     m.name = *name;
     m.baseColor = glm::vec4(r.baseColor[0], r.baseColor[1], r.baseColor[2], r.baseColor[3]);
+    m.emissive = glm::vec3(r.emissive[0], r.emissive[1], r.emissive[2]);
+    m.emissiveStrength = r.emissiveStrength;
+    m.metallic = r.metallic;
+    m.roughness = r.roughness;
+    m.normalScale = r.normalScale;
+    m.occlusionStrength = r.occlusionStrength;
     m.alphaMode = AlphaMode(r.alphaMode);
     m.alphaCutoff = r.alphaCutoff;
     m.doubleSided = (r.flags & pack::kMaterialDoubleSided) != 0;
-    m.baseColorTexture.texture = r.baseColorTexture;
-    m.baseColorTexture.image = r.baseColorImage;
-    m.baseColorTexture.texCoord = r.baseColorTexCoord;
-    m.baseColorTexture.uri = *uri;
+    const auto slots = textureSlots(m);
+    for (size_t t = 0; t < slots.size(); ++t) {
+      auto ref = readTextureSlot(r.textures[t], t, *scene, fmt::format("{} texture slot {}", where, t));
+      if (!ref) return ref.error();
+      *slots[t] = std::move(ref.value());
+    }
     scene->materials.push_back(std::move(m));
+  }
+  return {};
+}
+
+Status Parser::readMeshStreams(Scene* scene) {
+  const SectionView s = optional(pack::kMeshStreamsSection);
+  const SectionView tangents = optional(pack::kTangentsSection);
+  const SectionView uvs1 = optional(pack::kUvs1Section);
+  if (s.data == nullptr && (tangents.data != nullptr || uvs1.data != nullptr))
+    return fail("sections 'tangents' / 'uvs1' need section 'meshStreams'");
+  if (s.data == nullptr) return {};
+  if (s.entry.count != scene->meshes.size())
+    return fail(fmt::format("section 'meshStreams' has {} records for {} meshes", s.entry.count, scene->meshes.size()));
+  for (uint64_t i = 0; i < s.entry.count; ++i) {
+    const auto r = record<pack::MeshStreamsRecord>(s, i);
+    Mesh& mesh = scene->meshes[i];
+    const uint64_t n = mesh.vertices.size();
+    const std::string where = fmt::format("section 'meshStreams' record {}", i);
+    if (r.firstTangent != pack::kNoStream) {
+      if (!rangeFits(r.firstTangent, n, tangents.entry.count))
+        return fail(fmt::format("{}: field 'firstTangent' {} + {} vertices runs past the {} records of section "
+                                "'tangents'", where, r.firstTangent, n, tangents.entry.count));
+      mesh.tangents.resize(n);
+      std::memcpy(mesh.tangents.data(), tangents.data + r.firstTangent * sizeof(glm::vec4), n * sizeof(glm::vec4));
+      for (uint64_t v = 0; v < n; ++v) {
+        const glm::vec4 t = mesh.tangents[v];
+        const float len = glm::length(glm::vec3(t));
+        const bool none = t == glm::vec4(0.0f);
+        if (!none && !(std::abs(len - 1.0f) < 1e-2f && (t.w == 1.0f || t.w == -1.0f)))
+          return fail(
+              fmt::format("{}: tangent of vertex {} is not a unit vector with w = +-1 (or all zero)", where, v));
+      }
+    }
+    if (r.firstUv1 != pack::kNoStream) {
+      if (!rangeFits(r.firstUv1, n, uvs1.entry.count))
+        return fail(fmt::format("{}: field 'firstUv1' {} + {} vertices runs past the {} records of section 'uvs1'",
+                                where, r.firstUv1, n, uvs1.entry.count));
+      mesh.uvs1.resize(n);
+      std::memcpy(mesh.uvs1.data(), uvs1.data + r.firstUv1 * sizeof(glm::vec2), n * sizeof(glm::vec2));
+      for (const glm::vec2& uv : mesh.uvs1)
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return fail(where + ": non-finite uv1");
+    }
+  }
+  return {};
+}
+
+Status Parser::readTextures(Scene* scene) {
+  const SectionView textures = optional(pack::kTexturesSection);
+  const SectionView classes = optional(pack::kTextureClassesSection);
+  const SectionView texels = optional(pack::kTexelsSection);
+  const int present = (textures.data != nullptr) + (classes.data != nullptr) + (texels.data != nullptr);
+  if (present == 0) return {};
+  if (present != 3) return fail("sections 'textures', 'textureClasses' and 'texels' must appear together");
+  for (uint64_t i = 0; i < classes.entry.count; ++i) {
+    const auto r = record<pack::TextureClassRecord>(classes, i);
+    const std::string where = fmt::format("section 'textureClasses' record {}", i);
+    TextureClass c;
+    c.size = r.size;
+    c.colorSpace = ColorSpace(r.colorSpace);
+    c.layers = r.layers;
+    c.mipCount = r.mipCount;
+    if (r.size < 1 || r.size > 16384 || !std::has_single_bit(r.size) || r.colorSpace > 1 || r.layers < 1 ||
+        r.layers > 256 || r.mipCount != TextureClass::mipCountFor(r.size)) {
+      return fail(fmt::format("{}: 'size' {} (power of two, 1..16384) / 'colorSpace' {} / 'layers' {} (1..256) / "
+                              "'mipCount' {} (log2(size) + 1) invalid",
+                              where, r.size, r.colorSpace, r.layers, r.mipCount));
+    }
+    if (r.byteCount != c.totalBytes())
+      return fail(fmt::format("{}: field 'byteCount' {} differs from the {} bytes its mips need", where, r.byteCount,
+                              c.totalBytes()));
+    if (r.firstByte % pack::kAlignment != 0 || !rangeFits(r.firstByte, r.byteCount, texels.entry.size))
+      return fail(fmt::format("{}: field 'firstByte' {} (+ {} bytes) is not 16-aligned inside section 'texels' ({} "
+                              "bytes)", where, r.firstByte, r.byteCount, texels.entry.size));
+    c.texels.assign(texels.data + r.firstByte, texels.data + r.firstByte + r.byteCount);
+    scene->textureClasses.push_back(std::move(c));
+  }
+  std::vector<std::vector<uint8_t>> used;
+  for (const TextureClass& c : scene->textureClasses) used.emplace_back(c.layers, 0);
+  for (uint64_t i = 0; i < textures.entry.count; ++i) {
+    const auto r = record<pack::TextureRecord>(textures, i);
+    const std::string where = fmt::format("section 'textures' record {}", i);
+    auto name = string(r.name, where + " field 'name'");
+    if (!name) return name.error();
+    if (r.sizeClass >= scene->textureClasses.size() || r.layer >= scene->textureClasses[r.sizeClass].layers)
+      return fail(fmt::format("{}: 'sizeClass' {} / 'layer' {} out of range", where, r.sizeClass, r.layer));
+    if (used[r.sizeClass][r.layer]++)
+      return fail(fmt::format("{}: class {} layer {} is used twice", where, r.sizeClass, r.layer));
+    if (r.colorSpace != uint32_t(scene->textureClasses[r.sizeClass].colorSpace))
+      return fail(fmt::format("{}: field 'colorSpace' {} differs from its class's", where, r.colorSpace));
+    if (r.sourceImage < -1 || r.originalWidth < 1 || r.originalHeight < 1)
+      return fail(where + ": 'sourceImage' < -1 or an original size of 0");
+    scene->textures.push_back({*name, r.sourceImage, ColorSpace(r.colorSpace), r.sizeClass, r.layer,
+                               r.originalWidth, r.originalHeight});
   }
   return {};
 }
@@ -396,6 +541,8 @@ Result<Scene> Parser::run() {
   Scene scene;
   if (Status s = readScene(&scene); !s) return s.error();
   if (Status s = readMeshes(&scene); !s) return s.error();
+  if (Status s = readMeshStreams(&scene); !s) return s.error();
+  if (Status s = readTextures(&scene); !s) return s.error();
   if (Status s = readMaterials(&scene); !s) return s.error();
   if (Status s = readObjects(&scene); !s) return s.error();
   if (Status s = validateScene(scene); !s) return fail(s.error().message);

@@ -5,7 +5,9 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -60,11 +62,151 @@ uint64_t alignUp(uint64_t v) { return (v + pack::kAlignment - 1) & ~(pack::kAlig
 
 std::string errnoText(int err) { return std::strerror(err); }
 
+Error invalid(std::string message) { return makeError(ErrorCode::MalformedInput, std::move(message)); }
+
+template <typename T>
+std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
+  std::vector<uint8_t> out(v.size() * sizeof(T));
+  if (!v.empty()) std::memcpy(out.data(), v.data(), out.size());
+  return out;
+}
+
+Result<pack::TextureSlotRecord> slotRecord(const TextureRef& t, const Scene& scene, size_t slot,
+                                           StringTable& strings, const std::string& where) {
+  const bool enumsOk = uint32_t(t.sampler.wrapS) <= 2 && uint32_t(t.sampler.wrapT) <= 2 &&
+                       uint32_t(t.sampler.magFilter) <= 1 && uint32_t(t.sampler.minFilter) <= 1 &&
+                       uint32_t(t.sampler.mipFilter) <= 2;
+  const float* m = &t.transform[0][0];
+  if (!enumsOk || t.texCoord > 1 || !std::all_of(m, m + 6, [](float x) { return std::isfinite(x); }))
+    return invalid(where + ": invalid sampler, texCoord (0 or 1) or non-finite transform");
+  if (t.baked < -1 || t.baked >= int64_t(scene.textures.size()))
+    return invalid(
+        fmt::format("{}: baked texture {} out of range ({} textures)", where, t.baked, scene.textures.size()));
+  if (t.baked >= 0 && scene.textures[size_t(t.baked)].colorSpace != textureSlotColorSpace(slot))
+    return invalid(fmt::format("{}: baked texture {} has the wrong colour space for this slot", where, t.baked));
+  pack::TextureSlotRecord r{};
+  r.texture = t.baked;
+  r.gltfTexture = t.texture;
+  r.gltfImage = t.image;
+  r.texCoord = t.texCoord;
+  r.wrapS = uint8_t(t.sampler.wrapS);
+  r.wrapT = uint8_t(t.sampler.wrapT);
+  r.magFilter = uint8_t(t.sampler.magFilter);
+  r.minFilter = uint8_t(t.sampler.minFilter);
+  r.mipFilter = uint8_t(t.sampler.mipFilter);
+  std::memcpy(r.transform, m, sizeof(r.transform));
+  auto uri = strings.add(t.uri);
+  if (!uri) return uri.error();
+  r.uri = *uri;
+  return r;
+}
+
+Result<std::vector<uint8_t>> serializeMaterials(const Scene& scene, StringTable& strings) {
+  std::vector<uint8_t> out;
+  for (size_t i = 0; i < scene.materials.size(); ++i) {
+    const Material& m = scene.materials[i];
+    const std::string where = fmt::format("material {} '{}'", i, m.name);
+    const float factors[] = {m.alphaCutoff, m.emissive.x, m.emissive.y, m.emissive.z, m.emissiveStrength,
+                             m.metallic,    m.roughness,  m.normalScale, m.occlusionStrength};
+    const bool factorsFinite =
+        std::all_of(std::begin(factors), std::end(factors), [](float x) { return std::isfinite(x); });
+    if (!finite(m.baseColor) || !factorsFinite)
+      return invalid(where + ": non-finite factor or alpha cutoff");
+    pack::MaterialRecord r{};
+    auto name = strings.add(m.name);
+    if (!name) return name.error();
+    r.name = *name;
+    for (int c = 0; c < 4; ++c) r.baseColor[c] = m.baseColor[c];
+    for (int c = 0; c < 3; ++c) r.emissive[c] = m.emissive[c];
+    r.emissiveStrength = m.emissiveStrength;
+    r.metallic = m.metallic;
+    r.roughness = m.roughness;
+    r.normalScale = m.normalScale;
+    r.occlusionStrength = m.occlusionStrength;
+    r.alphaMode = static_cast<uint32_t>(m.alphaMode);
+    r.alphaCutoff = m.alphaCutoff;
+    r.flags = m.doubleSided ? pack::kMaterialDoubleSided : 0u;
+    const auto slots = textureSlots(m);
+    for (size_t t = 0; t < slots.size(); ++t) {
+      auto slot = slotRecord(*slots[t], scene, t, strings, where + fmt::format(" texture slot {}", t));
+      if (!slot) return slot.error();
+      r.textures[t] = *slot;
+    }
+    append(out, r);
+  }
+  return out;
+}
+
+Status checkTextureClasses(const Scene& scene) {
+  std::vector<std::vector<uint8_t>> used(scene.textureClasses.size());
+  for (size_t i = 0; i < scene.textureClasses.size(); ++i) {
+    const TextureClass& c = scene.textureClasses[i];
+    if (c.size < 1 || c.size > 16384 || !std::has_single_bit(c.size) || c.layers < 1 || c.layers > 256 ||
+        c.mipCount != TextureClass::mipCountFor(c.size) || uint32_t(c.colorSpace) > 1 ||
+        c.texels.size() != c.totalBytes())
+      return invalid(fmt::format("texture class {}: inconsistent size, layers, mip count or texel bytes", i));
+    used[i].assign(c.layers, 0);
+  }
+  for (size_t i = 0; i < scene.textures.size(); ++i) {
+    const Texture& t = scene.textures[i];
+    if (t.sizeClass >= scene.textureClasses.size() || t.layer >= scene.textureClasses[t.sizeClass].layers ||
+        used[t.sizeClass][t.layer]++ || t.colorSpace != scene.textureClasses[t.sizeClass].colorSpace ||
+        t.originalWidth < 1 || t.originalHeight < 1)
+      return invalid(fmt::format("texture {} '{}': bad class, layer, colour space or original size", i, t.name));
+  }
+  return {};
+}
+
+// Appends "textures", "textureClasses" and "texels" when the scene has baked textures.
+Status serializeTextures(const Scene& scene, StringTable& strings, std::vector<Section>* sections) {
+  if (scene.textures.empty() && scene.textureClasses.empty()) return {};
+  if (Status s = checkTextureClasses(scene); !s) return s;
+  std::vector<uint8_t> textureBytes, classBytes, texels;
+  for (const Texture& t : scene.textures) {
+    auto name = strings.add(t.name);
+    if (!name) return name.error();
+    append(textureBytes, pack::TextureRecord{*name, t.sourceImage, uint32_t(t.colorSpace), t.sizeClass, t.layer,
+                                             t.originalWidth, t.originalHeight});
+  }
+  for (const TextureClass& c : scene.textureClasses) {
+    texels.resize(alignUp(texels.size()), 0);
+    append(classBytes, pack::TextureClassRecord{c.size, uint32_t(c.colorSpace), c.layers, c.mipCount, texels.size(),
+                                                c.texels.size()});
+    texels.insert(texels.end(), c.texels.begin(), c.texels.end());
+  }
+  sections->push_back(
+      {pack::kTexturesSection, sizeof(pack::TextureRecord), scene.textures.size(), std::move(textureBytes)});
+  sections->push_back({pack::kTextureClassesSection, sizeof(pack::TextureClassRecord), scene.textureClasses.size(),
+                       std::move(classBytes)});
+  const uint64_t texelCount = texels.size();
+  sections->push_back({pack::kTexelsSection, 1, texelCount, std::move(texels)});
+  return {};
+}
+
+// Appends "meshStreams", "tangents" and "uvs1" when some mesh has tangents or a second uv set.
+void serializeMeshStreams(const Scene& scene, std::vector<Section>* sections) {
+  std::vector<pack::MeshStreamsRecord> records;
+  std::vector<glm::vec4> tangents;
+  std::vector<glm::vec2> uvs1;
+  for (const Mesh& m : scene.meshes) {
+    pack::MeshStreamsRecord r{pack::kNoStream, pack::kNoStream};
+    if (!m.tangents.empty()) r.firstTangent = tangents.size();
+    if (!m.uvs1.empty()) r.firstUv1 = uvs1.size();
+    tangents.insert(tangents.end(), m.tangents.begin(), m.tangents.end());
+    uvs1.insert(uvs1.end(), m.uvs1.begin(), m.uvs1.end());
+    records.push_back(r);
+  }
+  if (tangents.empty() && uvs1.empty()) return;
+  sections->push_back({pack::kMeshStreamsSection, sizeof(pack::MeshStreamsRecord), records.size(), bytesOf(records)});
+  if (!tangents.empty())
+    sections->push_back({pack::kTangentsSection, sizeof(glm::vec4), tangents.size(), bytesOf(tangents)});
+  if (!uvs1.empty()) sections->push_back({pack::kUvs1Section, sizeof(glm::vec2), uvs1.size(), bytesOf(uvs1)});
+}
+
 }  // namespace
 
 Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* report) {
   if (Status s = validateScene(scene); !s) return s.error();
-  auto invalid = [](std::string message) { return makeError(ErrorCode::MalformedInput, std::move(message)); };
   StringTable strings;
 
   // scene
@@ -141,27 +283,8 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
   }
 
   // materials
-  std::vector<uint8_t> materialBytes;
-  for (size_t i = 0; i < scene.materials.size(); ++i) {
-    const Material& m = scene.materials[i];
-    if (!finite(m.baseColor) || !std::isfinite(m.alphaCutoff))
-      return invalid(fmt::format("material {} '{}': non-finite base colour or alpha cutoff", i, m.name));
-    pack::MaterialRecord r{};
-    auto name = strings.add(m.name);
-    if (!name) return name.error();
-    auto uri = strings.add(m.baseColorTexture.uri);
-    if (!uri) return uri.error();
-    r.name = *name;
-    for (int c = 0; c < 4; ++c) r.baseColor[c] = m.baseColor[c];
-    r.alphaMode = static_cast<uint32_t>(m.alphaMode);
-    r.alphaCutoff = m.alphaCutoff;
-    r.flags = m.doubleSided ? pack::kMaterialDoubleSided : 0u;
-    r.baseColorTexture = m.baseColorTexture.texture;
-    r.baseColorImage = m.baseColorTexture.image;
-    r.baseColorTexCoord = m.baseColorTexture.texCoord;
-    r.baseColorUri = *uri;
-    append(materialBytes, r);
-  }
+  Result<std::vector<uint8_t>> materialBytes = serializeMaterials(scene, strings);
+  if (!materialBytes) return materialBytes.error();
 
   // objects (validateScene checked indices and finite, non-degenerate transforms)
   std::vector<uint8_t> objectBytes;
@@ -181,11 +304,13 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
       {pack::kMeshesSection, sizeof(pack::MeshRecord), scene.meshes.size(), std::move(meshBytes)});
   sections.push_back({pack::kLodsSection, sizeof(pack::LodRecord), lodTotal, std::move(lodBytes)});
   sections.push_back({pack::kMaterialsSection, sizeof(pack::MaterialRecord), scene.materials.size(),
-                      std::move(materialBytes)});
+                      std::move(materialBytes.value())});
   sections.push_back(
       {pack::kObjectsSection, sizeof(pack::ObjectRecord), scene.objects.size(), std::move(objectBytes)});
   sections.push_back({pack::kVerticesSection, sizeof(gpu::Vertex), vertexTotal, std::move(vertexBytes)});
   sections.push_back({pack::kIndicesSection, sizeof(uint32_t), indexTotal, std::move(indexBytes)});
+  serializeMeshStreams(scene, &sections);
+  if (Status s = serializeTextures(scene, strings, &sections); !s) return s.error();
   const uint64_t stringCount = strings.bytes().size();
   sections.push_back({pack::kStringsSection, 1, stringCount, std::move(strings.bytes())});
 

@@ -73,6 +73,13 @@ Status writeColorImage(const std::string& path, uint32_t width, uint32_t height,
   return writeWith(path, spec, OIIO::TypeDesc::UINT8, px.data());
 }
 
+Status writeRgba8Image(const std::string& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba) {
+  if (rgba.size() != size_t(width) * height * 4) return makeError(ErrorCode::InvalidArgument, "RGBA8 image size mismatch");
+  OIIO::ImageSpec spec(int(width), int(height), 4, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // the texels are straight alpha: write them unchanged
+  return writeWith(path, spec, OIIO::TypeDesc::UINT8, rgba.data());
+}
+
 Status writeIdImage(const std::string& path, uint32_t width, uint32_t height, const std::vector<uint32_t>& ids) {
   if (ids.size() != size_t(width) * height * 2) return makeError(ErrorCode::InvalidArgument, "ID image size mismatch");
   const std::string ext = extensionOf(path);

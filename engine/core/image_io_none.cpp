@@ -13,6 +13,7 @@ Error unavailable(const std::string& path) {
 }  // namespace
 
 Status writeColorImage(const std::string& path, uint32_t, uint32_t, const std::vector<float>&) { return unavailable(path); }
+Status writeRgba8Image(const std::string& path, uint32_t, uint32_t, const std::vector<uint8_t>&) { return unavailable(path); }
 Status writeIdImage(const std::string& path, uint32_t, uint32_t, const std::vector<uint32_t>&) { return unavailable(path); }
 Status readIdImage(const std::string& path, uint32_t&, uint32_t&, std::vector<uint32_t>&) { return unavailable(path); }
 

@@ -16,6 +16,10 @@ struct MeshSource {
   std::vector<glm::vec3> normals;  // same count as positions (generated when absent)
   std::vector<glm::vec2> uvs;      // empty or same count as positions
   std::vector<uint32_t> colors;    // empty or same count as positions, RGBA8 (R in low byte)
+  std::vector<glm::vec2> uvs1;     // TEXCOORD_1: empty or same count as positions
+  // Empty or same count as positions: xyz unit (along +u of TEXCOORD_0), w = +1 or -1 the handedness,
+  // bitangent = cross(normal, xyz) * w; (0,0,0,0) for vertices that have none (the shader derives one).
+  std::vector<glm::vec4> tangents;
   std::vector<uint32_t> indices;   // 3 per triangle, each < positions.size()
 };
 

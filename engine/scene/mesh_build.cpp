@@ -20,6 +20,22 @@ uint32_t packColor(glm::vec4 c) {
   return q(c.r) | (q(c.g) << 8) | (q(c.b) << 16) | (q(c.a) << 24);
 }
 
+// Applies a meshopt remap table (old vertex -> new vertex) to one optional stream; empty stays empty.
+template <typename T>
+std::vector<T> remapStream(const std::vector<T>& in, const std::vector<uint32_t>& remap, size_t outCount) {
+  if (in.empty()) return {};
+  std::vector<T> out(outCount);
+  meshopt_remapVertexBuffer(out.data(), in.data(), in.size(), sizeof(T), remap.data());
+  return out;
+}
+
+// Tangents must be finite unit-ish vectors with w = +-1, or all zero ("none for this vertex").
+bool validTangent(const glm::vec4& t) {
+  if (t == glm::vec4(0.0f)) return true;
+  const float len = glm::length(glm::vec3(t));
+  return std::isfinite(len) && std::abs(len - 1.0f) < 1e-2f && (t.w == 1.0f || t.w == -1.0f);
+}
+
 }  // namespace
 
 uint32_t octEncode(glm::vec3 n) {
@@ -86,7 +102,9 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
                      fmt::format("mesh '{}': needs vertices and a multiple of 3 indices (has {} / {})",
                                  source.name, vertexCount, source.indices.size()));
   if (source.normals.size() != vertexCount || (!source.uvs.empty() && source.uvs.size() != vertexCount) ||
-      (!source.colors.empty() && source.colors.size() != vertexCount))
+      (!source.colors.empty() && source.colors.size() != vertexCount) ||
+      (!source.uvs1.empty() && source.uvs1.size() != vertexCount) ||
+      (!source.tangents.empty() && source.tangents.size() != vertexCount))
     return makeError(ErrorCode::MalformedInput, fmt::format("mesh '{}': attribute counts differ", source.name));
   for (uint32_t i : source.indices)
     if (i >= vertexCount)
@@ -101,7 +119,17 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
                        fmt::format("mesh '{}': vertex {} has a non-finite position or normal", source.name, i));
   }
 
-  // Interleave into the GPU vertex format, then deduplicate identical vertices.
+  for (size_t i = 0; i < source.tangents.size(); ++i)
+    if (!validTangent(source.tangents[i]))
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("mesh '{}': vertex {} has an invalid tangent (need unit xyz, w = +-1)",
+                                   source.name, i));
+  for (size_t i = 0; i < source.uvs1.size(); ++i)
+    if (!std::isfinite(source.uvs1[i].x) || !std::isfinite(source.uvs1[i].y))
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("mesh '{}': vertex {} has a non-finite uv1", source.name, i));
+
+  // Interleave into the GPU vertex format, then deduplicate vertices identical in every stream.
   std::vector<gpu::Vertex> raw(vertexCount);
   for (size_t i = 0; i < vertexCount; ++i) {
     gpu::Vertex& v = raw[i];
@@ -116,12 +144,16 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   }
   const size_t indexCount = source.indices.size();
   std::vector<uint32_t> remap(vertexCount);
-  size_t unique = meshopt_generateVertexRemap(remap.data(), source.indices.data(), indexCount, raw.data(),
-                                              vertexCount, sizeof(gpu::Vertex));
+  std::vector<meshopt_Stream> streams = {{raw.data(), sizeof(gpu::Vertex), sizeof(gpu::Vertex)}};
+  if (!source.tangents.empty()) streams.push_back({source.tangents.data(), sizeof(glm::vec4), sizeof(glm::vec4)});
+  if (!source.uvs1.empty()) streams.push_back({source.uvs1.data(), sizeof(glm::vec2), sizeof(glm::vec2)});
+  size_t unique = meshopt_generateVertexRemapMulti(remap.data(), source.indices.data(), indexCount, vertexCount,
+                                                   streams.data(), streams.size());
   Mesh mesh;
   mesh.name = source.name;
-  mesh.vertices.resize(unique);
-  meshopt_remapVertexBuffer(mesh.vertices.data(), raw.data(), vertexCount, sizeof(gpu::Vertex), remap.data());
+  mesh.vertices = remapStream(raw, remap, unique);
+  mesh.tangents = remapStream(source.tangents, remap, unique);
+  mesh.uvs1 = remapStream(source.uvs1, remap, unique);
   std::vector<uint32_t> lod0(indexCount);
   meshopt_remapIndexBuffer(lod0.data(), source.indices.data(), indexCount, remap.data());
 
@@ -129,9 +161,14 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   const size_t stride = sizeof(gpu::Vertex);
   meshopt_optimizeVertexCache(lod0.data(), lod0.data(), indexCount, unique);
   meshopt_optimizeOverdraw(lod0.data(), lod0.data(), indexCount, pos, unique, stride, 1.05f);
-  // Fetch order follows LOD0; coarser levels index a subset of the same vertices.
-  meshopt_optimizeVertexFetch(mesh.vertices.data(), lod0.data(), indexCount, mesh.vertices.data(), unique,
-                              stride);
+  // Fetch order follows LOD0; coarser levels index a subset of the same vertices. Every vertex is used by
+  // LOD0 (the remap above keeps only referenced ones), so the fetch remap is a permutation.
+  std::vector<uint32_t> fetch(unique);
+  meshopt_optimizeVertexFetchRemap(fetch.data(), lod0.data(), indexCount, unique);
+  meshopt_remapIndexBuffer(lod0.data(), lod0.data(), indexCount, fetch.data());
+  mesh.vertices = remapStream(mesh.vertices, fetch, unique);
+  mesh.tangents = remapStream(mesh.tangents, fetch, unique);
+  mesh.uvs1 = remapStream(mesh.uvs1, fetch, unique);
   pos = &mesh.vertices[0].px;
 
   mesh.indices = lod0;

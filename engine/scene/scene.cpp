@@ -45,6 +45,10 @@ Status validateScene(const Scene& scene) {
     for (const Lod& l : m.lods)
       if (l.indexCount == 0 || l.indexCount % 3 || size_t(l.firstIndex) + l.indexCount > m.indices.size())
         return makeError(ErrorCode::MalformedInput, fmt::format("mesh {} '{}': LOD range out of bounds", i, m.name));
+    if ((!m.tangents.empty() && m.tangents.size() != m.vertices.size()) ||
+        (!m.uvs1.empty() && m.uvs1.size() != m.vertices.size()))
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("mesh {} '{}': tangent / uv1 stream size differs from the vertex count", i, m.name));
     for (uint32_t idx : m.indices)
       if (idx >= m.vertices.size())
         return makeError(ErrorCode::MalformedInput, fmt::format("mesh {} '{}': index out of range", i, m.name));
@@ -62,6 +66,18 @@ Status validateScene(const Scene& scene) {
                        fmt::format("object {}: degenerate (zero-scale) transform", i));
   }
   return {};
+}
+
+std::array<const TextureRef*, kTextureSlotCount> textureSlots(const Material& m) {
+  return {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture, &m.occlusionTexture, &m.emissiveTexture};
+}
+
+std::array<TextureRef*, kTextureSlotCount> textureSlots(Material& m) {
+  return {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture, &m.occlusionTexture, &m.emissiveTexture};
+}
+
+ColorSpace textureSlotColorSpace(size_t slot) {
+  return slot == 0 || slot == 4 ? ColorSpace::Srgb : ColorSpace::Linear;
 }
 
 }  // namespace visbuf

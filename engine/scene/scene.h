@@ -2,6 +2,7 @@
 // Positions are double on the CPU; the GPU mirror stores them relative to `anchor` in float.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 
 #include "core/result.h"
 #include "scene/mesh.h"
+#include "scene/texture.h"
 #include "shared/types.h"
 
 namespace visbuf {
@@ -24,6 +26,10 @@ struct Lod {
 struct Mesh {
   std::string name;
   std::vector<gpu::Vertex> vertices;
+  // Optional streams parallel to `vertices` (empty, or one per vertex; see MeshSource), kept out of the
+  // 32-byte gpu::Vertex that every pass reads.
+  std::vector<glm::vec4> tangents;
+  std::vector<glm::vec2> uvs1;
   std::vector<uint32_t> indices;  // every LOD, concatenated; indices are mesh-local
   std::vector<Lod> lods;          // lods[0] = full mesh; error non-decreasing
   glm::vec4 boundsSphere{0.0f};   // contains every vertex
@@ -47,23 +53,33 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
 // glTF alpha modes. Values are stored in packs: never renumber.
 enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
 
-// A reference to a texture image, carried as metadata until textures are supported (no pixels loaded).
-struct TextureRef {
-  int32_t texture = -1;  // source glTF texture index; -1: no texture
-  int32_t image = -1;    // source glTF image index; -1: none or unknown
-  uint32_t texCoord = 0; // TEXCOORD_n set the texture is sampled with
-  std::string uri;       // image URI as written in the glTF (relative to it); empty for embedded images
-  bool operator==(const TextureRef&) const = default;
-};
-
 struct Material {
   std::string name;
   glm::vec4 baseColor{1.0f};  // linear RGBA, each in [0,1]
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;   // AlphaMode::Mask: fragments with alpha < cutoff are discarded
   bool doubleSided = false;
-  TextureRef baseColorTexture;
+  TextureRef baseColorTexture;  // sRGB; multiplies baseColor
+  // Metallic-roughness model (glTF 2.0 core); defaults are glTF's.
+  float metallic = 1.0f;              // [0,1]
+  float roughness = 1.0f;             // [0,1]
+  TextureRef metallicRoughnessTexture;  // linear; B: metallic, G: roughness (multiply the factors)
+  TextureRef normalTexture;           // linear, tangent space; xy scaled by normalScale
+  float normalScale = 1.0f;
+  TextureRef occlusionTexture;        // linear; R: occlusion, strength lerps from 1 to it
+  float occlusionStrength = 1.0f;     // [0,1]
+  glm::vec3 emissive{0.0f};           // linear RGB factor, each in [0,1]
+  float emissiveStrength = 1.0f;      // KHR_materials_emissive_strength, >= 0; multiplies emissive
+  TextureRef emissiveTexture;         // sRGB; multiplies emissive * emissiveStrength
 };
+
+// A material's five texture slots in a fixed order (packs store them in this order): base colour,
+// metallic-roughness, normal, occlusion, emissive.
+inline constexpr size_t kTextureSlotCount = 5;
+std::array<const TextureRef*, kTextureSlotCount> textureSlots(const Material& m);
+std::array<TextureRef*, kTextureSlotCount> textureSlots(Material& m);
+// Colour space of a slot's texels: Srgb for base colour and emissive, Linear for the data textures.
+ColorSpace textureSlotColorSpace(size_t slot);
 
 struct Object {
   glm::dmat4 transform{1.0};  // object -> world (affine)
@@ -84,6 +100,8 @@ struct Scene {
   std::vector<Mesh> meshes;
   std::vector<Material> materials;
   std::vector<Object> objects;
+  std::vector<Texture> textures;            // baked images, referenced by TextureRef::baked
+  std::vector<TextureClass> textureClasses; // their pixels (texture.h)
   glm::dvec3 anchor{0.0};  // GPU positions are relative to this point
   Camera defaultCamera;
   glm::vec3 lightDirection = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));  // towards the light

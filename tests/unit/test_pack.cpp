@@ -72,6 +72,46 @@ Scene makeTestScene(uint32_t knotSegments = 64, uint32_t knotSides = 12) {
   return scene;
 }
 
+// makeTestScene plus every optional section: tangents (one "none" vertex, both handednesses) and a second uv
+// set on the box, and baked textures in two classes (4x4 sRGB with 2 layers, 2x2 linear) that the mask
+// material references from its base colour, normal and emissive slots with non-default samplers/transforms.
+Scene makeTexturedTestScene() {
+  Scene scene = makeTestScene(16, 6);
+  Mesh& box = scene.meshes[1];
+  box.tangents.assign(box.vertices.size(), glm::vec4(1.0f, 0.0f, 0.0f, 1.0f));
+  box.tangents[0] = glm::vec4(0.0f, 1.0f, 0.0f, -1.0f);
+  box.tangents[1] = glm::vec4(0.0f);
+  for (size_t i = 0; i < box.vertices.size(); ++i) box.uvs1.push_back(glm::vec2(0.5f * float(i), -float(i)));
+  auto makeClass = [](uint32_t size, ColorSpace cs, uint32_t layers) {
+    TextureClass c;
+    c.size = size;
+    c.colorSpace = cs;
+    c.layers = layers;
+    c.mipCount = TextureClass::mipCountFor(size);
+    c.texels.resize(c.totalBytes());
+    for (size_t i = 0; i < c.texels.size(); ++i) c.texels[i] = uint8_t(i * 7 + size);
+    return c;
+  };
+  scene.textureClasses = {makeClass(4, ColorSpace::Srgb, 2), makeClass(2, ColorSpace::Linear, 1)};
+  scene.textures = {{"albedo", 0, ColorSpace::Srgb, 0, 0, 640, 480},
+                    {"glow", 3, ColorSpace::Srgb, 0, 1, 4, 4},
+                    {"normal", -1, ColorSpace::Linear, 1, 0, 2, 2}};
+  Material& m = scene.materials[1];
+  m.baseColorTexture.baked = 0;
+  m.baseColorTexture.transform = glm::mat3x2(2.0f, -0.5f, 0.25f, 3.0f, 0.125f, -1.0f);
+  m.baseColorTexture.sampler = {WrapMode::ClampToEdge, WrapMode::MirroredRepeat, TextureFilter::Nearest,
+                                TextureFilter::Linear, MipFilter::None};
+  m.normalTexture = {1, 4, 1, "n.png", glm::mat3x2(1.0f), {}, 2};
+  m.normalScale = 0.5f;
+  m.emissiveTexture.baked = 1;
+  m.emissive = {1.0f, 0.5f, 0.0f};
+  m.emissiveStrength = 7.0f;
+  m.metallic = 0.25f;
+  m.roughness = 0.75f;
+  m.occlusionStrength = 0.5f;
+  return scene;
+}
+
 void expectScenesEqual(const Scene& a, const Scene& b) {
   EXPECT_EQ(a.name, b.name);
   EXPECT_EQ(a.anchor, b.anchor);
@@ -91,6 +131,8 @@ void expectScenesEqual(const Scene& a, const Scene& b) {
     EXPECT_EQ(std::memcmp(x.vertices.data(), y.vertices.data(), x.vertices.size() * sizeof(gpu::Vertex)), 0)
         << "mesh " << i;
     EXPECT_EQ(x.indices, y.indices) << "mesh " << i;
+    EXPECT_EQ(x.tangents, y.tangents) << "mesh " << i;
+    EXPECT_EQ(x.uvs1, y.uvs1) << "mesh " << i;
     ASSERT_EQ(x.lods.size(), y.lods.size());
     for (size_t l = 0; l < x.lods.size(); ++l) {
       EXPECT_EQ(x.lods[l].firstIndex, y.lods[l].firstIndex);
@@ -108,7 +150,17 @@ void expectScenesEqual(const Scene& a, const Scene& b) {
     EXPECT_EQ(x.alphaCutoff, y.alphaCutoff);
     EXPECT_EQ(x.doubleSided, y.doubleSided);
     EXPECT_EQ(x.baseColorTexture, y.baseColorTexture);
+    EXPECT_EQ(x.metallic, y.metallic);
+    EXPECT_EQ(x.roughness, y.roughness);
+    EXPECT_EQ(x.normalScale, y.normalScale);
+    EXPECT_EQ(x.occlusionStrength, y.occlusionStrength);
+    EXPECT_EQ(x.emissive, y.emissive);
+    EXPECT_EQ(x.emissiveStrength, y.emissiveStrength);
+    for (size_t t = 0; t < kTextureSlotCount; ++t)
+      EXPECT_EQ(*textureSlots(x)[t], *textureSlots(y)[t]) << "material " << i << " slot " << t;
   }
+  EXPECT_EQ(a.textures, b.textures);
+  EXPECT_EQ(a.textureClasses, b.textureClasses);
   ASSERT_EQ(a.objects.size(), b.objects.size());
   for (size_t i = 0; i < a.objects.size(); ++i) {
     EXPECT_EQ(a.objects[i].transform, b.objects[i].transform) << "object " << i;
@@ -218,6 +270,32 @@ TEST(PackRoundTrip, GeneratedSceneInMemory) {
   EXPECT_EQ(*again, *bytes);
 }
 
+TEST(PackRoundTrip, TexturedSceneInMemory) {
+  const Scene scene = makeTexturedTestScene();
+  PackWriteReport report;
+  Result<std::vector<uint8_t>> bytes = serializePack(scene, &report);
+  ASSERT_TRUE(bytes) << bytes.error().message;
+  EXPECT_EQ(report.sections.size(), 14u);  // the 8 required + meshStreams, tangents, uvs1, 3 texture sections
+  Result<Scene> back = parse(*bytes);
+  ASSERT_TRUE(back) << back.error().message;
+  expectScenesEqual(scene, *back);
+  Result<std::vector<uint8_t>> again = serializePack(*back);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(*again, *bytes);
+  // A texture class starts 16-aligned in "texels"; the second one after the first one's bytes.
+  const pack::SectionEntry classes = entryOf(*bytes, sectionIndex(*bytes, "textureClasses"));
+  pack::TextureClassRecord second;
+  std::memcpy(&second, bytes->data() + classes.offset + sizeof(second), sizeof(second));
+  EXPECT_EQ(second.firstByte, (scene.textureClasses[0].texels.size() + 15) / 16 * 16);
+  // The writer refuses inconsistent texture data.
+  Scene broken = scene;
+  broken.textureClasses[1].texels.pop_back();
+  EXPECT_FALSE(serializePack(broken));
+  broken = scene;
+  broken.materials[1].baseColorTexture.baked = 2;  // a linear texture in the sRGB base colour slot
+  EXPECT_FALSE(serializePack(broken));
+}
+
 TEST_F(PackFileTest, GeneratedSceneThroughFile) {
   const Scene scene = makeTestScene();
   const fs::path path = dir_ / "scene.vbp";
@@ -278,6 +356,17 @@ TEST(PackReader, FlippedByteInEachSectionIsAChecksumError) {
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene(), &report);
   ASSERT_TRUE(bytes);
   ASSERT_EQ(report.sections.size(), 8u);
+  PackWriteReport texturedReport;
+  Result<std::vector<uint8_t>> textured = serializePack(makeTexturedTestScene(), &texturedReport);
+  ASSERT_TRUE(textured);
+  for (const PackSectionInfo& s : texturedReport.sections) {
+    ASSERT_GT(s.size, 0u) << s.name;
+    for (uint64_t at : {s.offset, s.offset + s.size / 2, s.offset + s.size - 1}) {
+      std::vector<uint8_t> damaged = *textured;
+      damaged[at] ^= 0x10;
+      EXPECT_TRUE(failsWith(parse(damaged), "section '" + s.name + "': checksum mismatch")) << "byte " << at;
+    }
+  }
   for (const PackSectionInfo& s : report.sections) {
     ASSERT_GT(s.size, 0u) << s.name;
     for (uint64_t at : {s.offset, s.offset + s.size / 2, s.offset + s.size - 1}) {
@@ -302,7 +391,8 @@ TEST(PackReader, WrongMagicAndVersion) {
   h.version = pack::kVersion + 1;
   std::memcpy(v.data(), &h, sizeof(h));
   reseal(v);
-  EXPECT_TRUE(failsWith(parse(v), "pack format version 2 is not supported", ErrorCode::Unsupported));
+  EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
+                        ErrorCode::Unsupported));
   v = *bytes;
   v[0] = 'X';
   EXPECT_TRUE(failsWith(parse(v), "not a visbuf pack"));
@@ -412,6 +502,54 @@ TEST(PackReader, BadReferencesInsideSections) {
                         "vertex 3 lies outside field 'boundsSphere'"));
 }
 
+TEST(PackReader, BadTexturesAndStreams) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTexturedTestScene());
+  ASSERT_TRUE(bytes);
+  auto edit = [&](const char* section, size_t record, size_t at, auto value) {
+    std::vector<uint8_t> v = *bytes;
+    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
+    std::memcpy(v.data() + e.offset + record * e.elementSize + at, &value, sizeof(value));
+    reseal(v);
+    return parse(v);
+  };
+  EXPECT_TRUE(failsWith(edit("textures", 1, 20, uint32_t{9}), "section 'textures' record 1: 'sizeClass' 0 / 'layer' 9"));
+  EXPECT_TRUE(failsWith(edit("textures", 1, 20, uint32_t{0}), "class 0 layer 0 is used twice"));
+  EXPECT_TRUE(failsWith(edit("textures", 2, 12, uint32_t{1}), "section 'textures' record 2: field 'colorSpace' 1"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 0, 0, uint32_t{3}), "section 'textureClasses' record 0: 'size' 3"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 12, uint32_t{5}), "'mipCount' 5"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 24, uint64_t{1} << 40), "field 'byteCount' 1099511627776"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 16, ~uint64_t{15}), "is not 16-aligned inside section 'texels'"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 16, uint64_t{8}), "field 'firstByte' 8"));
+  const size_t slot0 = offsetof(pack::MaterialRecord, textures);
+  const size_t normalSlot = slot0 + 2 * sizeof(pack::TextureSlotRecord);
+  EXPECT_TRUE(failsWith(edit("materials", 1, slot0, int32_t{99}), "record 1 texture slot 0: field 'texture' 99"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, slot0, int32_t{2}), "texture 2 has the wrong colour space"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, normalSlot + 12, uint32_t{2}), "texture slot 2: 'texCoord' 2"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 17, uint8_t{3}), "texture slot 0: 'texCoord' 1 / wrap 1 3"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 28, float{NAN}), "texture slot 0: field 'transform'"));
+  EXPECT_TRUE(failsWith(edit("materials", 0, 40, float{INFINITY}), "record 0: non-finite colour, factor"));
+  EXPECT_TRUE(failsWith(edit("meshStreams", 1, 0, ~uint64_t{0} - 1), "section 'meshStreams' record 1: field 'firstTangent'"));
+  EXPECT_TRUE(failsWith(edit("meshStreams", 0, 8, uint64_t{0}), "section 'meshStreams' record 0: field 'firstUv1' 0"));
+  EXPECT_TRUE(failsWith(edit("tangents", 2, 12, 0.5f), "record 1: tangent of vertex 2"));
+  EXPECT_TRUE(failsWith(edit("uvs1", 3, 0, float{NAN}), "record 1: non-finite uv1"));
+  {
+    std::vector<uint8_t> v = *bytes;  // texels renamed: textures without pixels
+    pack::SectionEntry e = entryOf(v, sectionIndex(v, "texels"));
+    std::strcpy(e.name, "texelz");
+    setEntry(v, sectionIndex(v, "texels"), e);
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "'textures', 'textureClasses' and 'texels' must appear together"));
+  }
+  {
+    std::vector<uint8_t> v = *bytes;
+    pack::SectionEntry e = entryOf(v, sectionIndex(v, "meshStreams"));
+    std::strcpy(e.name, "meshStreamz");
+    setEntry(v, sectionIndex(v, "meshStreams"), e);
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "need section 'meshStreams'"));
+  }
+}
+
 // --- atomic writes
 // ------------------------------------------------------------------------------------------
 
@@ -481,14 +619,23 @@ TEST_F(PackFileTest, UnwritableDirectory) {
 // --- fuzz
 // ---------------------------------------------------------------------------------------------------
 
+void fuzzPack(const Scene& scene, uint64_t seed);
+
 // 2,000 random mutations of a valid pack (fixed seed): bit flips, random bytes, extreme integers written over
 // header/table/record fields, truncation and extension. Half of them are resealed (checksums recomputed) so
 // that they reach the structural and content checks. Every read must return (no crash, no sanitizer report
 // under the sanitizer build); a success must be a valid scene.
 TEST(PackFuzz, RandomMutationsNeverCrash) {
-  Result<std::vector<uint8_t>> original = serializePack(makeTestScene(16, 6));
+  for (const bool textured : {false, true}) {
+    SCOPED_TRACE(textured ? "textured" : "plain");
+    fuzzPack(textured ? makeTexturedTestScene() : makeTestScene(16, 6), textured ? 20240612 : 20240611);
+  }
+}
+
+void fuzzPack(const Scene& scene, uint64_t seed) {
+  Result<std::vector<uint8_t>> original = serializePack(scene);
   ASSERT_TRUE(original);
-  Rng rng(20240611);
+  Rng rng(seed);
   auto below = [&](uint64_t n) { return n == 0 ? 0 : rng.next() % n; };
   const uint64_t extremes[] = {0,
                                1,

@@ -1,0 +1,95 @@
+// Texture baking for `visbuf bake`: the images that materials reference are decoded (OpenImageIO: PNG, JPEG;
+// embedded or external), resized to a square power of two, given a full box-filtered mip chain and grouped
+// into size classes (engine/scene/texture.h; docs/pack-format.md explains the layout).
+//
+// Per image, in this order:
+//   1. Decode to float RGBA (grey -> RGB, no alpha -> 1; alpha stays straight, not premultiplied). Colour
+//      textures (base colour, emissive) are sRGB: their RGB is converted to linear light here.
+//   2. Size: S = min(maxTextureSize, P) where P is the power of two NEAREST to the larger side (ties round up:
+//      300 -> 256, 400 -> 512, 384 -> 512), so that side is stretched by at most 4/3 or shrunk to no less than
+//      2/3. Non-square images become S x S, stretching the shorter side (the shader's uvs span [0,1] either
+//      way; REPEAT / MIRRORED_REPEAT then wrap in hardware exactly as glTF asks, which a sub-rectangle of a
+//      bigger layer could not).
+//      A square power-of-two image needs no resampling: its own mip chain is built and the levels above S
+//      dropped. Anything else is resampled once with OpenImageIO's resize (filtered, in linear light).
+//   3. Mip chain to 1x1: each level is the 2x2 box average of the previous one, in linear light (float).
+//   4. Encode RGBA8: sRGB textures re-encode RGB with the sRGB curve (exactly rounded), alpha linear; data
+//      textures (normal, metallic-roughness, occlusion) are linear throughout.
+//
+// An image used both as colour and as data (rare) is baked twice, once per colour space.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "asset/gltf_import.h"
+#include "core/result.h"
+#include "scene/scene.h"
+
+namespace visbuf {
+
+struct TextureBakeOptions {
+  uint32_t maxTextureSize = 2048;  // power of two in [1, 16384]; larger images are downscaled to it
+};
+
+// A decoded image in linear light: width x height RGBA floats, row-major from the top row.
+struct LinearImage {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<float> rgba;
+};
+
+// One baked image: square, power-of-two `size`, mips[m] is max(size >> m, 1)^2 RGBA8 texels.
+struct BakedImage {
+  uint32_t size = 0;
+  uint32_t originalWidth = 0, originalHeight = 0;
+  std::vector<std::vector<uint8_t>> mips;
+  std::string resizeNote;  // e.g. "211x211 -> 256x256 (non-power-of-two: nearest power of two)"; empty: none
+};
+
+// Called after each texture is baked: (done, total, name of the texture).
+using TextureBakeProgress = std::function<void(size_t done, size_t total, const std::string& name)>;
+
+struct TextureBakeReport {
+  std::vector<std::string> notes;  // one line per resized image
+  uint64_t texelBytes = 0;         // all classes, all mips
+};
+
+// Bakes every image referenced by scene->materials (TextureRef::image indexes imported.images) into
+// scene->textures / scene->textureClasses, and sets each reference's `baked`. Textures are numbered in order of
+// first use (materials in order; slots base colour, metallic-roughness, normal, occlusion, emissive); classes
+// in order of first use, at most 256 layers each (Vulkan's guaranteed maxImageArrayLayers: a 257th image of
+// the same size and colour space opens a second class).
+// Errors (each names the glTF image): InvalidArgument (bad maxTextureSize), FileNotFound / IoError (an
+// external image file), MalformedInput (bytes that are not a decodable PNG/JPEG, an image index out of range,
+// an empty embedded image), CapacityExceeded (a side over 16384), Unsupported (a build without OpenImageIO).
+Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& options, Scene* scene,
+                    TextureBakeReport* report = nullptr, const TextureBakeProgress& progress = {});
+
+// --- the steps, for tests and tools
+
+// sRGB transfer functions (IEC 61966-2-1), on [0,1] (clamped).
+float srgbToLinear(float v);
+float linearToSrgb(float v);
+// Linear [0,1] value -> round(255 * linearToSrgb(v)) computed exactly (a table of the 255 decision points).
+uint8_t encodeSrgb8(float linear);
+
+// The baked size of a width x height image (step 2 above). Both must be >= 1; maxSize a power of two.
+uint32_t bakedTextureSize(uint32_t width, uint32_t height, uint32_t maxSize);
+// Mip levels of a square power-of-two image down to 1x1, level 0 first (step 3).
+std::vector<LinearImage> buildMipChain(LinearImage level0);
+// RGBA8 encoding (step 4).
+std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace);
+
+// Decodes an encoded PNG/JPEG (`name` starts error messages); RGB converted to linear when colorSpace is Srgb.
+Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace);
+// Resamples (OpenImageIO resize, linear light) to width x height.
+Result<LinearImage> resizeImage(const LinearImage& image, uint32_t width, uint32_t height);
+// Steps 1-4 for one encoded image.
+Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
+                             uint32_t maxTextureSize);
+
+}  // namespace visbuf
