@@ -5,7 +5,8 @@
 // node's world transform into the vertices and concatenates all primitives into a single indexed triangle
 // list.
 // Materials, textures, cameras, lights, skins and animations are ignored (meshes come out in rest pose, with
-// the mesh's default morph weights, or the node's weights where a node overrides them).
+// the mesh's default morph weights, or the node's weights where a node overrides them). importGltfScene()
+// imports skins and animations (see below).
 //
 // Supported:
 //   - .gltf (external .bin files and data: URIs) and .glb, told apart by the "glTF" magic, then by name.
@@ -45,8 +46,9 @@
 // Nothing in the file's contents can make the importer assert or crash.
 //
 // Not supported: KHR_draco_mesh_compression and EXT_mesh_gpu_instancing (Unsupported when required; when only
-// used, the plain nodes are imported), TEXCOORD_1+ / COLOR_1+ / TANGENT (ignored), skinning and animation,
-// KHR_texture_transform (quantized uvs that rely on it come out in their raw integer range).
+// used, the plain nodes are imported), TEXCOORD_1+ / COLOR_1+ / TANGENT (ignored), JOINTS_1 / WEIGHTS_1 (more
+// than 4 influences per vertex: ignored with a warning), KHR_animation_pointer channels (ignored with a
+// warning), KHR_texture_transform (quantized uvs that rely on it come out in their raw integer range).
 #pragma once
 
 #include <cstdint>
@@ -100,10 +102,33 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     factor (linear RGBA, clamped to [0,1] with a warning), alpha mode and cutoff, double-sided, and the
 //     base-colour texture reference (texture index, image index, image URI, TEXCOORD set; no pixels are
 //     read). Primitives without a material use a "default" material (glTF's: white, opaque) appended after
-//     the file's materials, only when needed. Skins and animations are ignored (rest pose, as in
-//     importGltfMesh).
-// Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist and
-// for non-finite material factors.
+//     the file's materials, only when needed.
+//   - Skinning: JOINTS_0 (VEC4 u8/u16) and WEIGHTS_0 (VEC4 float or normalized u8/u16) become
+//     MeshSource::joints / weights. Weights are renormalised to sum 1; a vertex whose weights are all 0 gets
+//     weight 1 on its first slot (warning); slots with weight 0 get joint 0. Meshes stay in rest pose (bind
+//     shape) in object space.
+//   - Skins (only when the file has skins or animations, else nodes/skins/animations stay empty):
+//     ImportedScene::nodes is every glTF node in file order (parent, rest TRS or matrix), so joint and
+//     channel node indices are glTF node indices. Skins keep their joints, inverse bind matrices (identity
+//     when absent; extra matrices beyond the joint count ignored) and skeleton. An instance of a node with a
+//     skin has ImportedInstance::skin set. glTF ignores the skinned node's own transform: skinned vertices are
+//     sum_i w_i * global(joint_i) * inverseBind_i * p, in world space (animation.h). The instance transform
+//     (the node's world matrix) is kept for rest-pose drawing and must not be applied to skinned vertices;
+//     mirrored variants of skinned meshes are chosen by that node transform too (for the usual files, whose
+//     bind pose reproduces the node transform, it has the same handedness as the joint matrices).
+//   - Animations: every clip with its channels (translation / rotation / scale / weights) and samplers
+//     (LINEAR, STEP, CUBICSPLINE; rotations may be normalized integers). A sampler's times are the input
+//     accessor (finite, strictly increasing), its values the output accessor, whose element count must be
+//     keys x (3 for CUBICSPLINE, else 1) [x morph target count for weights]. Channels without a target node,
+//     with an unknown path, or animating the weights of a node without morph targets are ignored (warning).
+// Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist, for
+// non-finite material factors, and for skin / animation data that cannot be evaluated: a joint node or skin
+// that does not exist, a joint index (JOINTS_0, weight > 0) not below the skin's joint count, negative or
+// non-finite weights, a skinned node's primitive without JOINTS_0 / WEIGHTS_0, inverse bind matrices that
+// are fewer than the joints, non-finite or not affine, a child listed by two parents or a cycle anywhere in
+// the node graph, non-increasing or non-finite key times, an output count that does not match the keys and
+// interpolation, non-finite values, an unknown interpolation, an animated node that has a matrix. Messages
+// name the node / skin / animation, sampler or channel and the accessor.
 struct ImportedMesh {
   MeshSource source;      // object space; name: "<mesh name>" [+ "/<material name>"] [+ " (mirrored)"]
   int32_t gltfMesh = -1;  // source glTF mesh index
@@ -116,6 +141,8 @@ struct ImportedInstance {
   uint32_t material = 0;      // into ImportedScene::materials (== meshes[mesh].material)
   glm::dmat4 transform{1.0};  // object -> world, double precision, finite, |det| > 0
   int32_t node = -1;          // source glTF node index
+  int32_t skin = -1;          // into ImportedScene::skins when the node is skinned (then `transform` is not
+                              // applied to the skinned vertices), -1 otherwise
 };
 
 struct ImportedScene {
@@ -123,6 +150,10 @@ struct ImportedScene {
   std::vector<ImportedMesh> meshes;
   std::vector<Material> materials;
   std::vector<ImportedInstance> instances;
+  // Animation data (empty when the file has neither skins nor animations).
+  std::vector<SceneNode> nodes;  // every glTF node, in file order
+  std::vector<Skin> skins;
+  std::vector<AnimationClip> animations;
 };
 
 // Imports the default scene of the glTF file at `path` as meshes + materials + instances (see above).

@@ -146,6 +146,7 @@ inline constexpr const char* kVerticesSection = "vertices";
 inline constexpr const char* kIndicesSection = "indices";
 inline constexpr const char* kMaterialsSection = "materials";
 inline constexpr const char* kObjectsSection = "objects";
+// Optional sections of version 1 (skins, animation clips, skin vertices): pack_animation_format.h.
 
 // CRC-32 (IEEE, as zlib's crc32()): crc32(b, crc32(a)) == crc32(a + b). Start with crc = 0.
 uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);

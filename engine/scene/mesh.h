@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/type_precision.hpp>
 
 namespace visbuf {
 
@@ -17,6 +18,9 @@ struct MeshSource {
   std::vector<glm::vec2> uvs;      // empty or same count as positions
   std::vector<uint32_t> colors;    // empty or same count as positions, RGBA8 (R in low byte)
   std::vector<uint32_t> indices;   // 3 per triangle, each < positions.size()
+  // Skinning streams (glTF JOINTS_0 / WEIGHTS_0): both empty, or both the same count as positions.
+  std::vector<glm::u16vec4> joints;  // indices into the skin's joint list; slots with weight 0 hold 0
+  std::vector<glm::vec4> weights;    // each >= 0, finite, summing to 1
 };
 
 }  // namespace visbuf

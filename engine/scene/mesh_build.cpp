@@ -77,6 +77,23 @@ void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std:
   }
 }
 
+// The source's JOINTS_0 / WEIGHTS_0 streams as SkinVertex records (empty when the mesh is not skinned), in
+// canonical form: slots with weight 0 get joint 0, so equal influences compare equal byte for byte.
+Result<std::vector<SkinVertex>> skinVerticesOf(const MeshSource& source) {
+  std::vector<SkinVertex> out(source.joints.size());
+  for (size_t v = 0; v < out.size(); ++v) {
+    for (int i = 0; i < 4; ++i) {
+      const float w = source.weights[v][i];
+      if (!std::isfinite(w) || w < 0.0f)
+        return makeError(ErrorCode::MalformedInput,
+                         fmt::format("mesh '{}': vertex {} has skin weight {} (< 0 or not finite)", source.name, v, w));
+      out[v].weights[i] = w;
+      out[v].joints[i] = w > 0.0f ? source.joints[v][i] : uint16_t{0};
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options) {
@@ -86,7 +103,9 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
                      fmt::format("mesh '{}': needs vertices and a multiple of 3 indices (has {} / {})",
                                  source.name, vertexCount, source.indices.size()));
   if (source.normals.size() != vertexCount || (!source.uvs.empty() && source.uvs.size() != vertexCount) ||
-      (!source.colors.empty() && source.colors.size() != vertexCount))
+      (!source.colors.empty() && source.colors.size() != vertexCount) ||
+      source.joints.size() != source.weights.size() ||
+      (!source.joints.empty() && source.joints.size() != vertexCount))
     return makeError(ErrorCode::MalformedInput, fmt::format("mesh '{}': attribute counts differ", source.name));
   for (uint32_t i : source.indices)
     if (i >= vertexCount)
@@ -114,14 +133,25 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     v.color = source.colors.empty() ? packColor(glm::vec4(1.0f)) : source.colors[i];
     v.pad = 0;
   }
+  Result<std::vector<SkinVertex>> rawSkin = skinVerticesOf(source);
+  if (!rawSkin) return rawSkin.error();
+  const bool skinned = !rawSkin->empty();
+  // Deduplicate: two vertices merge only when the GPU vertex and the skin data are both identical.
   const size_t indexCount = source.indices.size();
   std::vector<uint32_t> remap(vertexCount);
-  size_t unique = meshopt_generateVertexRemap(remap.data(), source.indices.data(), indexCount, raw.data(),
-                                              vertexCount, sizeof(gpu::Vertex));
+  const meshopt_Stream streams[2] = {{raw.data(), sizeof(gpu::Vertex), sizeof(gpu::Vertex)},
+                                     {rawSkin->data(), sizeof(SkinVertex), sizeof(SkinVertex)}};
+  size_t unique = meshopt_generateVertexRemapMulti(remap.data(), source.indices.data(), indexCount, vertexCount,
+                                                   streams, skinned ? 2 : 1);
   Mesh mesh;
   mesh.name = source.name;
   mesh.vertices.resize(unique);
   meshopt_remapVertexBuffer(mesh.vertices.data(), raw.data(), vertexCount, sizeof(gpu::Vertex), remap.data());
+  if (skinned) {
+    mesh.skinVertices.resize(unique);
+    meshopt_remapVertexBuffer(mesh.skinVertices.data(), rawSkin->data(), vertexCount, sizeof(SkinVertex),
+                              remap.data());
+  }
   std::vector<uint32_t> lod0(indexCount);
   meshopt_remapIndexBuffer(lod0.data(), source.indices.data(), indexCount, remap.data());
 
@@ -129,9 +159,15 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   const size_t stride = sizeof(gpu::Vertex);
   meshopt_optimizeVertexCache(lod0.data(), lod0.data(), indexCount, unique);
   meshopt_optimizeOverdraw(lod0.data(), lod0.data(), indexCount, pos, unique, stride, 1.05f);
-  // Fetch order follows LOD0; coarser levels index a subset of the same vertices.
-  meshopt_optimizeVertexFetch(mesh.vertices.data(), lod0.data(), indexCount, mesh.vertices.data(), unique,
-                              stride);
+  // Fetch order follows LOD0; coarser levels index a subset of the same vertices. One remap reorders both
+  // vertex streams so skinVertices stay parallel to vertices.
+  std::vector<uint32_t> fetchRemap(unique);
+  meshopt_optimizeVertexFetchRemap(fetchRemap.data(), lod0.data(), indexCount, unique);
+  meshopt_remapIndexBuffer(lod0.data(), lod0.data(), indexCount, fetchRemap.data());
+  meshopt_remapVertexBuffer(mesh.vertices.data(), mesh.vertices.data(), unique, stride, fetchRemap.data());
+  if (skinned)
+    meshopt_remapVertexBuffer(mesh.skinVertices.data(), mesh.skinVertices.data(), unique, sizeof(SkinVertex),
+                              fetchRemap.data());
   pos = &mesh.vertices[0].px;
 
   mesh.indices = lod0;

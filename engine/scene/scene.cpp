@@ -61,7 +61,7 @@ Status validateScene(const Scene& scene) {
       return makeError(ErrorCode::MalformedInput,
                        fmt::format("object {}: degenerate (zero-scale) transform", i));
   }
-  return {};
+  return validateSceneAnimation(scene);
 }
 
 }  // namespace visbuf
