@@ -22,6 +22,8 @@ struct RenderCommand {
   bool wideIds = false;
   bool validation = false;
   uint32_t frames = 1;
+  double time = 0.0;     // animation time (s)
+  bool animate = false;  // advance the animation by 1/30 s per frame
   std::string output = "visbuf.png";
   std::string idsOut;
   std::string json;

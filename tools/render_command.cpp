@@ -33,6 +33,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per frame (default: one per object)");
   sub->add_flag("--wide-ids", c.wideIds, "force the 64-bit visibility target");
   sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
+  sub->add_option("--time", c.time, "animation time in seconds (skinned scenes: every instance's pose)")
+      ->check(CLI::Range(-1e9, 1e9))
+      ->capture_default_str();
+  sub->add_flag("--animate", c.animate, "with --frames N: advance the animation by 1/30 s per frame (else paused)");
   sub->add_option("--frames", c.frames, "frames to render; timings are the median over frames after the first")
       ->check(CLI::Range(1u, 10000u))
       ->capture_default_str();
@@ -98,6 +102,7 @@ int runRender(const RenderCommand& c) {
       options.readPyramid = false;
       if (last && c.view != "shaded" && (options.path == RenderPath::Visbuf || c.view == "overdraw"))
         prepareViewOptions(c.view, options);
+      options.animationTime = c.time + (c.animate ? double(i) / 30.0 : 0.0);  // --animate: 30 poses a second
       frame = (*renderer)->renderFrame(*camera, options);
       if (!frame) return {};
       runs.push_back(frame->stats);

@@ -57,9 +57,22 @@ Result<Scene> loadScene(const SceneOptions& o) {
                        "--objects applies to field, city and glTF scenes, not to packs");
     return readPack(o.scene);
   }
-  // A glTF file with --objects N > 1: its default scene flattened into one mesh, instanced N times in the
-  // field layout.
+  // A glTF file with --objects N > 1: with skinned meshes, N animated copies (each at its own phase); else
+  // its default scene flattened into one mesh, instanced N times in the field layout.
   if (o.objects > 1) {
+    GltfImportReport report;
+    Result<ImportedScene> imported = importGltfScene(o.scene, {}, &report);
+    if (imported && imported->skins.size() > 0) {
+      for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", w.c_str());
+      Result<Scene> asset = buildImportedScene(*imported);
+      if (!asset) return asset.error();
+      if (!asset->skinnedObjects.empty()) {
+        AnimatedFieldParams p;
+        p.instances = o.objects;
+        p.seed = o.seed;
+        return makeAnimatedField(*asset, p);
+      }
+    }
     Result<MeshSource> m = importMesh(o.scene);
     if (!m) return m.error();
     FieldParams p;

@@ -29,6 +29,9 @@ std::string formatStats(const FrameStats& s) {
     out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
                        s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
   }
+  if (s.skinnedInstances)
+    out += fmt::format("skinning      {} instances, {} vertices, {} (poses {:.3f} ms CPU)\n", s.skinnedInstances,
+                       s.skinnedVertices, s.skinned ? "re-skinned" : "pose unchanged: skipped", s.animationCpuMs);
   for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
   out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
@@ -67,6 +70,10 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["gpuMs"] = s.gpuMs;
   j["cpuRecordMs"] = s.cpuRecordMs;
   j["wallMs"] = s.wallMs;
+  j["skinnedInstances"] = s.skinnedInstances;
+  j["skinnedVertices"] = s.skinnedVertices;
+  j["skinned"] = s.skinned;
+  j["animationCpuMs"] = s.animationCpuMs;
   j["sceneBytes"] = s.sceneBytes;
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
   return j;

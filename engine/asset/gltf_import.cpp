@@ -36,6 +36,7 @@
 #include <tuple>
 #include <utility>
 
+#include "asset/gltf_animation.h"
 #include "asset/gltf_detail.h"
 
 namespace visbuf {
@@ -136,7 +137,7 @@ uint64_t indexComponentSize(int type) {
 }
 
 // What an attribute accessor may contain (glTF 2.0 core + KHR_mesh_quantization).
-enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta, Tangent };
+enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta, Tangent, Joints, Weights, Unchecked };
 
 // Returns "" when the accessor's type/componentType/normalized combination suits `kind`, else the reason.
 std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a) {
@@ -180,6 +181,19 @@ std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a
       typeOk = a.type == TINYGLTF_TYPE_VEC4;
       componentOk = isFloat || (isSigned8or16 && a.normalized);
       expected = "VEC4 of FLOAT or normalized BYTE/SHORT";
+      break;
+    case AttributeKind::Joints:
+      typeOk = a.type == TINYGLTF_TYPE_VEC4;
+      componentOk = isUnsigned8or16 && !a.normalized;
+      expected = "VEC4 of UNSIGNED_BYTE/UNSIGNED_SHORT";
+      break;
+    case AttributeKind::Weights:
+      typeOk = a.type == TINYGLTF_TYPE_VEC4;
+      componentOk = isFloat || (isUnsigned8or16 && a.normalized);
+      expected = "VEC4 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT";
+      break;
+    case AttributeKind::Unchecked:  // the caller checks (skins, animations: gltf_animation.cpp)
+      typeOk = componentOk = true;
       break;
   }
   if (typeOk && componentOk) return {};
@@ -267,6 +281,8 @@ struct DecodedPrimitive {
   std::vector<uint32_t> colors;    // empty: none
   std::vector<glm::vec2> uvs1;     // TEXCOORD_1; empty: none
   std::vector<glm::vec4> tangents; // xyz unit, w = +-1; empty: none (or dropped as invalid)
+  std::vector<glm::u16vec4> joints;  // JOINTS_0 / WEIGHTS_0, empty: none (see convertSkinAttributes)
+  std::vector<glm::vec4> weights;
   // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
   std::vector<std::vector<glm::vec3>> positionDeltas;
   std::vector<std::vector<glm::vec3>> normalDeltas;
@@ -308,6 +324,8 @@ class Importer {
   Status readTangents(int accessor, const std::string& where, std::vector<glm::vec4>* out);
 
   Result<DecodedPrimitive> decodePrimitive(int mesh, int primitive);
+  Status decodeSkinAttributes(const tinygltf::Primitive& prim, const std::string& where, DecodedPrimitive* out);
+  Status checkSkinnedNode(int nodeIndex, const std::vector<DecodedPrimitive>& prims, const std::string& where);
   Result<const std::vector<DecodedPrimitive>*> decodedMesh(int mesh);
   // The mesh node `nodeIndex` instances, decoded, with its effective morph weights (the node's own, else
   // the mesh's defaults). mesh == nullptr when the node has no mesh.
@@ -769,6 +787,7 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     for (uint64_t i = 0; i < vertexCount; ++i)
       out.colors[i] = packColor(&flat[i * static_cast<uint64_t>(n)], n);
   }
+  if (Status s = decodeSkinAttributes(prim, where, &out); !s) return s.error();
 
   // Morph targets (only POSITION and NORMAL matter for a static mesh; TANGENT is ignored).
   for (size_t t = 0; t < prim.targets.size(); ++t) {
@@ -836,6 +855,34 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     out.skipped = true;
   }
   return out;
+}
+
+// JOINTS_0 + WEIGHTS_0 (both or neither); JOINTS_1+ are ignored: the skinning pass takes 4 influences.
+Status Importer::decodeSkinAttributes(const tinygltf::Primitive& prim, const std::string& where,
+                                      DecodedPrimitive* out) {
+  auto joints = prim.attributes.find("JOINTS_0");
+  auto weights = prim.attributes.find("WEIGHTS_0");
+  if (joints == prim.attributes.end() && weights == prim.attributes.end()) return {};
+  if (joints == prim.attributes.end() || weights == prim.attributes.end()) {
+    warn(where + ": JOINTS_0 and WEIGHTS_0 must come together; skinning attributes ignored");
+    return {};
+  }
+  if (prim.attributes.count("JOINTS_1") != 0)
+    warn(where + ": JOINTS_1 / WEIGHTS_1 ignored (at most 4 influences per vertex)");
+  std::vector<float> flat[2];
+  for (auto [it, kind, k] :
+       {std::tuple{joints, AttributeKind::Joints, 0}, std::tuple{weights, AttributeKind::Weights, 1}}) {
+    const std::string w = where + " accessor " + str(it->second) + " (" + it->first + ")";
+    int n = 0;
+    if (Status s = readFloats(it->second, kind, w, &flat[k], &n); !s) return s;
+    if (flat[k].size() != out->positions.size() * 4) {
+      return malformed(w + ": count " + str(uint64_t{flat[k].size() / 4}) + " differs from POSITION count " +
+                       str(uint64_t{out->positions.size()}));
+    }
+  }
+  const std::string w = where + " accessor " + str(weights->second) + " (WEIGHTS_0)";
+  return convertSkinAttributes(flat[0], flat[1], w, [this](const std::string& m) { warn(m); }, &out->joints,
+                               &out->weights);
 }
 
 Result<const std::vector<DecodedPrimitive>*> Importer::decodedMesh(int mesh) {
@@ -1140,6 +1187,33 @@ Result<MeshSource> Importer::run() {
 // ---------------------------------------------------------------------------------------------------------
 // Scene import (instances)
 
+// A skinned node's skin exists and every primitive it draws has JOINTS_0 / WEIGHTS_0 (glTF requires both).
+Status Importer::checkSkinnedNode(int nodeIndex, const std::vector<DecodedPrimitive>& prims,
+                                  const std::string& where) {
+  const int skin = model_.nodes[static_cast<size_t>(nodeIndex)].skin;
+  if (static_cast<size_t>(skin) >= model_.skins.size())
+    return malformed(where + ": skin " + str(skin) + " does not exist");
+  for (size_t p = 0; p < prims.size(); ++p) {
+    if (!prims[p].skipped && prims[p].joints.empty())
+      return malformed(where + ": skinned, but primitive " + str(uint64_t{p}) + " has no JOINTS_0 / WEIGHTS_0");
+  }
+  return {};
+}
+
+// Appends a primitive's skin streams to `out` (whose vertices of this primitive start at `base`). Vertices
+// without skin data, before or after skinned ones, get joint 0 with weight 1 (only meshes drawn by
+// unskinned nodes can mix: checkSkinnedNode refuses it for skinned ones).
+void appendSkinStreams(const DecodedPrimitive& prim, size_t base, MeshSource* out) {
+  if (prim.joints.empty() && out->joints.empty()) return;
+  out->joints.resize(base, glm::u16vec4(0));
+  out->weights.resize(base, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+  out->joints.insert(out->joints.end(), prim.joints.begin(), prim.joints.end());
+  out->weights.insert(out->weights.end(), prim.weights.begin(), prim.weights.end());
+  const size_t end = std::max(out->positions.size(), out->joints.size());
+  out->joints.resize(end, glm::u16vec4(0));
+  out->weights.resize(end, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+}
+
 // Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
 Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
   auto resolved = nodeMesh(nodeIndex);
@@ -1157,6 +1231,9 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
     return {};
   }
   const bool mirrored = det < 0.0;
+  if (node.skin >= 0) {
+    if (Status s = checkSkinnedNode(nodeIndex, **prims, nodeWhere); !s) return s;
+  }
 
   // Material groups in order of first appearance among the primitives.
   std::vector<int> groups;
@@ -1200,8 +1277,11 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
         if (mesh.primitives[p].material != gltfMaterial || prim.skipped) continue;
         const std::string where =
             nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " + str(uint64_t{p});
+        const size_t base = im.source.positions.size();
         if (Status s = emitPrimitive(prim, glm::dmat4(1.0), weights, where, &im.source); !s) return s;
+        appendSkinStreams(prim, base, &im.source);
       }
+      appendSkinStreams(DecodedPrimitive{}, im.source.positions.size(), &im.source);  // pad to the end
       padOptionalStreams(&im.source);
       if (mirrored) {
         for (size_t i = 0; i + 2 < im.source.indices.size(); i += 3)
@@ -1231,6 +1311,7 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
     inst.material = scene->meshes[meshIndex].material;
     inst.transform = world;
     inst.node = nodeIndex;
+    inst.skin = node.skin >= 0 ? node.skin : -1;
     scene->instances.push_back(inst);
   }
   return {};
@@ -1242,11 +1323,17 @@ Result<ImportedScene> Importer::runScene() {
   const WarnFn warnFn = [this](const std::string& message) { warn(message); };
   if (Status s = importMaterials(model_, path_, warnFn, &scene.materials); !s) return s.error();
   if (Status s = collectImages(model_, path_, &scene.images); !s) return s.error();
+  const ReadFloats read = [this](int accessor, const std::string& where, std::vector<float>* out) {
+    int n = 0;
+    return readFloats(accessor, AttributeKind::Unchecked, where, out, &n);
+  };
+  if (Status s = importAnimationData(model_, path_, read, warnFn, &scene); !s) return s.error();
   std::string sceneLabel;
   Status walked = walkScene(
       [&](int nodeIndex, const glm::dmat4& world) { return emitSceneNode(nodeIndex, world, &scene); },
       &sceneLabel);
   if (!walked) return walked.error();
+  if (Status s = checkSkinnedInstances(scene, path_); !s) return s.error();
   if (scene.instances.empty()) {
     return malformed(path_ + ": no triangle geometry in " + sceneLabel + " (" +
                      str(uint64_t{primitivesSkipped}) + " primitive(s) skipped)");

@@ -6,7 +6,7 @@
 // list.
 // Materials, textures, cameras, lights, skins and animations are ignored (meshes come out in rest pose, with
 // the mesh's default morph weights, or the node's weights where a node overrides them); importGltfScene reads
-// materials and collects the images they use.
+// materials, collects the images they use, and imports skins and animations (see below).
 //
 // Supported:
 //   - .gltf (external .bin files and data: URIs) and .glb, told apart by the "glTF" magic, then by name.
@@ -52,8 +52,10 @@
 //
 // Not supported: KHR_draco_mesh_compression and EXT_mesh_gpu_instancing (Unsupported when required; when only
 // used, the plain nodes are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas (the base
-// tangents are kept), skinning and animation. KHR_texture_transform is read into each TextureRef (scene
-// import), never applied to the vertex uvs (quantized uvs that rely on it come out in their raw integer range).
+// tangents are kept), JOINTS_1 / WEIGHTS_1 (more than 4 influences per vertex: ignored with a warning),
+// KHR_animation_pointer channels (ignored with a warning). KHR_texture_transform is read into each TextureRef
+// (scene import), never applied to the vertex uvs (quantized uvs that rely on it come out in their raw integer
+// range).
 #pragma once
 
 #include <cstdint>
@@ -113,13 +115,37 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     use 0), sampler (wrap S/T, mag/min/mip filter; undefined filters are trilinear) and
 //     KHR_texture_transform as a 3x2 matrix (its texCoord overrides the set). Primitives without a material
 //     use a "default" material (glTF's: white, opaque, metallic 1, roughness 1) appended after the file's
-//     materials, only when needed. Skins and animations are ignored (rest pose, as in importGltfMesh).
+//     materials, only when needed.
 //   - Images: every glTF image, in file order (glTF image i is images[i]), NOT decoded: the encoded bytes of
 //     embedded images (bufferView, range-checked, or data: URI) or, for external files, the path resolved
 //     against the glTF's folder (the file is not opened here; texture_bake.h decodes all of them).
+//   - Skinning: JOINTS_0 (VEC4 u8/u16) and WEIGHTS_0 (VEC4 float or normalized u8/u16) become
+//     MeshSource::joints / weights. Weights are renormalised to sum 1; a vertex whose weights are all 0 gets
+//     weight 1 on its first slot (warning); slots with weight 0 get joint 0. Meshes stay in rest pose (bind
+//     shape) in object space.
+//   - Skins (only when the file has skins or animations, else nodes/skins/animations stay empty):
+//     ImportedScene::nodes is every glTF node in file order (parent, rest TRS or matrix), so joint and
+//     channel node indices are glTF node indices. Skins keep their joints, inverse bind matrices (identity
+//     when absent; extra matrices beyond the joint count ignored) and skeleton. An instance of a node with a
+//     skin has ImportedInstance::skin set. glTF ignores the skinned node's own transform: skinned vertices are
+//     sum_i w_i * global(joint_i) * inverseBind_i * p, in world space (animation.h). The instance transform
+//     (the node's world matrix) is kept for rest-pose drawing and must not be applied to skinned vertices;
+//     mirrored variants of skinned meshes are chosen by that node transform too (for the usual files, whose
+//     bind pose reproduces the node transform, it has the same handedness as the joint matrices).
+//   - Animations: every clip with its channels (translation / rotation / scale / weights) and samplers
+//     (LINEAR, STEP, CUBICSPLINE; rotations may be normalized integers). A sampler's times are the input
+//     accessor (finite, strictly increasing), its values the output accessor, whose element count must be
+//     keys x (3 for CUBICSPLINE, else 1) [x morph target count for weights]. Channels without a target node,
+//     with an unknown path, or animating the weights of a node without morph targets are ignored (warning).
 // Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist, for
-// non-finite material factors or texture transforms, for texture / sampler indices that do not exist, and for
-// an image bufferView that does not exist or runs past its buffer.
+// non-finite material factors or texture transforms, for texture / sampler indices that do not exist, for
+// an image bufferView that does not exist or runs past its buffer, and for skin / animation data that cannot
+// be evaluated: a joint node or skin that does not exist, a joint index (JOINTS_0, weight > 0) not below the
+// skin's joint count, negative or non-finite weights, a skinned node's primitive without JOINTS_0 / WEIGHTS_0,
+// inverse bind matrices that are fewer than the joints, non-finite or not affine, a child listed by two
+// parents or a cycle anywhere in the node graph, non-increasing or non-finite key times, an output count that
+// does not match the keys and interpolation, non-finite values, an unknown interpolation, an animated node
+// that has a matrix. Messages name the node / skin / animation, sampler or channel and the accessor.
 struct ImportedMesh {
   MeshSource source;      // object space; name: "<mesh name>" [+ "/<material name>"] [+ " (mirrored)"]
   int32_t gltfMesh = -1;  // source glTF mesh index
@@ -132,6 +158,8 @@ struct ImportedInstance {
   uint32_t material = 0;      // into ImportedScene::materials (== meshes[mesh].material)
   glm::dmat4 transform{1.0};  // object -> world, double precision, finite, |det| > 0
   int32_t node = -1;          // source glTF node index
+  int32_t skin = -1;          // into ImportedScene::skins when the node is skinned (then `transform` is not
+                              // applied to the skinned vertices), -1 otherwise
 };
 
 // A glTF image as found in the file, not decoded.
@@ -149,6 +177,10 @@ struct ImportedScene {
   std::vector<Material> materials;
   std::vector<ImportedInstance> instances;
   std::vector<ImportedImage> images;  // glTF image i is images[i]
+  // Animation data (empty when the file has neither skins nor animations).
+  std::vector<SceneNode> nodes;  // every glTF node, in file order
+  std::vector<Skin> skins;
+  std::vector<AnimationClip> animations;
 };
 
 // Imports the default scene of the glTF file at `path` as meshes + materials + instances (see above).

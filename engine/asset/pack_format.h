@@ -210,6 +210,7 @@ inline constexpr const char* kTexelsSection = "texels";
 inline constexpr const char* kMeshStreamsSection = "meshStreams";
 inline constexpr const char* kTangentsSection = "tangents";
 inline constexpr const char* kUvs1Section = "uvs1";
+// Optional sections for skins, animation clips and skin vertices: pack_animation_format.h.
 
 // CRC-32 (IEEE, as zlib's crc32()): crc32(b, crc32(a)) == crc32(a + b). Start with crc = 0.
 uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);

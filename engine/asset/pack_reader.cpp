@@ -4,7 +4,8 @@
 //   3. each section: name, alignment, count x elementSize (overflow), size, range inside the file, overlap,
 //      then the declared file size;
 //   4. each section's checksum; required sections present, once, with the expected record size;
-//   5. contents: string refs, mesh/LOD/vertex/index ranges, index values, finite values, object references;
+//   5. contents: string refs, mesh/LOD/vertex/index ranges, index values, finite values, object references,
+//      then the optional animation sections (pack_animation.cpp);
 //   6. validateScene() on the result.
 #include "asset/pack_reader.h"
 
@@ -22,6 +23,7 @@
 #include <string_view>
 #include <vector>
 
+#include "asset/pack_animation.h"
 #include "asset/pack_format.h"
 
 namespace visbuf {
@@ -54,7 +56,7 @@ uint32_t expectedElementSize(std::string_view name) {
   if (name == pack::kMeshStreamsSection) return sizeof(pack::MeshStreamsRecord);
   if (name == pack::kTangentsSection) return sizeof(float) * 4;
   if (name == pack::kUvs1Section) return sizeof(float) * 2;
-  return 0;
+  return pack::animationSectionElementSize(std::string(name));  // 0: unknown
 }
 
 constexpr const char* kRequiredSections[] = {
@@ -545,6 +547,12 @@ Result<Scene> Parser::run() {
   if (Status s = readTextures(&scene); !s) return s.error();
   if (Status s = readMaterials(&scene); !s) return s.error();
   if (Status s = readObjects(&scene); !s) return s.error();
+  auto find = [&](const char* name) {
+    auto it = sections_.find(name);
+    return it == sections_.end() ? pack::SectionBytes{} : pack::SectionBytes{it->second.data, it->second.entry.count};
+  };
+  auto readString = [&](pack::StringRef ref, const std::string& where) { return string(ref, where); };
+  if (Status s = pack::readAnimationSections(find, readString, label_, &scene); !s) return s.error();
   if (Status s = validateScene(scene); !s) return fail(s.error().message);
   return scene;
 }

@@ -15,6 +15,7 @@
 #include <limits>
 #include <utility>
 
+#include "asset/pack_animation.h"
 #include "asset/pack_format.h"
 #include "core/image_io.h"
 
@@ -298,6 +299,10 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
     append(objectBytes, r);
   }
 
+  // optional animation sections (pack_animation.cpp); before "strings" so their names are in it
+  auto animation = pack::serializeAnimationSections(scene, [&](const std::string& s) { return strings.add(s); });
+  if (!animation) return animation.error();
+
   std::vector<Section> sections;
   sections.push_back({pack::kSceneSection, sizeof(pack::SceneRecord), 1, std::move(sceneBytes)});
   sections.push_back(
@@ -311,6 +316,7 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
   sections.push_back({pack::kIndicesSection, sizeof(uint32_t), indexTotal, std::move(indexBytes)});
   serializeMeshStreams(scene, &sections);
   if (Status s = serializeTextures(scene, strings, &sections); !s) return s.error();
+  for (pack::SectionData& a : *animation) sections.push_back({a.name, a.elementSize, a.count, std::move(a.bytes)});
   const uint64_t stringCount = strings.bytes().size();
   sections.push_back({pack::kStringsSection, 1, stringCount, std::move(strings.bytes())});
 

@@ -28,8 +28,14 @@ Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildO
     scene.materials.push_back(m);
   }
   scene.objects.reserve(imported.instances.size());
-  for (const ImportedInstance& inst : imported.instances)
+  for (const ImportedInstance& inst : imported.instances) {
+    if (inst.skin >= 0)
+      scene.skinnedObjects.push_back({uint32_t(scene.objects.size()), uint32_t(inst.skin)});
     scene.objects.push_back({inst.transform, inst.mesh, inst.material});
+  }
+  scene.nodes = imported.nodes;
+  scene.skins = imported.skins;
+  scene.animations = imported.animations;
   frameScene(scene);
   return scene;
 }

@@ -1,5 +1,6 @@
 // Turns an imported glTF scene (gltf_import.h) into a render-ready Scene: every mesh through buildMesh()
-// (meshoptimizer optimisation + LOD chain), instances as objects, and a default camera that frames it.
+// (meshoptimizer optimisation + LOD chain), instances as objects (skinned instances also as skinnedObjects),
+// nodes / skins / animations as they are, and a default camera that frames the rest pose.
 // Shared by `visbuf bake` (which then writes a pack) and `visbuf render --scene FILE.gltf` (in memory).
 #pragma once
 

@@ -17,6 +17,7 @@
 #include "forward.vert.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
+#include "skin.comp.h"
 #include "visibility.frag.h"
 #include "visibility.vert.h"
 #include "visibility_wide.frag.h"
@@ -32,6 +33,7 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("visibility_wide.frag", spv_visibility_wide_frag)
   VB_SHADER("shade.comp", spv_shade_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
+  VB_SHADER("skin.comp", spv_skin_comp)
   VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)

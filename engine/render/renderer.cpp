@@ -24,6 +24,8 @@
 #include "passes/depth_pyramid_pass.h"
 #include "passes/forward_pass.h"
 #include "passes/shade_pass.h"
+#include "passes/skin_pass.h"
+#include "render/animation_state.h"
 #include "passes/visibility_pass.h"
 #include "render/frame_math.h"
 #include "scene/gpu_scene.h"
@@ -54,7 +56,7 @@ IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw,
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 8;
+constexpr uint32_t kCommandBuffers = 10;  // setup, skin, 2 x (cull, raster), pyramid, shade, readback
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
 
@@ -82,6 +84,8 @@ struct Renderer::Impl {
   passes::ShadePass shade;
   passes::ForwardPass forward;
   passes::DepthPyramidPass pyramid;
+  std::unique_ptr<AnimationState> animation;  // skinned scenes only
+  passes::SkinPass skin;
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
   bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
@@ -321,15 +325,19 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
   for (uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& o = scene.objects[i];
     const Mesh& mesh = scene.meshes[o.mesh];
-    const double scale = maxScaleOf(o.transform);
-    glm::dvec4 s = objectBoundsWorld(scene, o, scale);
+    double scale = 0.0;
+    glm::dvec4 s;
+    if (!animation || !animation->skinnedBounds(i, &s, &scale)) {  // skinned: the current pose's bound
+      scale = maxScaleOf(o.transform);
+      s = objectBoundsWorld(scene, o, scale);
+    }
     if (options.cull != CullMode::None && !sphereInFrustum(math, camera, glm::dvec3(s), s.w)) {
       ++st.frustumCulled;
       continue;
     }
     double dist = glm::length(glm::dvec3(s) - camera.position) - s.w;
     uint32_t lod = selectLod(mesh, scale, dist, math, camera.nearPlane, options.lodErrorPixels);
-    const gpu::MeshData& md = gpuScene.meshTable[o.mesh];
+    const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[i]];
     out.push_back({md.lods[lod].indexCount, md.lods[lod].firstIndex, int32_t(md.vertexOffset), i});
     st.trianglesDrawn += md.lods[lod].indexCount / 3;
     st.lodHistogram[lod]++;
@@ -494,7 +502,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.objects = gpuScene.objectCount;
   st.drawCapacity = capacity;
   st.ids = encoding;
-  st.sceneBytes = gpuScene.bytes;
+  st.sceneBytes = gpuScene.bytes + (animation ? animation->bytes() : 0);
 
   uint32_t used = 0;
   // setup: queries, counters
@@ -516,6 +524,23 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   }
   VK_CHECK(vkEndCommandBuffer(cmd));
 
+  if (animation) {  // skinning: only when the pose changed (a static scene has no AnimationState at all)
+    st.skinnedInstances = animation->instanceCount();
+    st.skinnedVertices = animation->vertexCount();
+    if (animation->update(options.animationTime)) {
+      st.skinned = true;
+      st.animationCpuMs = animation->lastUpdateMs();
+      cmd = cmds[used++];
+      beginCmd(cmd);
+      uint32_t t = timestamps->begin(cmd, "skin");
+      skin.record(cmd, animation->instanceCount(), animation->maxVertices());
+      timestamps->end(cmd, t);
+      // Regions and mesh slots are read by every later pass (cull, raster, shading, forward).
+      gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                         VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
+      VK_CHECK(vkEndCommandBuffer(cmd));
+    }
+  }
   const gpu::Image* colorSource = &color;
   const CullMode effectiveCull = frozen ? lastCull : options.cull;
   const bool builtPyramid = usePyramid;
@@ -533,7 +558,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
     if (options.readDraws)
       for (const auto& d : fdraws) {
-        const gpu::MeshData& md = gpuScene.meshTable[scene.objects[d.objectId].mesh];
+        const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[d.objectId]];
         uint32_t lod = 0;
         while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
         result.drawnObjects.push_back(d.objectId);
@@ -692,7 +717,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
     auto add = [&](const gpu::DrawCommand& d) {
       result.drawnObjects.push_back(d.firstInstance);
-      const gpu::MeshData& md = gpuScene.meshTable[scene.objects[d.firstInstance].mesh];
+      const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[d.firstInstance]];
       uint32_t lod = 0;
       while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
       result.drawnLods.push_back(lod);
@@ -799,6 +824,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->pyramid.create(device);
   impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 12);
   impl->createTargets(config.width, config.height);
+  impl->animation = AnimationState::create(device, scene, impl->gpuScene);
+  if (impl->animation)
+    impl->skin.create(device, {impl->gpuScene.vertices.handle(), impl->gpuScene.meshes.handle(),
+                               impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
+                               impl->animation->instances().handle()});
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 

@@ -45,7 +45,8 @@ struct FrameOptions {
                                 // the camera can move on and show what that frame culled
   bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
   bool countOverdraw = false;   // debug: count raster writes per pixel (FrameResult.overdraw)
-  bool readAttributes = false;  // visbuf: read the shading pass's reconstruction per pixel (FrameResult.attributes)
+  bool readAttributes = false;
+  double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)  // visbuf: read the shading pass's reconstruction per pixel (FrameResult.attributes)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };
@@ -83,6 +84,10 @@ struct FrameStats {
   double gpuMs = 0.0;           // sum of pass times
   double cpuRecordMs = 0.0;     // CPU time to cull (forward) and record
   double wallMs = 0.0;          // submit to fence, plus readback conversion
+  uint32_t skinnedInstances = 0;  // animated instances in the scene
+  uint64_t skinnedVertices = 0;   // their vertices (all rewritten when the pose changes)
+  bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
+  double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
   uint64_t targetBytesPerPixel = 0;
 };

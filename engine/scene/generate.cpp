@@ -178,4 +178,56 @@ Result<Scene> makeCityScene(const CityParams& params) {
   return scene;
 }
 
+Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& params) {
+  if (asset.skinnedObjects.empty())
+    return makeError(ErrorCode::InvalidArgument, "animated field: the asset has no skinned objects");
+  if (params.instances == 0) return makeError(ErrorCode::InvalidArgument, "animated field: 0 instances");
+  Scene s;
+  s.name = "animated-field";
+  s.meshes = asset.meshes;
+  s.materials = asset.materials;
+  s.nodes = asset.nodes;
+  s.skins = asset.skins;
+  s.animations = asset.animations;
+  s.lightDirection = asset.lightDirection;
+  // The asset's rest-pose bounds (skinned objects: their node transforms place the bind pose).
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (const Object& o : asset.objects) {
+    const glm::dvec4 b = objectBoundsWorld(asset, o);
+    lo = glm::min(lo, glm::dvec3(b) - b.w);
+    hi = glm::max(hi, glm::dvec3(b) + b.w);
+  }
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double unit = 1.0 / std::max(0.5 * glm::length(hi - lo), 1e-9);
+  const uint32_t side = uint32_t(std::ceil(std::sqrt(double(params.instances))));
+  std::vector<int32_t> skinnedIndex(asset.objects.size(), -1);
+  for (size_t i = 0; i < asset.skinnedObjects.size(); ++i) skinnedIndex[asset.skinnedObjects[i].object] = int32_t(i);
+  Rng rng(params.seed);
+  for (uint32_t k = 0; k < params.instances; ++k) {
+    const double x = (double(k % side) - 0.5 * side + rng.uniform(-0.3, 0.3)) * params.spacing;
+    const double z = (double(k / side) - 0.5 * side + rng.uniform(-0.3, 0.3)) * params.spacing;
+    const glm::dmat4 place = glm::translate(glm::dmat4(1.0), glm::dvec3(x, 0.0, z)) *
+                             glm::rotate(glm::dmat4(1.0), rng.uniform(0.0, 6.283185307179586), glm::dvec3(0, 1, 0)) *
+                             glm::scale(glm::dmat4(1.0), glm::dvec3(unit)) *
+                             glm::translate(glm::dmat4(1.0), -centre);
+    const double phase = rng.uniform();
+    for (size_t i = 0; i < asset.objects.size(); ++i) {
+      const Object& o = asset.objects[i];
+      s.objects.push_back({place * o.transform, o.mesh, o.material});
+      if (skinnedIndex[i] < 0) continue;
+      SkinnedObject so = asset.skinnedObjects[size_t(skinnedIndex[i])];
+      so.object = uint32_t(s.objects.size() - 1);
+      so.placement = place * so.placement;
+      const bool hasClip = so.clip >= 0 && size_t(so.clip) < s.animations.size();
+      so.timeOffset = hasClip ? phase * s.animations[size_t(so.clip)].duration : 0.0;
+      s.skinnedObjects.push_back(so);
+    }
+  }
+  const double half = 0.5 * side * params.spacing;
+  s.defaultCamera.position = {0.0, 0.3 * half + 1.5, half + 3.0};
+  s.defaultCamera.target = {0.0, 0.0, 0.3 * half};
+  s.defaultCamera.nearPlane = 0.05;
+  return s;
+}
+
 }  // namespace visbuf

@@ -27,6 +27,17 @@ struct FieldParams {
 // axis, angle in [0,90) degrees.
 Result<Scene> makeFieldScene(const FieldParams& params);
 
+struct AnimatedFieldParams {
+  uint32_t instances = 1000;
+  uint64_t seed = 1;
+  double spacing = 3.0;  // instances stand on a jittered grid in the XZ plane, this far apart (normalised units)
+};
+// Many copies of an asset with skinned objects (a baked glTF such as Fox or CesiumMan), each scaled to a unit
+// bounding radius, standing upright on a jittered grid with a random heading, playing clip 0 at its own random
+// phase. The asset's meshes, skins, clips and node hierarchy are shared; every copy of a skinned object is a
+// skinned instance of its own (its own vertex region and pose). Fails when the asset has no skinned objects.
+Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& params);
+
 struct CityParams {
   uint32_t objects = 20000;  // approximate total (buildings + clutter + ground)
   uint64_t seed = 1;

@@ -20,6 +20,12 @@ gpu::ObjectData packObject(const Object& object, const Scene& scene) {
   return d;
 }
 
+gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placement, const Scene& scene) {
+  Object placed = object;
+  placed.transform = placement;
+  return packObject(placed, scene);
+}
+
 uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount) {
   const uint64_t perWindow = maxRange / sizeof(gpu::ObjectData) / 4 * 4;
   return uint32_t(std::min<uint64_t>(objectCount, perWindow));
@@ -47,6 +53,35 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   std::vector<gpu::ObjectData> objects;
   objects.reserve(scene.objects.size());
   for (const Object& o : scene.objects) objects.push_back(packObject(o, scene));
+  for (uint32_t i = 0; i < scene.objects.size(); ++i) g.objectMesh.push_back(scene.objects[i].mesh);
+  // Skinned instances: a region of rest vertices (uv and colour stay; position and normal are rewritten
+  // every pose) and a mesh slot of their own; the skin vertices of each source mesh once.
+  std::vector<SkinVertex> skinVertices;
+  std::vector<int64_t> skinVertexStart(scene.meshes.size(), -1);
+  for (const SkinnedObject& so : scene.skinnedObjects) {
+    const Object& o = scene.objects[so.object];
+    const Mesh& mesh = scene.meshes[o.mesh];
+    if (skinVertexStart[o.mesh] < 0) {
+      skinVertexStart[o.mesh] = int64_t(skinVertices.size());
+      skinVertices.insert(skinVertices.end(), mesh.skinVertices.begin(), mesh.skinVertices.end());
+    }
+    GpuScene::SkinnedRegion r;
+    r.object = so.object;
+    r.sourceMesh = o.mesh;
+    r.meshSlot = uint32_t(g.meshTable.size());
+    r.sourceVertex = g.meshTable[o.mesh].vertexOffset;
+    r.skinVertex = uint32_t(skinVertexStart[o.mesh]);
+    r.outVertex = uint32_t(vertices.size());
+    r.vertexCount = uint32_t(mesh.vertices.size());
+    vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
+    gpu::MeshData md = g.meshTable[o.mesh];
+    md.vertexOffset = r.outVertex;
+    g.meshTable.push_back(md);
+    objects[so.object] = packSkinnedObject(o, so.placement, scene);
+    objects[so.object].meshIndex = r.meshSlot;
+    g.objectMesh[so.object] = r.meshSlot;
+    g.skinned.push_back(r);
+  }
   std::vector<gpu::MaterialData> materials;
   for (const Material& m : scene.materials) materials.push_back({m.baseColor, glm::vec4(0.0f)});
 
@@ -72,8 +107,10 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.meshes = gpu::uploadVector(device, g.meshTable, ssbo);
   g.objects = gpu::uploadVector(device, objects, ssbo);
   g.materials = gpu::uploadVector(device, materials, ssbo);
+  if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
   g.objectCount = uint32_t(objects.size());
-  g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size();
+  g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
+            (g.skinVertices ? g.skinVertices.size() : 0);
   return g;
 }
 

@@ -18,6 +18,22 @@ struct GpuScene {
   gpu::Buffer objects;    // gpu::ObjectData[]
   gpu::Buffer materials;  // gpu::MaterialData[]
   std::vector<gpu::MeshData> meshTable;  // CPU copy (forward path, ID decoding)
+  std::vector<uint32_t> objectMesh;      // meshTable slot each object draws (its own slot when skinned)
+
+  // Skinned instances (Scene::skinnedObjects, same order): each owns a region of the vertex pool that the
+  // skinning pass rewrites, and a mesh table slot (the source mesh's LODs pointing at that region, bounds
+  // and LOD errors rewritten per pose). Empty for a static scene, and then nothing below is allocated.
+  struct SkinnedRegion {
+    uint32_t object = 0;
+    uint32_t sourceMesh = 0;    // Scene::meshes / meshTable index of the rest-pose mesh
+    uint32_t meshSlot = 0;      // meshTable slot of this instance
+    uint32_t sourceVertex = 0;  // first rest vertex in the pool
+    uint32_t skinVertex = 0;    // first SkinVertex in skinVertices
+    uint32_t outVertex = 0;     // first vertex of the instance's region
+    uint32_t vertexCount = 0;
+  };
+  std::vector<SkinnedRegion> skinned;
+  gpu::Buffer skinVertices;  // SkinVertex[] of the meshes skinned objects use (24 bytes each)
   uint32_t objectCount = 0;
   uint32_t maxTrianglesPerDraw = 0;  // largest LOD0 triangle count: sets the triangle ID bits
   uint64_t bytes = 0;                // GPU memory of the mirror
@@ -30,6 +46,8 @@ uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount);
 
 // Packs an object into its 64-byte record, translation relative to `anchor`.
 gpu::ObjectData packObject(const Object& object, const Scene& scene);
+// The same for a skinned object: its placement (SkinnedObject::placement) instead of its transform.
+gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placement, const Scene& scene);
 
 // Validates and uploads. Fails with CapacityExceeded when a buffer would exceed the device's
 // maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit; the object records are read

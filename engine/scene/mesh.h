@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/type_precision.hpp>
 
 namespace visbuf {
 
@@ -21,6 +22,9 @@ struct MeshSource {
   // bitangent = cross(normal, xyz) * w; (0,0,0,0) for vertices that have none (the shader derives one).
   std::vector<glm::vec4> tangents;
   std::vector<uint32_t> indices;   // 3 per triangle, each < positions.size()
+  // Skinning streams (glTF JOINTS_0 / WEIGHTS_0): both empty, or both the same count as positions.
+  std::vector<glm::u16vec4> joints;  // indices into the skin's joint list; slots with weight 0 hold 0
+  std::vector<glm::vec4> weights;    // each >= 0, finite, summing to 1
 };
 
 }  // namespace visbuf

@@ -93,6 +93,23 @@ void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std:
   }
 }
 
+// The source's JOINTS_0 / WEIGHTS_0 streams as SkinVertex records (empty when the mesh is not skinned), in
+// canonical form: slots with weight 0 get joint 0, so equal influences compare equal byte for byte.
+Result<std::vector<SkinVertex>> skinVerticesOf(const MeshSource& source) {
+  std::vector<SkinVertex> out(source.joints.size());
+  for (size_t v = 0; v < out.size(); ++v) {
+    for (int i = 0; i < 4; ++i) {
+      const float w = source.weights[v][i];
+      if (!std::isfinite(w) || w < 0.0f)
+        return makeError(ErrorCode::MalformedInput,
+                         fmt::format("mesh '{}': vertex {} has skin weight {} (< 0 or not finite)", source.name, v, w));
+      out[v].weights[i] = w;
+      out[v].joints[i] = w > 0.0f ? source.joints[v][i] : uint16_t{0};
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options) {
@@ -104,7 +121,9 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   if (source.normals.size() != vertexCount || (!source.uvs.empty() && source.uvs.size() != vertexCount) ||
       (!source.colors.empty() && source.colors.size() != vertexCount) ||
       (!source.uvs1.empty() && source.uvs1.size() != vertexCount) ||
-      (!source.tangents.empty() && source.tangents.size() != vertexCount))
+      (!source.tangents.empty() && source.tangents.size() != vertexCount) ||
+      source.joints.size() != source.weights.size() ||
+      (!source.joints.empty() && source.joints.size() != vertexCount))
     return makeError(ErrorCode::MalformedInput, fmt::format("mesh '{}': attribute counts differ", source.name));
   for (uint32_t i : source.indices)
     if (i >= vertexCount)
@@ -142,11 +161,16 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     v.color = source.colors.empty() ? packColor(glm::vec4(1.0f)) : source.colors[i];
     v.pad = 0;
   }
+  Result<std::vector<SkinVertex>> rawSkin = skinVerticesOf(source);
+  if (!rawSkin) return rawSkin.error();
+  const bool skinned = !rawSkin->empty();
+  // Deduplicate: two vertices merge only when the GPU vertex and the skin data are both identical.
   const size_t indexCount = source.indices.size();
   std::vector<uint32_t> remap(vertexCount);
   std::vector<meshopt_Stream> streams = {{raw.data(), sizeof(gpu::Vertex), sizeof(gpu::Vertex)}};
   if (!source.tangents.empty()) streams.push_back({source.tangents.data(), sizeof(glm::vec4), sizeof(glm::vec4)});
   if (!source.uvs1.empty()) streams.push_back({source.uvs1.data(), sizeof(glm::vec2), sizeof(glm::vec2)});
+  if (skinned) streams.push_back({rawSkin->data(), sizeof(SkinVertex), sizeof(SkinVertex)});
   size_t unique = meshopt_generateVertexRemapMulti(remap.data(), source.indices.data(), indexCount, vertexCount,
                                                    streams.data(), streams.size());
   Mesh mesh;
@@ -154,6 +178,7 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   mesh.vertices = remapStream(raw, remap, unique);
   mesh.tangents = remapStream(source.tangents, remap, unique);
   mesh.uvs1 = remapStream(source.uvs1, remap, unique);
+  mesh.skinVertices = remapStream(*rawSkin, remap, unique);
   std::vector<uint32_t> lod0(indexCount);
   meshopt_remapIndexBuffer(lod0.data(), source.indices.data(), indexCount, remap.data());
 
@@ -162,13 +187,15 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   meshopt_optimizeVertexCache(lod0.data(), lod0.data(), indexCount, unique);
   meshopt_optimizeOverdraw(lod0.data(), lod0.data(), indexCount, pos, unique, stride, 1.05f);
   // Fetch order follows LOD0; coarser levels index a subset of the same vertices. Every vertex is used by
-  // LOD0 (the remap above keeps only referenced ones), so the fetch remap is a permutation.
+  // LOD0 (the remap above keeps only referenced ones), so the fetch remap is a permutation; one remap reorders
+  // every stream so they stay parallel to vertices.
   std::vector<uint32_t> fetch(unique);
   meshopt_optimizeVertexFetchRemap(fetch.data(), lod0.data(), indexCount, unique);
   meshopt_remapIndexBuffer(lod0.data(), lod0.data(), indexCount, fetch.data());
   mesh.vertices = remapStream(mesh.vertices, fetch, unique);
   mesh.tangents = remapStream(mesh.tangents, fetch, unique);
   mesh.uvs1 = remapStream(mesh.uvs1, fetch, unique);
+  mesh.skinVertices = remapStream(mesh.skinVertices, fetch, unique);
   pos = &mesh.vertices[0].px;
 
   mesh.indices = lod0;

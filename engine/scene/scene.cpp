@@ -65,7 +65,7 @@ Status validateScene(const Scene& scene) {
       return makeError(ErrorCode::MalformedInput,
                        fmt::format("object {}: degenerate (zero-scale) transform", i));
   }
-  return {};
+  return validateSceneAnimation(scene);
 }
 
 std::array<const TextureRef*, kTextureSlotCount> textureSlots(const Material& m) {

@@ -10,8 +10,10 @@
 #include <glm/glm.hpp>
 
 #include "core/result.h"
+#include "scene/animation.h"
 #include "scene/mesh.h"
 #include "scene/texture.h"
+#include "scene/skin_vertex.h"
 #include "shared/types.h"
 
 namespace visbuf {
@@ -32,6 +34,7 @@ struct Mesh {
   std::vector<glm::vec2> uvs1;
   std::vector<uint32_t> indices;  // every LOD, concatenated; indices are mesh-local
   std::vector<Lod> lods;          // lods[0] = full mesh; error non-decreasing
+  std::vector<SkinVertex> skinVertices;  // empty, or parallel to vertices (a skinned mesh)
   glm::vec4 boundsSphere{0.0f};   // contains every vertex
   uint32_t triangleCount(size_t lod = 0) const { return lods[lod].indexCount / 3; }
   glm::vec3 position(uint32_t vertex) const {
@@ -95,6 +98,19 @@ struct Camera {
   double nearPlane = 0.1;            // reverse-Z, infinite far plane
 };
 
+// An object drawn with skinning: its mesh's vertices are skinned by `skin` each frame (the object's
+// transform is not applied to skinned vertices; glTF ignores the skinned mesh node's transform). Its
+// culling bound at a pose is skinnedBoundsSphere() (animation.h), not the mesh's rest-pose boundsSphere.
+struct SkinnedObject {
+  uint32_t object = 0;  // into Scene::objects; its mesh has skinVertices
+  uint32_t skin = 0;    // into Scene::skins; covers every joint index of the mesh's skinVertices
+  // Playback (not stored in packs: every instance of a pack plays clip 0 from time 0 in place).
+  int32_t clip = 0;            // Scene::animations index played (looping); no such clip: the rest pose
+  double timeOffset = 0.0;     // seconds added to the frame's animation time: each instance its own phase
+  glm::dmat4 placement{1.0};   // world placement of the skinned result (identity for a file's own instances)
+  bool operator==(const SkinnedObject&) const = default;
+};
+
 struct Scene {
   std::string name;
   std::vector<Mesh> meshes;
@@ -102,6 +118,12 @@ struct Scene {
   std::vector<Object> objects;
   std::vector<Texture> textures;            // baked images, referenced by TextureRef::baked
   std::vector<TextureClass> textureClasses; // their pixels (texture.h)
+  // Animation (all empty for a static scene): the node hierarchy (joints and channels index it), skins,
+  // clips, and which objects are skinned (at most one entry per object).
+  std::vector<SceneNode> nodes;
+  std::vector<Skin> skins;
+  std::vector<AnimationClip> animations;
+  std::vector<SkinnedObject> skinnedObjects;
   glm::dvec3 anchor{0.0};  // GPU positions are relative to this point
   Camera defaultCamera;
   glm::vec3 lightDirection = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));  // towards the light
@@ -109,8 +131,12 @@ struct Scene {
   uint64_t totalTriangles() const;  // full-detail triangles over all objects
 };
 
-// Checks a scene before upload: indices, finite transforms, mesh/material references.
+// Checks a scene before upload: indices, finite transforms, mesh/material references, and
+// validateSceneAnimation().
 Status validateScene(const Scene& scene);
+// The animation part (scene_animation.cpp): validateNodes / validateSkin / validateClip, skin vertex counts
+// and weights, skinned objects' object/skin references, and joint indices below the skin's joint count.
+Status validateSceneAnimation(const Scene& scene);
 
 // World-space bounding sphere of an object (double precision, conservative: uses the largest
 // column norm of the 3x3 part as the scale).

@@ -39,6 +39,14 @@
 #define STAT_LOD_HISTOGRAM 8       // MAX_LODS counters: draws per LOD level
 #define STAT_COUNT (STAT_LOD_HISTOGRAM + MAX_LODS)
 
+// Skinning pass (shaders/skin.comp.glsl): its own descriptor set, one thread per instance vertex.
+#define SKIN_WORKGROUP_SIZE 64
+#define SKIN_BINDING_VERTICES 0      // Vertex[] (the unified pool: rest vertices in, instance regions out)
+#define SKIN_BINDING_MESHES 1        // MeshData[] (instance slots: bounds and LOD errors per pose)
+#define SKIN_BINDING_SKIN_VERTICES 2 // SkinVertex[] (joints, weights)
+#define SKIN_BINDING_JOINTS 3        // vec4[3 * joints]: joint matrix rows, skin space, per instance
+#define SKIN_BINDING_INSTANCES 4     // SkinInstance[]
+
 // Descriptor bindings (set 0) used by every pass; one layout keeps the frame script simple.
 #define BINDING_FRAME 0      // uniform FrameData
 #define BINDING_OBJECTS 1    // ObjectData[]

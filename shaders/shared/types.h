@@ -93,6 +93,19 @@ struct FrameData {
   uint objectSplit;     // objects [0, objectSplit) are in BINDING_OBJECTS, the rest in BINDING_OBJECTS_HIGH
 };
 
+// One animated instance of the skinning pass (48 bytes), written by the CPU every pose.
+struct SkinInstance {
+  uint sourceVertex;  // first rest vertex (pool index)
+  uint skinVertex;    // first SkinVertex
+  uint vertexCount;
+  uint outVertex;     // first vertex of the instance's region (pool index)
+  uint firstJoint;    // first joint matrix of this instance
+  uint meshSlot;      // the instance's MeshData
+  uint sourceMesh;    // the rest-pose mesh's MeshData (its LOD errors)
+  float lodScale;     // largest joint scale of the pose: multiplies the LOD errors
+  vec4 bounds;        // skin space: xyz centre, w radius, contains every skinned vertex of the pose
+};
+
 // Push constants of the cull, visibility and depth pyramid passes (16 bytes).
 struct PassConstants {
   uint phase;     // CULL_PHASE_EARLY / CULL_PHASE_LATE

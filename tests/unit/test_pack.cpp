@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "animation_test_scene.h"
 #include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 #include "asset/pack_format.h"
@@ -36,7 +37,8 @@ fs::path assetPath(const std::string& relative) {
 }
 
 // A small scene that exercises every field: two meshes with LOD chains, materials of every alpha mode with
-// texture references, mirrored and far-from-origin objects, a non-default camera and anchor.
+// texture references, mirrored and far-from-origin objects, a non-default camera and anchor, and skinning /
+// animation data (the box mesh is skinned, object 1 a skinned object: every optional section is present).
 Scene makeTestScene(uint32_t knotSegments = 64, uint32_t knotSides = 12) {
   Scene scene;
   scene.name = "generated test scene";
@@ -69,6 +71,7 @@ Scene makeTestScene(uint32_t knotSegments = 64, uint32_t knotSides = 12) {
   scene.defaultCamera.fovY = 0.9;
   scene.defaultCamera.nearPlane = 0.01;
   scene.lightDirection = glm::normalize(glm::vec3(-1.0f, 2.0f, 0.5f));
+  test::addTestAnimation(scene, 1, 1);
   return scene;
 }
 
@@ -167,6 +170,7 @@ void expectScenesEqual(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.objects[i].mesh, b.objects[i].mesh);
     EXPECT_EQ(a.objects[i].material, b.objects[i].material);
   }
+  test::expectAnimationEqual(a, b);
 }
 
 std::vector<uint8_t> readBytes(const fs::path& path) {
@@ -275,7 +279,7 @@ TEST(PackRoundTrip, TexturedSceneInMemory) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(scene, &report);
   ASSERT_TRUE(bytes) << bytes.error().message;
-  EXPECT_EQ(report.sections.size(), 14u);  // the 8 required + meshStreams, tangents, uvs1, 3 texture sections
+  EXPECT_EQ(report.sections.size(), 14u + 11u);  // 8 required, meshStreams, tangents, uvs1, 3 texture, 11 animation
   Result<Scene> back = parse(*bytes);
   ASSERT_TRUE(back) << back.error().message;
   expectScenesEqual(scene, *back);
@@ -310,7 +314,7 @@ TEST_F(PackFileTest, GeneratedSceneThroughFile) {
 TEST_F(PackFileTest, RealAssetsThroughFile) {
   for (const char* relative :
        {"DamagedHelmet/glTF-Binary/DamagedHelmet.glb", "OrientationTest/glTF/OrientationTest.gltf",
-        "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf"}) {
+        "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf", "CesiumMan/glTF/CesiumMan.gltf", "Fox/glTF/Fox.gltf"}) {
     SCOPED_TRACE(relative);
     const fs::path asset = assetPath(relative);
     if (!fs::exists(asset)) GTEST_SKIP() << "asset not found: " << asset;
@@ -355,7 +359,7 @@ TEST(PackReader, FlippedByteInEachSectionIsAChecksumError) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene(), &report);
   ASSERT_TRUE(bytes);
-  ASSERT_EQ(report.sections.size(), 8u);
+  ASSERT_EQ(report.sections.size(), 8u + 11u);  // required + animation sections
   PackWriteReport texturedReport;
   Result<std::vector<uint8_t>> textured = serializePack(makeTexturedTestScene(), &texturedReport);
   ASSERT_TRUE(textured);
@@ -548,6 +552,40 @@ TEST(PackReader, BadTexturesAndStreams) {
     reseal(v);
     EXPECT_TRUE(failsWith(parse(v), "need section 'meshStreams'"));
   }
+}
+
+TEST(PackReader, BadReferencesInAnimationSections) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
+  ASSERT_TRUE(bytes);
+  auto edit = [&](const char* section, size_t record, size_t offset, auto value) {
+    std::vector<uint8_t> v = *bytes;
+    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
+    std::memcpy(v.data() + e.offset + record * e.elementSize + offset, &value, sizeof(value));
+    reseal(v);
+    return parse(v);
+  };
+  EXPECT_TRUE(failsWith(edit("nodes", 2, 8, int32_t{9}), "section 'nodes' record 2: field 'parent' 9"));
+  EXPECT_TRUE(failsWith(edit("nodes", 1, 8, int32_t{3}), "section 'nodes': node hierarchy has a cycle"));
+  EXPECT_TRUE(failsWith(edit("nodes", 0, 16, double(NAN)), "section 'nodes' record 0: non-finite transform"));
+  EXPECT_TRUE(failsWith(edit("skins", 0, 8, uint64_t{1} << 60), "section 'skins' record 0: fields 'firstJoint'"));
+  EXPECT_TRUE(failsWith(edit("skins", 0, 16, uint32_t{70000}), "field 'jointCount' is 70000"));
+  EXPECT_TRUE(failsWith(edit("skinJoints", 1, 0, uint32_t{40}), "joint 1 is node 40, which does not exist"));
+  EXPECT_TRUE(failsWith(edit("skinJoints", 0, 8 + 3 * 8, 0.5), "inverse bind matrix 0 is not affine"));
+  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 0, uint32_t{7}), "section 'skinnedMeshes' record 0: field 'mesh' 7"));
+  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 8, uint64_t{5}), "fields 'firstSkinVertex' 5"));
+  EXPECT_TRUE(failsWith(edit("skinVertices", 3, 0, uint16_t{2}), "uses joint index 2, skin 0 has 2 joints"));
+  EXPECT_TRUE(failsWith(edit("skinVertices", 3, 8, 0.75f), "weights sum to"));
+  EXPECT_TRUE(failsWith(edit("skinnedObjects", 0, 0, uint32_t{0}), "skinned object 0: mesh 0 'torus-knot' has no skin vertices"));
+  EXPECT_TRUE(failsWith(edit("skinnedObjects", 0, 4, uint32_t{1}), "field 'object' 1 / 'skin' 1 out of range"));
+  EXPECT_TRUE(failsWith(edit("animations", 0, 24, uint32_t{1} << 31), "fields 'firstChannel' 2147483648"));
+  EXPECT_TRUE(failsWith(edit("animations", 1, 8, 7.0), "duration 7 differs from the last key time 0.5"));
+  EXPECT_TRUE(failsWith(edit("animSamplers", 2, 0, uint32_t{3}), "field 'interpolation' is 3"));
+  EXPECT_TRUE(failsWith(edit("animSamplers", 0, 16, uint64_t{1} << 40), "fields 'firstTime' 0 + 'keyCount' 1099511627776"));
+  EXPECT_TRUE(failsWith(edit("animSamplers", 1, 4, uint32_t{4}), "path 2 does not fit 4 components"));
+  EXPECT_TRUE(failsWith(edit("animChannels", 0, 4, uint32_t{2}), "target node 2 has a matrix"));
+  EXPECT_TRUE(failsWith(edit("animChannels", 1, 8, uint32_t{4}), "'path' 4 out of range"));
+  EXPECT_TRUE(failsWith(edit("animTimes", 1, 0, 0.0f), "key times are not strictly increasing (key 1"));
+  EXPECT_TRUE(failsWith(edit("animValues", 4, 0, INFINITY), "output value 4 is not finite"));
 }
 
 // --- atomic writes

@@ -1,0 +1,115 @@
+// Optional pack sections for skeletal animation (docs/pack-format.md, "Animation sections"): the node
+// hierarchy, skins, per-vertex skin data of skinned meshes, which objects are skinned, and animation clips.
+// Same rules as pack_format.h (plain little-endian records copied with memcpy, sizes pinned below). A
+// section that is absent means "none"; a static scene has none of them, and a reader that does not know
+// them skips them (it then draws the rest pose). All "first*" ranges of one kind are disjoint and, summed
+// over their records, cover at most their target section.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "asset/pack_format.h"
+#include "scene/skin_vertex.h"
+
+namespace visbuf::pack {
+
+inline constexpr uint32_t kNodeHasMatrix = 1u;  // NodeRecord::flags
+
+// Section "nodes": one record per Scene::nodes entry (glTF node order; joints and channels index it).
+struct NodeRecord {
+  StringRef name;
+  int32_t parent;         // node index or -1; the hierarchy has no cycles
+  uint32_t flags;         // kNodeHasMatrix: `matrix` is the local transform (never animated), TRS unused
+  double translation[3];  // finite
+  double rotation[4];     // x, y, z, w; unit length
+  double scale[3];        // finite
+  double matrix[16];      // column-major, finite (identity when not kNodeHasMatrix)
+};
+static_assert(sizeof(NodeRecord) == 224 && offsetof(NodeRecord, translation) == 16 &&
+              offsetof(NodeRecord, matrix) == 96);
+
+// Section "skins": one record per Scene::skins entry; its joints are skinJoints[firstJoint, + jointCount).
+struct SkinRecord {
+  StringRef name;
+  uint64_t firstJoint;  // into "skinJoints"
+  uint32_t jointCount;  // 1..65536
+  int32_t skeleton;     // node index or -1
+};
+static_assert(sizeof(SkinRecord) == 24);
+
+// Section "skinJoints": one record per joint of every skin.
+struct SkinJointRecord {
+  uint32_t node;           // < node count
+  uint32_t reserved;       // 0
+  double inverseBind[16];  // column-major, finite, affine (last row 0 0 0 1)
+};
+static_assert(sizeof(SkinJointRecord) == 136 && offsetof(SkinJointRecord, inverseBind) == 8);
+
+// Section "skinnedMeshes": meshes with per-vertex skin data: skinVertices[firstSkinVertex, + the mesh's
+// vertexCount) parallel to the mesh's vertices. At most one record per mesh.
+struct SkinnedMeshRecord {
+  uint32_t mesh;             // < mesh count
+  uint32_t reserved;         // 0
+  uint64_t firstSkinVertex;  // into "skinVertices"
+};
+static_assert(sizeof(SkinnedMeshRecord) == 16);
+
+// Section "skinVertices": SkinVertex records (scene/skin_vertex.h): joints u16 x 4, weights f32 x 4.
+static_assert(sizeof(SkinVertex) == 24 && offsetof(SkinVertex, weights) == 8);
+
+// Section "skinnedObjects": Scene::skinnedObjects, at most one record per object.
+struct SkinnedObjectRecord {
+  uint32_t object;  // < object count; its mesh has a "skinnedMeshes" record
+  uint32_t skin;    // < skin count; covers every joint index of the mesh's skin vertices
+};
+static_assert(sizeof(SkinnedObjectRecord) == 8);
+
+// Section "animations": one record per clip; samplers animSamplers[firstSampler, + samplerCount), channels
+// animChannels[firstChannel, + channelCount).
+struct AnimationRecord {
+  StringRef name;
+  double duration;  // seconds: the last key time over the clip's samplers
+  uint32_t firstSampler;
+  uint32_t samplerCount;
+  uint32_t firstChannel;
+  uint32_t channelCount;
+};
+static_assert(sizeof(AnimationRecord) == 32);
+
+// Section "animSamplers": keys animTimes[firstTime, + keyCount), values animValues[firstValue, + keyCount x
+// components x (3 for cubic spline, else 1)).
+struct AnimSamplerRecord {
+  uint32_t interpolation;  // Interpolation: 0 linear, 1 step, 2 cubic spline
+  uint32_t components;     // 3 translation/scale, 4 rotation, morph target count for weights (1..65536)
+  uint64_t firstTime;      // into "animTimes"
+  uint64_t keyCount;       // >= 1
+  uint64_t firstValue;     // into "animValues"
+};
+static_assert(sizeof(AnimSamplerRecord) == 32);
+
+// Section "animChannels".
+struct AnimChannelRecord {
+  uint32_t sampler;   // relative to the clip's firstSampler, < samplerCount
+  uint32_t node;      // target node, < node count, without kNodeHasMatrix
+  uint32_t path;      // AnimationPath: 0 translation, 1 rotation, 2 scale, 3 weights
+  uint32_t reserved;  // 0
+};
+static_assert(sizeof(AnimChannelRecord) == 16);
+
+// Sections "animTimes" and "animValues": f32 (times in seconds, strictly increasing per sampler; values
+// finite).
+
+inline constexpr const char* kNodesSection = "nodes";
+inline constexpr const char* kSkinsSection = "skins";
+inline constexpr const char* kSkinJointsSection = "skinJoints";
+inline constexpr const char* kSkinnedMeshesSection = "skinnedMeshes";
+inline constexpr const char* kSkinVerticesSection = "skinVertices";
+inline constexpr const char* kSkinnedObjectsSection = "skinnedObjects";
+inline constexpr const char* kAnimationsSection = "animations";
+inline constexpr const char* kAnimSamplersSection = "animSamplers";
+inline constexpr const char* kAnimChannelsSection = "animChannels";
+inline constexpr const char* kAnimTimesSection = "animTimes";
+inline constexpr const char* kAnimValuesSection = "animValues";
+
+}  // namespace visbuf::pack

@@ -1,0 +1,75 @@
+#include "passes/skin_pass.h"
+
+#include <array>
+
+#include "gpu/check.h"
+#include "shared/types.h"
+
+namespace visbuf::passes {
+
+SkinPass::~SkinPass() {
+  if (!device_) return;
+  VkDevice dev = device_->device();
+  vkDestroyDescriptorPool(dev, pool_, nullptr);
+  vkDestroyPipelineLayout(dev, layout_, nullptr);
+  vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
+}
+
+void SkinPass::create(gpu::Device& device, const SkinInputs& in) {
+  device_ = &device;
+  VkDevice dev = device.device();
+  const std::array<uint32_t, 5> bindings = {SKIN_BINDING_VERTICES, SKIN_BINDING_MESHES, SKIN_BINDING_SKIN_VERTICES,
+                                            SKIN_BINDING_JOINTS, SKIN_BINDING_INSTANCES};
+  const std::array<VkBuffer, 5> buffers = {in.vertices, in.meshes, in.skinVertices, in.joints, in.instances};
+  std::array<VkDescriptorSetLayoutBinding, 5> b{};
+  for (size_t i = 0; i < b.size(); ++i)
+    b[i] = {bindings[i], VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  lci.bindingCount = uint32_t(b.size());
+  lci.pBindings = b.data();
+  VK_CHECK(vkCreateDescriptorSetLayout(dev, &lci, nullptr, &setLayout_));
+  VkPushConstantRange range{gpu::kPassConstantStages, 0, sizeof(gpu::PassConstants)};
+  VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pci.setLayoutCount = 1;
+  pci.pSetLayouts = &setLayout_;
+  pci.pushConstantRangeCount = 1;
+  pci.pPushConstantRanges = &range;
+  VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &layout_));
+  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, uint32_t(b.size())};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = 1;
+  dpci.poolSizeCount = 1;
+  dpci.pPoolSizes = &size;
+  VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
+  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  ai.descriptorPool = pool_;
+  ai.descriptorSetCount = 1;
+  ai.pSetLayouts = &setLayout_;
+  VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &set_));
+  std::array<VkDescriptorBufferInfo, 5> infos{};
+  std::array<VkWriteDescriptorSet, 5> writes{};
+  for (size_t i = 0; i < writes.size(); ++i) {
+    infos[i] = {buffers[i], 0, VK_WHOLE_SIZE};
+    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    writes[i].dstSet = set_;
+    writes[i].dstBinding = bindings[i];
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(dev, uint32_t(writes.size()), writes.data(), 0, nullptr);
+  pipeline_ = gpu::createComputePipeline(device, layout_, "skin.comp");
+}
+
+void SkinPass::record(VkCommandBuffer cmd, uint32_t instances, uint32_t maxVertices) const {
+  if (instances == 0) return;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
+  gpu::PassConstants pc{instances, 0, 0, 0};
+  vkCmdPushConstants(cmd, layout_, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  // Instances along y and z (65,535 each at least), vertices along x.
+  const uint32_t y = std::min(instances, 65535u), z = (instances + 65534u) / 65535u;
+  vkCmdDispatch(cmd, (std::max(maxVertices, 1u) + SKIN_WORKGROUP_SIZE - 1) / SKIN_WORKGROUP_SIZE, y, z);
+}
+
+}  // namespace visbuf::passes

@@ -1,0 +1,65 @@
+// The CPU half of skinning: every frame, each skinned instance's pose is evaluated in double precision
+// (scene/animation.h: clip sampling, node hierarchy, joint matrices), its conservative bounding sphere taken
+// from the joints' reach (skinnedBoundsSphere), and the joint rows and instance records written to the
+// host-visible buffers the skinning pass (passes/skin_pass.h) reads. Exists only for scenes with skinned
+// objects; a frame at the same animation time as the last one changes nothing (a paused animation is not
+// re-skinned).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/resources.h"
+#include "scene/gpu_scene.h"
+#include "scene/scene.h"
+
+namespace visbuf {
+
+class AnimationState {
+ public:
+  // nullptr when the scene has no skinned objects.
+  static std::unique_ptr<AnimationState> create(gpu::Device& device, const Scene& scene, const GpuScene& gpuScene);
+
+  // Evaluates every instance at `time` seconds and writes the buffers. Returns false, doing nothing, when
+  // the poses are already those of `time`.
+  bool update(double time);
+
+  uint32_t instanceCount() const { return uint32_t(regions_.size()); }
+  uint32_t maxVertices() const { return maxVertices_; }
+  uint64_t vertexCount() const { return vertexCount_; }
+  double lastUpdateMs() const { return lastUpdateMs_; }
+  const gpu::Buffer& joints() const { return joints_; }
+  const gpu::Buffer& instances() const { return instances_; }
+  uint64_t bytes() const { return joints_.size() + instances_.size(); }
+
+  // For the forward path's CPU culling and LOD: the world-space sphere of a skinned object's current pose
+  // and the scale its LOD errors take; false for objects that are not skinned.
+  bool skinnedBounds(uint32_t object, glm::dvec4* worldSphere, double* lodScale) const;
+
+ private:
+  AnimationState(const Scene& scene, const GpuScene& gpuScene) : scene_(scene), gpuScene_(gpuScene) {}
+  void evaluate(size_t first, size_t last, double time);
+
+  const Scene& scene_;
+  const GpuScene& gpuScene_;
+  std::vector<GpuScene::SkinnedRegion> regions_;
+  std::vector<uint32_t> firstJoint_;                    // per region
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<glm::dvec4>> spheres_;  // (mesh, skin) -> per joint
+  std::vector<const std::vector<glm::dvec4>*> regionSpheres_;
+  Pose rest_;
+  std::vector<int32_t> regionOfObject_;
+  std::vector<glm::dvec4> worldBounds_;
+  std::vector<double> lodScale_;
+  gpu::Buffer joints_, instances_;
+  uint32_t maxVertices_ = 0;
+  uint64_t vertexCount_ = 0;
+  bool evaluated_ = false;
+  double lastTime_ = 0.0;
+  double lastUpdateMs_ = 0.0;
+};
+
+}  // namespace visbuf
