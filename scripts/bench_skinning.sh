@@ -7,7 +7,7 @@
 # Usage: scripts/bench_skinning.sh [--device cpu|gpu] [--frames N] [--counts "1000 10000"] [OUTDIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-device=cpu frames=4 out=bench-skin counts="1000 10000 100000"
+device=cpu frames=4 out=bench-skin counts="1000 10000 50000 100000"
 while (($#)); do
   case "$1" in
     --device) device=$2; shift 2 ;;
@@ -21,7 +21,7 @@ fox=${VISBUF_FOX:-../shared/assets/Fox/glTF-Binary/Fox.glb}
 mkdir -p "$out"
 for n in $counts; do
   "$bin" render --device "$device" -o "" --frames "$frames" --animate --size 1280x720 --scene "$fox" \
-    --instances "$n" --json "$out/fox_$n.json" > "$out/fox_$n.txt" 2>&1
+    --instances "$n" --json "$out/fox_$n.json" > "$out/fox_$n.txt" 2>&1 || echo "fox x $n: failed (see $out/fox_$n.txt)"
 done
 static_args=(--device "$device" -o "" --frames "$frames" --size 1280x720 --scene field --objects 100000)
 for round in 1 2 3; do
