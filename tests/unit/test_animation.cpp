@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "test_assets.h"
 #include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 #include "asset/scene_bake.h"
@@ -24,18 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-fs::path assetPath(const std::string& relative) {
-#ifdef VISBUF_SHARED_ASSETS_DIR
-  return fs::path(VISBUF_SHARED_ASSETS_DIR) / relative;
-#else
-  return fs::path(relative);
-#endif
-}
-
-#define REQUIRE_ASSET(path)                                               \
-  do {                                                                    \
-    if (!fs::exists(path)) GTEST_SKIP() << "asset not found: " << (path); \
-  } while (0)
+using test::assetPath;
 
 std::vector<double> sample(const AnimationSampler& s, AnimationPath path, double t) {
   std::vector<double> out(s.components);

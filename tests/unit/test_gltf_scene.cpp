@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "test_assets.h"
 #include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 
@@ -22,18 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-fs::path assetPath(const std::string& relative) {
-#ifdef VISBUF_SHARED_ASSETS_DIR
-  return fs::path(VISBUF_SHARED_ASSETS_DIR) / relative;
-#else
-  return fs::path(relative);
-#endif
-}
-
-#define REQUIRE_ASSET(path)                                               \
-  do {                                                                    \
-    if (!fs::exists(path)) GTEST_SKIP() << "asset not found: " << (path); \
-  } while (0)
+using test::assetPath;
 
 // Positions of the flattened import equal, in order, every instance's mesh positions transformed by the
 // instance transform (both walk the same nodes in the same order; each test asset has one material per mesh).
