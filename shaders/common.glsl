@@ -20,7 +20,30 @@ ObjectData objectAt(uint i) {
   return o;
 }
 layout(std430, set = 0, binding = BINDING_MESHES) readonly buffer MeshBlock { MeshData meshes[]; };
-layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer VertexBlock { Vertex vertices[]; };
+layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer VertexBlock0 { Vertex vertices0[]; };
+layout(std430, set = 0, binding = BINDING_VERTICES_1) readonly buffer VertexBlock1 { Vertex vertices1[]; };
+layout(std430, set = 0, binding = BINDING_VERTICES_2) readonly buffer VertexBlock2 { Vertex vertices2[]; };
+layout(std430, set = 0, binding = BINDING_VERTICES_3) readonly buffer VertexBlock3 { Vertex vertices3[]; };
+
+// The vertex pool through its descriptor windows (each at most maxStorageBufferRange; skinned instances'
+// regions make pools larger than one window).
+Vertex vertexAt(uint i) {
+  uint w = i >> frame.vertexWindowShift, j = i - (w << frame.vertexWindowShift);
+  if (w == 0u) {
+    Vertex v = vertices0[j];
+    return v;
+  }
+  if (w == 1u) {
+    Vertex v = vertices1[j];
+    return v;
+  }
+  if (w == 2u) {
+    Vertex v = vertices2[j];
+    return v;
+  }
+  Vertex v = vertices3[j];
+  return v;
+}
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
 
 // Object space -> camera-relative world space. The translation is made camera-relative first

@@ -11,7 +11,7 @@ layout(location = 3) flat out uint outObject;
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
-  Vertex v = vertices[gl_VertexIndex];
+  Vertex v = vertexAt(gl_VertexIndex);
   gl_Position = clipPosition(o, vertexPosition(v));
   outNormal = normalToWorld(o, octDecode(v.normal));
   outColor = unpackColor(v.color);

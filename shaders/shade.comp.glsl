@@ -46,9 +46,9 @@ void main() {
   DrawCommand d = draws[slot];
   ObjectData o = objectAt(d.firstInstance);
   uint base = d.firstIndex + 3u * tri;
-  Vertex v0 = vertices[indices[base + 0u] + uint(d.vertexOffset)];
-  Vertex v1 = vertices[indices[base + 1u] + uint(d.vertexOffset)];
-  Vertex v2 = vertices[indices[base + 2u] + uint(d.vertexOffset)];
+  Vertex v0 = vertexAt(indices[base + 0u] + uint(d.vertexOffset));
+  Vertex v1 = vertexAt(indices[base + 1u] + uint(d.vertexOffset));
+  Vertex v2 = vertexAt(indices[base + 2u] + uint(d.vertexOffset));
   vec4 c0 = clipPosition(o, vertexPosition(v0));
   vec4 c1 = clipPosition(o, vertexPosition(v1));
   vec4 c2 = clipPosition(o, vertexPosition(v2));

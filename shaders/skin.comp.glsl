@@ -15,12 +15,42 @@ struct SkinVertexData {  // scene/skin_vertex.h: 4 x uint16 joints, 4 x float we
   float w0, w1, w2, w3;
 };
 
-layout(std430, set = 0, binding = SKIN_BINDING_VERTICES) buffer VertexBlock { Vertex vertices[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES) buffer VertexBlock0 { Vertex vertices0[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_1) buffer VertexBlock1 { Vertex vertices1[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_2) buffer VertexBlock2 { Vertex vertices2[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_3) buffer VertexBlock3 { Vertex vertices3[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_MESHES) buffer MeshBlock { MeshData meshes[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_SKIN_VERTICES) readonly buffer SkinBlock { SkinVertexData skin[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_JOINTS) readonly buffer JointBlock { vec4 jointRows[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_INSTANCES) readonly buffer InstanceBlock { SkinInstance instances[]; };
-layout(push_constant) uniform Push { PassConstants pc; };  // pc.phase: instance count
+layout(push_constant) uniform Push { PassConstants pc; };  // phase: instance count, drawBase: window shift
+
+// The vertex pool's windows, as vertexAt() in common.glsl (the shift comes as a push constant here).
+Vertex loadVertex(uint i) {
+  uint w = i >> pc.drawBase, j = i - (w << pc.drawBase);
+  if (w == 0u) {
+    Vertex v = vertices0[j];
+    return v;
+  }
+  if (w == 1u) {
+    Vertex v = vertices1[j];
+    return v;
+  }
+  if (w == 2u) {
+    Vertex v = vertices2[j];
+    return v;
+  }
+  Vertex v = vertices3[j];
+  return v;
+}
+
+void storeVertex(uint i, Vertex v) {
+  uint w = i >> pc.drawBase, j = i - (w << pc.drawBase);
+  if (w == 0u) vertices0[j] = v;
+  else if (w == 1u) vertices1[j] = v;
+  else if (w == 2u) vertices2[j] = v;
+  else vertices3[j] = v;
+}
 
 vec3 octDecodeSkin(uint packed) {
   vec2 f = unpackSnorm2x16(packed);
@@ -50,7 +80,7 @@ void main() {
       meshes[si.meshSlot].lods[k].error = meshes[si.sourceMesh].lods[k].error * si.lodScale;
   }
   if (v >= si.vertexCount) return;
-  Vertex rest = vertices[si.sourceVertex + v];
+  Vertex rest = loadVertex(si.sourceVertex + v);
   SkinVertexData s = skin[si.skinVertex + v];
   uint j[4] = uint[](s.joints01 & 0xFFFFu, s.joints01 >> 16, s.joints23 & 0xFFFFu, s.joints23 >> 16);
   float w[4] = float[](s.w0, s.w1, s.w2, s.w3);
@@ -73,5 +103,5 @@ void main() {
   o.py = dot(r1, p);
   o.pz = dot(r2, p);
   o.normal = octEncode(normalize(sn));
-  vertices[si.outVertex + v] = o;
+  storeVertex(si.outVertex + v, o);
 }

@@ -10,6 +10,6 @@ layout(push_constant) uniform Push { PassConstants pc; };
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
-  gl_Position = clipPosition(o, vertexPosition(vertices[gl_VertexIndex]));
+  gl_Position = clipPosition(o, vertexPosition(vertexAt(gl_VertexIndex)));
   outDrawSlot = pc.drawBase + gl_DrawIDARB;  // late-phase draws follow the early ones
 }

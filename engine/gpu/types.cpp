@@ -14,7 +14,7 @@ static_assert(sizeof(SkinInstance) == 48);
 static_assert(sizeof(ObjectData) == 64, "per-object GPU data stays at 64 bytes");
 static_assert(sizeof(MaterialData) == 32);
 static_assert(sizeof(DrawCommand) == 20, "VkDrawIndexedIndirectCommand layout");
-static_assert(sizeof(FrameData) == 304);
+static_assert(sizeof(FrameData) == 320);
 static_assert(offsetof(FrameData, view) == 64);
 static_assert(offsetof(FrameData, cameraOffset) == 128);
 static_assert(offsetof(FrameData, frustum) == 144);

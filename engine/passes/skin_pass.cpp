@@ -15,13 +15,19 @@ SkinPass::~SkinPass() {
   vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
 }
 
-void SkinPass::create(gpu::Device& device, const SkinInputs& in) {
+void SkinPass::create(gpu::Device& device, const SkinInputs& in, uint32_t vertexWindowShift) {
   device_ = &device;
+  vertexWindowShift_ = vertexWindowShift;
   VkDevice dev = device.device();
-  const std::array<uint32_t, 5> bindings = {SKIN_BINDING_VERTICES, SKIN_BINDING_MESHES, SKIN_BINDING_SKIN_VERTICES,
-                                            SKIN_BINDING_JOINTS, SKIN_BINDING_INSTANCES};
-  const std::array<VkBuffer, 5> buffers = {in.vertices, in.meshes, in.skinVertices, in.joints, in.instances};
-  std::array<VkDescriptorSetLayoutBinding, 5> b{};
+  const std::array<uint32_t, 8> bindings = {SKIN_BINDING_VERTICES,   SKIN_BINDING_MESHES,     SKIN_BINDING_SKIN_VERTICES,
+                                            SKIN_BINDING_JOINTS,     SKIN_BINDING_INSTANCES,  SKIN_BINDING_VERTICES_1,
+                                            SKIN_BINDING_VERTICES_2, SKIN_BINDING_VERTICES_3};
+  const std::array<VkDescriptorBufferInfo, 8> buffers = {
+      in.vertexWindows[0],         VkDescriptorBufferInfo{in.meshes, 0, VK_WHOLE_SIZE},
+      VkDescriptorBufferInfo{in.skinVertices, 0, VK_WHOLE_SIZE}, VkDescriptorBufferInfo{in.joints, 0, VK_WHOLE_SIZE},
+      VkDescriptorBufferInfo{in.instances, 0, VK_WHOLE_SIZE},    in.vertexWindows[1],
+      in.vertexWindows[2],         in.vertexWindows[3]};
+  std::array<VkDescriptorSetLayoutBinding, 8> b{};
   for (size_t i = 0; i < b.size(); ++i)
     b[i] = {bindings[i], VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
@@ -46,10 +52,9 @@ void SkinPass::create(gpu::Device& device, const SkinInputs& in) {
   ai.descriptorSetCount = 1;
   ai.pSetLayouts = &setLayout_;
   VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &set_));
-  std::array<VkDescriptorBufferInfo, 5> infos{};
-  std::array<VkWriteDescriptorSet, 5> writes{};
+  std::array<VkDescriptorBufferInfo, 8> infos = buffers;
+  std::array<VkWriteDescriptorSet, 8> writes{};
   for (size_t i = 0; i < writes.size(); ++i) {
-    infos[i] = {buffers[i], 0, VK_WHOLE_SIZE};
     writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[i].dstSet = set_;
     writes[i].dstBinding = bindings[i];
@@ -65,7 +70,7 @@ void SkinPass::record(VkCommandBuffer cmd, uint32_t instances, uint32_t maxVerti
   if (instances == 0) return;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
-  gpu::PassConstants pc{instances, 0, 0, 0};
+  gpu::PassConstants pc{instances, vertexWindowShift_, 0, 0};
   vkCmdPushConstants(cmd, layout_, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   // Instances along y and z (65,535 each at least), vertices along x.
   const uint32_t y = std::min(instances, 65535u), z = (instances + 65534u) / 65535u;

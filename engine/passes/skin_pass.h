@@ -5,13 +5,16 @@
 // with skinned objects.
 #pragma once
 
+#include <array>
+
 #include "gpu/pipeline.h"
 #include "gpu/resources.h"
+#include "shared/config.h"
 
 namespace visbuf::passes {
 
 struct SkinInputs {
-  VkBuffer vertices = VK_NULL_HANDLE;      // the unified pool (read and written)
+  std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows{};  // the unified pool (read and written)
   VkBuffer meshes = VK_NULL_HANDLE;        // the mesh table (instance slots written)
   VkBuffer skinVertices = VK_NULL_HANDLE;  // SkinVertex[]
   VkBuffer joints = VK_NULL_HANDLE;        // vec4 rows, 3 per joint matrix
@@ -24,7 +27,8 @@ class SkinPass {
   ~SkinPass();
   SkinPass(const SkinPass&) = delete;
   SkinPass& operator=(const SkinPass&) = delete;
-  void create(gpu::Device& device, const SkinInputs& inputs);
+  // vertexWindowShift: vertices per pool window, as FrameData::vertexWindowShift.
+  void create(gpu::Device& device, const SkinInputs& inputs, uint32_t vertexWindowShift);
   // One dispatch over `instances` instances of at most `maxVertices` vertices each.
   void record(VkCommandBuffer cmd, uint32_t instances, uint32_t maxVertices) const;
 
@@ -35,6 +39,7 @@ class SkinPass {
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
   gpu::Pipeline pipeline_;
+  uint32_t vertexWindowShift_ = 0;
 };
 
 }  // namespace visbuf::passes

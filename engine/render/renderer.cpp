@@ -62,6 +62,19 @@ constexpr uint32_t kPyramidProbeInterval = 16;
 
 }  // namespace
 
+// The vertex pool's descriptor windows: window k covers vertices [k << shift, (k + 1) << shift); windows past
+// the end of the pool repeat window 0 (bound, never read).
+std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift) {
+  const VkDeviceSize window = VkDeviceSize(sizeof(gpu::Vertex)) << shift;
+  std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> w{};
+  for (uint32_t k = 0; k < VERTEX_WINDOWS; ++k) {
+    const VkDeviceSize offset = k * window;
+    w[k] = offset < pool.size() ? VkDescriptorBufferInfo{pool.handle(), offset, std::min(window, pool.size() - offset)}
+                                : VkDescriptorBufferInfo{pool.handle(), 0, std::min(window, pool.size())};
+  }
+  return w;
+}
+
 struct Renderer::Impl {
   gpu::Device& device;
   const Scene& scene;
@@ -70,6 +83,7 @@ struct Renderer::Impl {
   IdEncoding encoding;
   uint32_t capacity = 0;
   uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
+  uint32_t vertexShift = 0;  // vertices per vertex-pool window: 1 << vertexShift (vertexWindowShift)
 
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
   VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
@@ -138,6 +152,9 @@ struct Renderer::Impl {
         {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
         {BINDING_ATTRIBUTES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_OBJECTS_HIGH, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_VERTICES_1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_VERTICES_2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_VERTICES_3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -151,7 +168,7 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 10},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 13},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -224,19 +241,22 @@ struct Renderer::Impl {
     // Objects: two windows of one buffer, split where one descriptor range would end (objectWindowSplit).
     const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
     const bool highUsed = objectSplit < gpuScene.objectCount;
-    VkDescriptorBufferInfo bufs[11] = {
+    const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
+    VkDescriptorBufferInfo bufs[14] = {
         {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
-        {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    {gpuScene.vertices.handle(), 0, VK_WHOLE_SIZE},
+        {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
         {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
         {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
-        {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE}};
-    const uint32_t bufBindings[11] = {BINDING_FRAME,   BINDING_OBJECTS,    BINDING_MESHES,      BINDING_VERTICES,
-                                      BINDING_INDICES, BINDING_DRAWS,      BINDING_STATS,       BINDING_MATERIALS,
-                                      BINDING_HISTORY, BINDING_ATTRIBUTES, BINDING_OBJECTS_HIGH};
+        {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
+        vw[1], vw[2], vw[3]};
+    const uint32_t bufBindings[14] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
+                                      BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
+                                      BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
+                                      BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 11; ++i) {
+    for (int i = 0; i < 14; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -307,6 +327,7 @@ struct Renderer::Impl {
     f.triangleBits = encoding.triangleBits;
     f.wideIds = encoding.wide ? 1u : 0u;
     f.objectSplit = objectSplit;
+    f.vertexWindowShift = vertexShift;
     return f;
   }
 
@@ -791,6 +812,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   // (beyond that, overflow is counted and reported like any capacity overflow).
   const uint64_t maxRange = device.properties().limits.maxStorageBufferRange;
   impl->objectSplit = objectWindowSplit(maxRange, impl->gpuScene.objectCount);
+  impl->vertexShift = vertexWindowShift(maxRange);
   impl->capacity = config.drawCapacity ? config.drawCapacity
                                        : uint32_t(std::clamp<uint64_t>(impl->gpuScene.objectCount, 1,
                                                                        maxRange / (2 * sizeof(gpu::DrawCommand))));
@@ -826,9 +848,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->createTargets(config.width, config.height);
   impl->animation = AnimationState::create(device, scene, impl->gpuScene);
   if (impl->animation)
-    impl->skin.create(device, {impl->gpuScene.vertices.handle(), impl->gpuScene.meshes.handle(),
-                               impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
-                               impl->animation->instances().handle()});
+    impl->skin.create(device, {vertexWindows(impl->gpuScene.vertices, impl->vertexShift),
+                               impl->gpuScene.meshes.handle(), impl->gpuScene.skinVertices.handle(),
+                               impl->animation->joints().handle(), impl->animation->instances().handle()},
+                      impl->vertexShift);
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 

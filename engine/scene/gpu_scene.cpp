@@ -26,6 +26,12 @@ gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placem
   return packObject(placed, scene);
 }
 
+uint32_t vertexWindowShift(uint64_t maxRange) {
+  uint32_t shift = 3;  // 8 vertices = 256 bytes at least
+  while (shift < 31 && (uint64_t(sizeof(gpu::Vertex)) << (shift + 1)) <= maxRange) ++shift;
+  return shift;
+}
+
 uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount) {
   const uint64_t perWindow = maxRange / sizeof(gpu::ObjectData) / 4 * 4;
   return uint32_t(std::min<uint64_t>(objectCount, perWindow));
@@ -93,7 +99,21 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
                                    "{:.1f} MiB", what, bytes / 1048576.0, limit / 1048576.0));
     return {};
   };
-  for (auto [what, bytes] : {std::pair{"vertex", vertices.size() * sizeof(gpu::Vertex)},
+  // The vertex pool: VERTEX_WINDOWS windows, and one buffer of at most the device's maxBufferSize.
+  VkPhysicalDeviceVulkan13Properties p13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_PROPERTIES};
+  VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  p2.pNext = &p13;
+  vkGetPhysicalDeviceProperties2(device.physicalDevice(), &p2);
+  const uint64_t poolLimit = std::min<uint64_t>(uint64_t(sizeof(gpu::Vertex)) << vertexWindowShift(limit) << 2,
+                                                p13.maxBufferSize);
+  if (vertices.size() * sizeof(gpu::Vertex) > poolLimit)
+    return makeError(ErrorCode::CapacityExceeded,
+                     fmt::format("vertex pool needs {:.1f} MiB ({} skinned instance regions included), over this "
+                                 "device's {:.1f} MiB ({} descriptor windows of maxStorageBufferRange, or "
+                                 "maxBufferSize)",
+                                 vertices.size() * sizeof(gpu::Vertex) / 1048576.0, g.skinned.size(),
+                                 poolLimit / 1048576.0, VERTEX_WINDOWS));
+  for (auto [what, bytes] : {
                              std::pair{"index", indices.size() * sizeof(uint32_t)},
                              std::pair{"object (second window)",
                                        (objects.size() - objectWindowSplit(limit, uint32_t(objects.size()))) *

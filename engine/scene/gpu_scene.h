@@ -44,6 +44,10 @@ struct GpuScene {
 // aligned, the largest minStorageBufferOffsetAlignment Vulkan allows); `objectCount` when they all fit.
 uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount);
 
+// log2 of the vertices per vertex-pool descriptor window (VERTEX_WINDOWS of them): the largest power of two of
+// 32-byte vertices one window of at most `maxRange` bytes holds (so window offsets stay 256-byte aligned).
+uint32_t vertexWindowShift(uint64_t maxRange);
+
 // Packs an object into its 64-byte record, translation relative to `anchor`.
 gpu::ObjectData packObject(const Object& object, const Scene& scene);
 // The same for a skinned object: its placement (SkinnedObject::placement) instead of its transform.

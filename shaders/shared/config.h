@@ -46,6 +46,9 @@
 #define SKIN_BINDING_SKIN_VERTICES 2 // SkinVertex[] (joints, weights)
 #define SKIN_BINDING_JOINTS 3        // vec4[3 * joints]: joint matrix rows, skin space, per instance
 #define SKIN_BINDING_INSTANCES 4     // SkinInstance[]
+#define SKIN_BINDING_VERTICES_1 5    // vertex windows 1..3 (as BINDING_VERTICES_1..3)
+#define SKIN_BINDING_VERTICES_2 6
+#define SKIN_BINDING_VERTICES_3 7
 
 // Descriptor bindings (set 0) used by every pass; one layout keeps the frame script simple.
 #define BINDING_FRAME 0      // uniform FrameData
@@ -61,6 +64,12 @@
 #define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
 #define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
 #define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
+// The vertex pool is read through VERTEX_WINDOWS descriptor windows of 2^FrameData.vertexWindowShift vertices
+// (each window at most maxStorageBufferRange): BINDING_VERTICES, then these.
+#define VERTEX_WINDOWS 4
+#define BINDING_VERTICES_1 15
+#define BINDING_VERTICES_2 16
+#define BINDING_VERTICES_3 17
 #define BINDING_OBJECTS_HIGH 14  // ObjectData[] from FrameData.objectSplit on (one descriptor range is capped by
                                  // maxStorageBufferRange: 2M objects on lavapipe)
 #define BINDING_ATTRIBUTES 13  // float[ATTRIBUTE_FLOATS] per pixel: the shading pass's reconstruction (stress only)

@@ -91,6 +91,8 @@ struct FrameData {
   float projY;          // proj[1][1] (negative: Vulkan y down): ndc.y = projY * y / -z
   uint pyramidLevels;   // valid levels of the depth pyramid (0 when occlusion is off)
   uint objectSplit;     // objects [0, objectSplit) are in BINDING_OBJECTS, the rest in BINDING_OBJECTS_HIGH
+  uint vertexWindowShift;  // vertex i is in window i >> shift (BINDING_VERTICES, BINDING_VERTICES_1..3)
+  uint pad1, pad2, pad3;
 };
 
 // One animated instance of the skinning pass (48 bytes), written by the CPU every pose.
