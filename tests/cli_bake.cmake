@@ -12,6 +12,25 @@ execute_process(COMMAND ${VISBUF} render --scene ${OUT}/helmet.vbp --size 160x12
 if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet.png)
   message(FATAL_ERROR "render of the pack failed (${rc}):\n${out2}\n${err2}")
 endif()
+# --quantize: the summary and the JSON carry the measured error, and the quantised pack renders.
+file(REMOVE ${OUT}/helmet_q.vbp ${OUT}/helmet_q.json)
+execute_process(COMMAND ${VISBUF} bake ${ASSETS}/DamagedHelmet/glTF-Binary/DamagedHelmet.glb -o ${OUT}/helmet_q.vbp
+                        --quantize --no-textures --json ${OUT}/helmet_q.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE outq ERROR_VARIABLE errq)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet_q.vbp OR NOT outq MATCHES "position error: max")
+  message(FATAL_ERROR "quantised bake failed (${rc}):\n${outq}\n${errq}")
+endif()
+file(READ ${OUT}/helmet_q.json jq)
+string(JSON qmax GET "${jq}" quantization maxPositionError)
+string(JSON qsaved GET "${jq}" quantization bytesSaved)
+if(NOT qsaved GREATER 0)
+  message(FATAL_ERROR "quantised bake JSON: bytesSaved ${qsaved}, maxPositionError ${qmax}")
+endif()
+execute_process(COMMAND ${VISBUF} render --scene ${OUT}/helmet_q.vbp --size 160x120 --validation -o ${OUT}/helmet_q.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out3 ERROR_VARIABLE err3)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet_q.png)
+  message(FATAL_ERROR "render of the quantised pack failed (${rc}):\n${out3}\n${err3}")
+endif()
 execute_process(COMMAND ${VISBUF} bake ${OUT}/missing.glb -o ${OUT}/missing.vbp RESULT_VARIABLE rc ERROR_VARIABLE e OUTPUT_QUIET)
 if(NOT rc EQUAL 1 OR EXISTS ${OUT}/missing.vbp)
   message(FATAL_ERROR "a missing input must exit 1 and write nothing (got ${rc}): ${e}")

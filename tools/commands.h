@@ -43,7 +43,7 @@ struct BakeCommand {
   std::string output;                                  // pack to write
   uint32_t lodCount = MeshBuildOptions{}.maxLods;      // LOD levels incl. the full mesh, 1..MAX_LODS
   uint32_t lodMinTriangles = MeshBuildOptions{}.minTriangles;
-  bool quantize = false;                               // not implemented yet: usage error
+  bool quantize = false;                               // store quantised vertices (PackWriteOptions::quantize)
   std::string json;                                    // summary as JSON; empty: none
   uint32_t maxTextureSize = 2048;                      // power of two, 1..16384
   bool noTextures = false;                             // skip texture baking (materials keep their references)

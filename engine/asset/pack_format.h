@@ -31,7 +31,9 @@ namespace visbuf::pack {
 static_assert(std::endian::native == std::endian::little, "packs are little-endian; add byte swapping");
 
 inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
-inline constexpr uint32_t kVersion = 2;  // 2: full materials, textures, tangent / uv1 streams
+// 2: full materials, textures, tangent / uv1 streams. 3: quantised vertices ("qvertices" + "quantization" instead
+// of "vertices"; exactly one of the two vertex sections is present).
+inline constexpr uint32_t kVersion = 3;
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
 inline constexpr size_t kSectionNameSize = 16;
@@ -86,7 +88,7 @@ static_assert(sizeof(SceneRecord) == 136 && offsetof(SceneRecord, lightDirection
 // vertexCount) indices[firstIndex, firstIndex + indexCount), its LODs lods[firstLod, firstLod + lodCount).
 struct MeshRecord {
   StringRef name;
-  uint64_t firstVertex;   // into "vertices"
+  uint64_t firstVertex;   // into "vertices" (or "qvertices" in a quantised pack)
   uint64_t firstIndex;    // into "indices"
   uint32_t vertexCount;   // >= 1
   uint32_t indexCount;    // >= 3
@@ -108,6 +110,47 @@ static_assert(sizeof(LodRecord) == 16);
 // Section "vertices": gpu::Vertex records as the GPU pool stores them (32 bytes, shaders/shared/types.h).
 static_assert(sizeof(gpu::Vertex) == 32);
 // Section "indices": uint32_t, mesh-local.
+
+// Section "qvertices" (a quantised pack, `visbuf bake --quantize`; replaces "vertices"): one record per vertex,
+// the mesh's record in "quantization" maps the integers back. A component q of a unorm16 field decodes as
+// dequantizeUnorm16(offset, scale, q) = offset + scale * (q / 65535), evaluated in float exactly as written
+// (the writer picks the q whose decoded value is nearest: error <= scale / 65535 / 2 + float rounding).
+struct QVertexRecord {
+  uint16_t position[3];  // unorm16 over the mesh's AABB: QuantizationRecord::positionOffset/Scale
+  uint16_t reserved;     // 0
+  uint32_t normal;       // gpu::Vertex::normal, unchanged (octahedral, 2 x snorm16)
+  uint16_t uv[2];        // unorm16 over the mesh's uv range: QuantizationRecord::uvOffset/Scale
+  uint32_t color;        // gpu::Vertex::color, unchanged (RGBA8)
+};
+static_assert(sizeof(QVertexRecord) == 20 && offsetof(QVertexRecord, normal) == 8 &&
+              offsetof(QVertexRecord, uv) == 12 && offsetof(QVertexRecord, color) == 16);
+
+// Section "quantization" (with "qvertices" only): one record per mesh, in mesh order. All finite, scales >= 0.
+struct QuantizationRecord {
+  float positionOffset[3];  // the AABB's minimum corner (mesh units)
+  float positionScale[3];   // its extent: maximum - minimum (0 on a flat axis)
+  float uvOffset[2];        // the uv range's minimum
+  float uvScale[2];         // its extent
+};
+static_assert(sizeof(QuantizationRecord) == 40 && offsetof(QuantizationRecord, uvOffset) == 24);
+
+inline float dequantizeUnorm16(float offset, float scale, uint16_t q) {
+  return offset + scale * (static_cast<float>(q) / 65535.0f);
+}
+
+// The gpu::Vertex a quantised record stands for (pad 0).
+inline gpu::Vertex dequantizeVertex(const QuantizationRecord& m, const QVertexRecord& q) {
+  gpu::Vertex v{};
+  v.px = dequantizeUnorm16(m.positionOffset[0], m.positionScale[0], q.position[0]);
+  v.py = dequantizeUnorm16(m.positionOffset[1], m.positionScale[1], q.position[1]);
+  v.pz = dequantizeUnorm16(m.positionOffset[2], m.positionScale[2], q.position[2]);
+  v.normal = q.normal;
+  v.u = dequantizeUnorm16(m.uvOffset[0], m.uvScale[0], q.uv[0]);
+  v.v = dequantizeUnorm16(m.uvOffset[1], m.uvScale[1], q.uv[1]);
+  v.color = q.color;
+  v.pad = 0;
+  return v;
+}
 
 inline constexpr uint32_t kMaterialDoubleSided = 1u;  // MaterialRecord::flags
 
@@ -194,7 +237,8 @@ struct ObjectRecord {
 };
 static_assert(sizeof(ObjectRecord) == 144 && offsetof(ObjectRecord, mesh) == 128);
 
-// Section names; these eight are required, each at most once.
+// Section names; these eight are required, each at most once, except that a quantised pack has "qvertices" and
+// "quantization" instead of "vertices" (exactly one of "vertices" / "qvertices").
 inline constexpr const char* kSceneSection = "scene";
 inline constexpr const char* kStringsSection = "strings";
 inline constexpr const char* kMeshesSection = "meshes";
@@ -210,6 +254,8 @@ inline constexpr const char* kTexelsSection = "texels";
 inline constexpr const char* kMeshStreamsSection = "meshStreams";
 inline constexpr const char* kTangentsSection = "tangents";
 inline constexpr const char* kUvs1Section = "uvs1";
+inline constexpr const char* kQVerticesSection = "qvertices";
+inline constexpr const char* kQuantizationSection = "quantization";
 // Optional sections for skins, animation clips and skin vertices: pack_animation_format.h.
 
 // CRC-32 (IEEE, as zlib's crc32()): crc32(b, crc32(a)) == crc32(a + b). Start with crc = 0.

@@ -3,7 +3,8 @@
 //   2. header + table checksum;
 //   3. each section: name, alignment, count x elementSize (overflow), size, range inside the file, overlap,
 //      then the declared file size;
-//   4. each section's checksum; required sections present, once, with the expected record size;
+//   4. each section's checksum; required sections present, once, with the expected record size; exactly one of
+//      "vertices" / "qvertices", "quantization" exactly with "qvertices";
 //   5. contents: string refs, mesh/LOD/vertex/index ranges, index values, finite values, object references,
 //      then the optional animation sections (pack_animation.cpp);
 //   6. validateScene() on the result.
@@ -56,12 +57,15 @@ uint32_t expectedElementSize(std::string_view name) {
   if (name == pack::kMeshStreamsSection) return sizeof(pack::MeshStreamsRecord);
   if (name == pack::kTangentsSection) return sizeof(float) * 4;
   if (name == pack::kUvs1Section) return sizeof(float) * 2;
+  if (name == pack::kQVerticesSection) return sizeof(pack::QVertexRecord);
+  if (name == pack::kQuantizationSection) return sizeof(pack::QuantizationRecord);
   return pack::animationSectionElementSize(std::string(name));  // 0: unknown
 }
 
-constexpr const char* kRequiredSections[] = {
-    pack::kSceneSection,    pack::kStringsSection, pack::kMeshesSection,    pack::kLodsSection,
-    pack::kVerticesSection, pack::kIndicesSection, pack::kMaterialsSection, pack::kObjectsSection};
+// Plus exactly one of "vertices" / "qvertices" (checked separately).
+constexpr const char* kRequiredSections[] = {pack::kSceneSection,   pack::kStringsSection,   pack::kMeshesSection,
+                                             pack::kLodsSection,    pack::kIndicesSection,   pack::kMaterialsSection,
+                                             pack::kObjectsSection};
 
 class Parser {
  public:
@@ -232,6 +236,16 @@ Status Parser::parseTable() {
   for (const char* name : kRequiredSections) {
     if (sections_.count(name) == 0) return fail(fmt::format("required section '{}' is missing", name));
   }
+  const bool plain = sections_.count(pack::kVerticesSection) != 0;
+  const bool quantized = sections_.count(pack::kQVerticesSection) != 0;
+  if (plain && quantized)
+    return fail("sections 'vertices' and 'qvertices' are both present; a pack stores exactly one of them");
+  if (!plain && !quantized)
+    return fail("required section 'vertices' (or 'qvertices' in a quantised pack) is missing");
+  if (quantized != (sections_.count(pack::kQuantizationSection) != 0)) {
+    return fail(quantized ? "section 'qvertices' needs section 'quantization'"
+                          : "section 'quantization' is only valid with section 'qvertices'");
+  }
   return {};
 }
 
@@ -275,9 +289,15 @@ Status Parser::readScene(Scene* scene) {
 Status Parser::readMeshes(Scene* scene) {
   const SectionView& meshes = sections_.at(pack::kMeshesSection);
   const SectionView& lods = sections_.at(pack::kLodsSection);
-  const SectionView& vertices = sections_.at(pack::kVerticesSection);
+  const bool quantized = sections_.count(pack::kQVerticesSection) != 0;
+  const SectionView& vertices = sections_.at(quantized ? pack::kQVerticesSection : pack::kVerticesSection);
+  const SectionView quantization = optional(pack::kQuantizationSection);
   const SectionView& indices = sections_.at(pack::kIndicesSection);
   if (meshes.entry.count == 0) return fail("section 'meshes' is empty: a pack needs at least one mesh");
+  if (quantized && quantization.entry.count != meshes.entry.count) {
+    return fail(fmt::format("section 'quantization' has {} records for {} meshes", quantization.entry.count,
+                            meshes.entry.count));
+  }
   scene->meshes.reserve(meshes.entry.count);
   for (uint64_t i = 0; i < meshes.entry.count; ++i) {
     const auto r = record<pack::MeshRecord>(meshes, i);
@@ -309,8 +329,28 @@ Status Parser::readMeshes(Scene* scene) {
     mesh.name = *name;
     mesh.boundsSphere = glm::vec4(r.boundsSphere[0], r.boundsSphere[1], r.boundsSphere[2], r.boundsSphere[3]);
     mesh.vertices.resize(r.vertexCount);
-    std::memcpy(mesh.vertices.data(), vertices.data + r.firstVertex * sizeof(gpu::Vertex),
-                size_t{r.vertexCount} * sizeof(gpu::Vertex));
+    if (quantized) {
+      const auto q = record<pack::QuantizationRecord>(quantization, i);
+      const std::string qw = fmt::format("section 'quantization' record {}", i);
+      if (!allFinite(q.positionOffset, 3) || !allFinite(q.uvOffset, 2))
+        return fail(qw + ": field 'positionOffset' or 'uvOffset' is not finite");
+      auto scaleOk = [](const float* scale, int n) {
+        return allFinite(scale, n) && std::all_of(scale, scale + n, [](float x) { return x >= 0.0f; });
+      };
+      if (!scaleOk(q.positionScale, 3) || !scaleOk(q.uvScale, 2))
+        return fail(qw + ": field 'positionScale' or 'uvScale' is not a finite value >= 0");
+      for (uint32_t v = 0; v < r.vertexCount; ++v) {
+        const auto qv = record<pack::QVertexRecord>(vertices, r.firstVertex + v);
+        if (qv.reserved != 0) {
+          return fail(fmt::format("section 'qvertices' record {} (mesh {} vertex {}): field 'reserved' is {}, "
+                                  "expected 0", r.firstVertex + v, i, v, qv.reserved));
+        }
+        mesh.vertices[v] = pack::dequantizeVertex(q, qv);
+      }
+    } else {
+      std::memcpy(mesh.vertices.data(), vertices.data + r.firstVertex * sizeof(gpu::Vertex),
+                  size_t{r.vertexCount} * sizeof(gpu::Vertex));
+    }
     mesh.indices.resize(r.indexCount);
     std::memcpy(mesh.indices.data(), indices.data + r.firstIndex * sizeof(uint32_t),
                 size_t{r.indexCount} * sizeof(uint32_t));

@@ -204,9 +204,104 @@ void serializeMeshStreams(const Scene& scene, std::vector<Section>* sections) {
   if (!uvs1.empty()) sections->push_back({pack::kUvs1Section, sizeof(glm::vec2), uvs1.size(), bytesOf(uvs1)});
 }
 
+// Picks the unorm16 q whose decoded value (pack::dequantizeUnorm16) is nearest to x in [offset, offset + scale].
+uint16_t quantizeUnorm16(float offset, float scale, float x) {
+  if (!(scale > 0.0f)) return 0;
+  const double t = std::clamp((double(x) - double(offset)) / double(scale) * 65535.0, 0.0, 65535.0);
+  const int q0 = int(std::lround(t));
+  int best = q0;
+  double bestError = std::numeric_limits<double>::infinity();
+  for (int q = std::max(q0 - 1, 0); q <= std::min(q0 + 1, 65535); ++q) {
+    const double e = std::abs(double(pack::dequantizeUnorm16(offset, scale, uint16_t(q))) - double(x));
+    if (e < bestError) {
+      bestError = e;
+      best = q;
+    }
+  }
+  return uint16_t(best);
+}
+
+float roundUp(double x) {
+  const float f = float(x);
+  return double(f) >= x ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
+}
+
+struct QuantizedMesh {
+  pack::QuantizationRecord params{};
+  std::vector<pack::QVertexRecord> vertices;
+  glm::vec4 boundsSphere{0.0f};  // the mesh's, grown to contain every decoded vertex
+  float maxPositionError = 0.0f;  // rounded up; added to the LOD errors
+};
+
+// Quantises one mesh (PackWriteOptions::quantize) and accumulates its errors into `report`.
+Result<QuantizedMesh> quantizeMesh(const Mesh& m, size_t index, PackQuantizationReport* report,
+                                   double* sumSquares, double* sumSquaresRelative) {
+  QuantizedMesh out;
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  glm::vec2 uvLo(std::numeric_limits<float>::max()), uvHi(-std::numeric_limits<float>::max());
+  for (const gpu::Vertex& v : m.vertices) {
+    lo = glm::min(lo, glm::vec3(v.px, v.py, v.pz));
+    hi = glm::max(hi, glm::vec3(v.px, v.py, v.pz));
+    uvLo = glm::min(uvLo, glm::vec2(v.u, v.v));
+    uvHi = glm::max(uvHi, glm::vec2(v.u, v.v));
+  }
+  for (int c = 0; c < 3; ++c) {
+    out.params.positionOffset[c] = lo[c];
+    out.params.positionScale[c] = hi[c] - lo[c];
+  }
+  for (int c = 0; c < 2; ++c) {
+    out.params.uvOffset[c] = uvLo[c];
+    out.params.uvScale[c] = uvHi[c] - uvLo[c];
+  }
+  const float* all = &out.params.positionOffset[0];
+  if (!std::all_of(all, all + 10, [](float x) { return std::isfinite(x); }))
+    return invalid(fmt::format("mesh {} '{}': its position or uv extent overflows float; cannot quantise", index,
+                               m.name));
+  const glm::dvec3 centre(m.boundsSphere);
+  const double radius = m.boundsSphere.w;
+  double maxError = 0.0, maxDistance = 0.0;
+  out.vertices.reserve(m.vertices.size());
+  for (const gpu::Vertex& v : m.vertices) {
+    pack::QVertexRecord q{};
+    q.position[0] = quantizeUnorm16(lo.x, out.params.positionScale[0], v.px);
+    q.position[1] = quantizeUnorm16(lo.y, out.params.positionScale[1], v.py);
+    q.position[2] = quantizeUnorm16(lo.z, out.params.positionScale[2], v.pz);
+    q.normal = v.normal;
+    q.uv[0] = quantizeUnorm16(uvLo.x, out.params.uvScale[0], v.u);
+    q.uv[1] = quantizeUnorm16(uvLo.y, out.params.uvScale[1], v.v);
+    q.color = v.color;
+    out.vertices.push_back(q);
+    const gpu::Vertex d = pack::dequantizeVertex(out.params, q);
+    const glm::dvec3 p(d.px, d.py, d.pz);
+    const double e = glm::length(p - glm::dvec3(v.px, v.py, v.pz));
+    const double rel = radius > 0.0 ? e / radius : 0.0;
+    maxError = std::max(maxError, e);
+    maxDistance = std::max(maxDistance, glm::length(p - centre));
+    *sumSquares += e * e;
+    *sumSquaresRelative += rel * rel;
+    report->maxRelativePositionError = std::max(report->maxRelativePositionError, rel);
+    report->maxUvError =
+        std::max(report->maxUvError, glm::length(glm::dvec2(d.u, d.v) - glm::dvec2(v.u, v.v)));
+    report->maxNormalError = std::max(
+        report->maxNormalError, double(glm::length(octDecode(d.normal) - octDecode(v.normal))));
+  }
+  out.maxPositionError = roundUp(maxError);
+  out.boundsSphere = glm::vec4(m.boundsSphere.x, m.boundsSphere.y, m.boundsSphere.z,
+                               std::max(m.boundsSphere.w, roundUp(maxDistance)));
+  report->maxPositionError = std::max(report->maxPositionError, maxError);
+  report->vertices += m.vertices.size();
+  report->meshMaxPositionError.push_back(out.maxPositionError);
+  return out;
+}
+
 }  // namespace
 
 Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* report) {
+  return serializePack(scene, PackWriteOptions{}, report);
+}
+
+Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOptions& options,
+                                           PackWriteReport* report) {
   if (Status s = validateScene(scene); !s) return s.error();
   StringTable strings;
 
@@ -235,9 +330,12 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
     append(sceneBytes, r);
   }
 
-  // meshes, lods, vertices, indices
-  std::vector<uint8_t> meshBytes, lodBytes, vertexBytes, indexBytes;
+  // meshes, lods, vertices (or qvertices + quantization), indices
+  std::vector<uint8_t> meshBytes, lodBytes, vertexBytes, indexBytes, quantizationBytes;
   uint64_t vertexTotal = 0, indexTotal = 0, lodTotal = 0;
+  PackQuantizationReport quantization;
+  quantization.enabled = options.quantize;
+  double sumSquares = 0.0, sumSquaresRelative = 0.0;
   for (size_t i = 0; i < scene.meshes.size(); ++i) {
     const Mesh& m = scene.meshes[i];
     if (m.vertices.size() > std::numeric_limits<uint32_t>::max() ||
@@ -254,6 +352,12 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
         return invalid(fmt::format("mesh {} '{}': vertex {} is not finite", i, m.name, v));
       }
     }
+    QuantizedMesh q;
+    if (options.quantize) {
+      Result<QuantizedMesh> quantized = quantizeMesh(m, i, &quantization, &sumSquares, &sumSquaresRelative);
+      if (!quantized) return quantized.error();
+      q = std::move(quantized.value());
+    }
     pack::MeshRecord r{};
     auto name = strings.add(m.name);
     if (!name) return name.error();
@@ -264,17 +368,25 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
     r.indexCount = static_cast<uint32_t>(m.indices.size());
     r.firstLod = static_cast<uint32_t>(lodTotal);
     r.lodCount = static_cast<uint32_t>(m.lods.size());
-    for (int c = 0; c < 4; ++c) r.boundsSphere[c] = m.boundsSphere[c];
+    const glm::vec4 bounds = options.quantize ? q.boundsSphere : m.boundsSphere;
+    for (int c = 0; c < 4; ++c) r.boundsSphere[c] = bounds[c];
     append(meshBytes, r);
     for (const Lod& l : m.lods) {
       if (!std::isfinite(l.error) || l.error < 0.0f)
         return invalid(
             fmt::format("mesh {} '{}': LOD error {} is not a finite value >= 0", i, m.name, l.error));
-      append(lodBytes, pack::LodRecord{l.firstIndex, l.indexCount, l.error, 0});
+      // Quantised: the decoded mesh differs from the original by up to maxPositionError everywhere.
+      const float error = options.quantize ? roundUp(double(l.error) + double(q.maxPositionError)) : l.error;
+      append(lodBytes, pack::LodRecord{l.firstIndex, l.indexCount, error, 0});
     }
-    const size_t vAt = vertexBytes.size();
-    vertexBytes.resize(vAt + m.vertices.size() * sizeof(gpu::Vertex));
-    std::memcpy(vertexBytes.data() + vAt, m.vertices.data(), m.vertices.size() * sizeof(gpu::Vertex));
+    if (options.quantize) {
+      for (const pack::QVertexRecord& qv : q.vertices) append(vertexBytes, qv);
+      append(quantizationBytes, q.params);
+    } else {
+      const size_t vAt = vertexBytes.size();
+      vertexBytes.resize(vAt + m.vertices.size() * sizeof(gpu::Vertex));
+      std::memcpy(vertexBytes.data() + vAt, m.vertices.data(), m.vertices.size() * sizeof(gpu::Vertex));
+    }
     const size_t iAt = indexBytes.size();
     indexBytes.resize(iAt + m.indices.size() * sizeof(uint32_t));
     std::memcpy(indexBytes.data() + iAt, m.indices.data(), m.indices.size() * sizeof(uint32_t));
@@ -312,7 +424,20 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
                       std::move(materialBytes.value())});
   sections.push_back(
       {pack::kObjectsSection, sizeof(pack::ObjectRecord), scene.objects.size(), std::move(objectBytes)});
-  sections.push_back({pack::kVerticesSection, sizeof(gpu::Vertex), vertexTotal, std::move(vertexBytes)});
+  if (options.quantize) {
+    quantization.bytesSaved = int64_t(vertexTotal * sizeof(gpu::Vertex)) -
+                              int64_t(vertexBytes.size() + quantizationBytes.size());
+    sections.push_back(
+        {pack::kQVerticesSection, sizeof(pack::QVertexRecord), vertexTotal, std::move(vertexBytes)});
+    sections.push_back({pack::kQuantizationSection, sizeof(pack::QuantizationRecord), scene.meshes.size(),
+                        std::move(quantizationBytes)});
+    if (vertexTotal > 0) {
+      quantization.rmsPositionError = std::sqrt(sumSquares / double(vertexTotal));
+      quantization.rmsRelativePositionError = std::sqrt(sumSquaresRelative / double(vertexTotal));
+    }
+  } else {
+    sections.push_back({pack::kVerticesSection, sizeof(gpu::Vertex), vertexTotal, std::move(vertexBytes)});
+  }
   sections.push_back({pack::kIndicesSection, sizeof(uint32_t), indexTotal, std::move(indexBytes)});
   serializeMeshStreams(scene, &sections);
   if (Status s = serializeTextures(scene, strings, &sections); !s) return s.error();
@@ -358,12 +483,18 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
     report->sections.clear();
     for (size_t i = 0; i < sections.size(); ++i)
       report->sections.push_back({sections[i].name, table[i].offset, table[i].size, table[i].count});
+    report->quantization = std::move(quantization);
   }
   return out;
 }
 
 Status writePack(const Scene& scene, const std::string& path, PackWriteReport* report) {
-  Result<std::vector<uint8_t>> bytes = serializePack(scene, report);
+  return writePack(scene, path, PackWriteOptions{}, report);
+}
+
+Status writePack(const Scene& scene, const std::string& path, const PackWriteOptions& options,
+                 PackWriteReport* report) {
+  Result<std::vector<uint8_t>> bytes = serializePack(scene, options, report);
   if (!bytes) return makeError(bytes.error().code, path + ": " + bytes.error().message);
 
   static std::atomic<uint32_t> counter{0};

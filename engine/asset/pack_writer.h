@@ -17,15 +17,40 @@ struct PackSectionInfo {
   uint64_t count = 0;   // records
 };
 
+// What --quantize cost, measured on the vertices the reader will decode against the scene's own.
+struct PackQuantizationReport {
+  bool enabled = false;
+  uint64_t vertices = 0;                   // over all meshes
+  double maxPositionError = 0.0;           // max |decoded - original| (Euclidean), mesh units
+  double rmsPositionError = 0.0;           // RMS of the same over all vertices
+  double maxRelativePositionError = 0.0;   // max of |decoded - original| / the mesh's boundsSphere radius
+  double rmsRelativePositionError = 0.0;   // (meshes of radius 0 count 0)
+  double maxNormalError = 0.0;             // max |decoded normal - original| (0: normals are stored unchanged)
+  double maxUvError = 0.0;                 // max |decoded uv - original| (Euclidean), uv units
+  int64_t bytesSaved = 0;                  // 32 bytes per vertex minus the "qvertices" + "quantization" bytes
+  std::vector<float> meshMaxPositionError;  // per mesh: added to its LOD errors in the pack (rounded up)
+};
+
 struct PackWriteReport {
   uint64_t fileBytes = 0;
   std::vector<PackSectionInfo> sections;  // in file order
+  PackQuantizationReport quantization;    // enabled only when PackWriteOptions::quantize
+};
+
+struct PackWriteOptions {
+  // Store "qvertices" (20 bytes: unorm16 positions over each mesh's AABB, unorm16 uvs over its uv range, normal
+  // and colour unchanged) + "quantization" instead of 32-byte "vertices". Each mesh's boundsSphere is grown to
+  // contain the decoded vertices and its measured max position error is added to every LOD error, so culling
+  // and LOD selection stay conservative. MalformedInput when a mesh's extent overflows float.
+  bool quantize = false;
 };
 
 // Serialises `scene` into the bytes of a pack. The scene must pass validateScene(); additionally every mesh
 // must have at most 2^32-1 vertices and indices, names and URIs at most 4 GiB together, and every
 // float/double finite (MalformedInput / CapacityExceeded otherwise). `report` may be null.
 Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* report = nullptr);
+Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOptions& options,
+                                           PackWriteReport* report = nullptr);
 
 // Writes `scene` to `path` atomically: the bytes go to a temporary file in the same folder
 // (".<name>.tmp<pid>.<n>"), which is flushed to disk (fsync) and then renamed onto `path` (commitFile).
@@ -33,5 +58,7 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, PackWriteReport* 
 // removed, `path` is left as it was (an existing pack stays intact), and an IoError names the path and the
 // system's reason.
 Status writePack(const Scene& scene, const std::string& path, PackWriteReport* report = nullptr);
+Status writePack(const Scene& scene, const std::string& path, const PackWriteOptions& options,
+                 PackWriteReport* report = nullptr);
 
 }  // namespace visbuf

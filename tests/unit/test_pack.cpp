@@ -1,11 +1,13 @@
 // Tests for the pack format (engine/asset/pack_{format,writer,reader}.h): round trips of a generated scene
-// and of real assets, truncation, checksums, versions, overflowing counts, atomic writes, and a bounded fuzz
-// run.
+// and of real assets, quantised packs (error bounds and the reported error against a recomputation),
+// truncation, checksums, versions, overflowing counts, atomic writes, and a bounded fuzz run.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <cfloat>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -397,6 +399,15 @@ TEST(PackReader, WrongMagicAndVersion) {
   reseal(v);
   EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
                         ErrorCode::Unsupported));
+  // Version 2 packs (before quantised vertices) are refused too: the user re-bakes.
+  EXPECT_EQ(pack::kVersion, 3u);
+  v = *bytes;
+  h = headerOf(v);
+  h.version = 2;
+  std::memcpy(v.data(), &h, sizeof(h));
+  reseal(v);
+  EXPECT_TRUE(failsWith(parse(v), "pack format version 2 is not supported by this build (it reads version 3); re-bake",
+                        ErrorCode::Unsupported));
   v = *bytes;
   v[0] = 'X';
   EXPECT_TRUE(failsWith(parse(v), "not a visbuf pack"));
@@ -588,6 +599,252 @@ TEST(PackReader, BadReferencesInAnimationSections) {
   EXPECT_TRUE(failsWith(edit("animValues", 4, 0, INFINITY), "output value 4 is not finite"));
 }
 
+// --- quantised packs
+// ----------------------------------------------------------------------------------------
+
+// makeTexturedTestScene (every optional section) with distinct vertex colours on the knot.
+Scene makeQuantizeTestScene() {
+  Scene scene = makeTexturedTestScene();
+  for (size_t i = 0; i < scene.meshes[0].vertices.size(); ++i)
+    scene.meshes[0].vertices[i].color = uint32_t(i) * 2654435761u;
+  return scene;
+}
+
+pack::QuantizationRecord quantizationOf(const std::vector<uint8_t>& bytes, size_t mesh) {
+  const pack::SectionEntry e = entryOf(bytes, sectionIndex(bytes, "quantization"));
+  pack::QuantizationRecord r;
+  std::memcpy(&r, bytes.data() + e.offset + mesh * sizeof(r), sizeof(r));
+  return r;
+}
+
+bool hasSection(const std::vector<uint8_t>& bytes, const std::string& name) {
+  for (size_t i = 0; i < headerOf(bytes).sectionCount; ++i)
+    if (std::string(entryOf(bytes, i).name) == name) return true;
+  return false;
+}
+
+// The pack with one more section appended (every existing section moves 48 bytes for the longer table), resealed.
+std::vector<uint8_t> withExtraSection(const std::vector<uint8_t>& bytes, const char* name, uint32_t elementSize,
+                                      const std::vector<uint8_t>& data) {
+  pack::Header h = headerOf(bytes);
+  const uint64_t shift = sizeof(pack::SectionEntry);  // 48, a multiple of 16
+  const uint64_t tableEnd = sizeof(pack::Header) + uint64_t{h.sectionCount} * sizeof(pack::SectionEntry);
+  std::vector<uint8_t> out(bytes.size() + shift + (data.size() + 15) / 16 * 16, 0);
+  std::memcpy(out.data() + tableEnd + shift, bytes.data() + tableEnd, bytes.size() - tableEnd);
+  for (size_t i = 0; i < h.sectionCount; ++i) {
+    pack::SectionEntry e = entryOf(bytes, i);
+    e.offset += shift;
+    setEntry(out, i, e);
+  }
+  pack::SectionEntry e{};
+  std::strncpy(e.name, name, pack::kSectionNameSize - 1);
+  e.offset = bytes.size() + shift;
+  e.size = data.size();
+  e.count = data.size() / elementSize;
+  e.elementSize = elementSize;
+  setEntry(out, h.sectionCount, e);
+  if (!data.empty()) std::memcpy(out.data() + e.offset, data.data(), data.size());
+  h.sectionCount += 1;
+  h.fileSize = out.size();
+  std::memcpy(out.data(), &h, sizeof(h));
+  reseal(out);
+  return out;
+}
+
+std::vector<uint8_t> sectionBytes(const std::vector<uint8_t>& bytes, const std::string& name) {
+  const pack::SectionEntry e = entryOf(bytes, sectionIndex(bytes, name));
+  return {bytes.begin() + int64_t(e.offset), bytes.begin() + int64_t(e.offset + e.size)};
+}
+
+TEST(PackQuantize, RoundTripWithinHalfAStep) {
+  const Scene scene = makeQuantizeTestScene();
+  PackWriteReport report;
+  Result<std::vector<uint8_t>> bytes = serializePack(scene, PackWriteOptions{true}, &report);
+  ASSERT_TRUE(bytes) << bytes.error().message;
+  ASSERT_TRUE(report.quantization.enabled);
+  EXPECT_FALSE(hasSection(*bytes, "vertices"));
+  uint64_t vertexCount = 0;
+  for (const Mesh& m : scene.meshes) vertexCount += m.vertices.size();
+  const pack::SectionEntry qv = entryOf(*bytes, sectionIndex(*bytes, "qvertices"));
+  EXPECT_EQ(qv.count, vertexCount);
+  EXPECT_EQ(qv.elementSize, 20u);
+  EXPECT_EQ(entryOf(*bytes, sectionIndex(*bytes, "quantization")).count, scene.meshes.size());
+  EXPECT_EQ(report.quantization.vertices, vertexCount);
+  EXPECT_EQ(report.quantization.bytesSaved, int64_t(12 * vertexCount) - int64_t(40 * scene.meshes.size()));
+
+  Result<Scene> back = parse(*bytes);
+  ASSERT_TRUE(back) << back.error().message;
+  ASSERT_EQ(back->meshes.size(), scene.meshes.size());
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    SCOPED_TRACE("mesh " + std::to_string(i));
+    const Mesh& x = scene.meshes[i];
+    const Mesh& y = back->meshes[i];
+    const pack::QuantizationRecord q = quantizationOf(*bytes, i);
+    ASSERT_EQ(x.vertices.size(), y.vertices.size());
+    EXPECT_EQ(x.indices, y.indices);
+    EXPECT_EQ(x.tangents, y.tangents);
+    EXPECT_EQ(x.uvs1, y.uvs1);
+    ASSERT_EQ(x.skinVertices.size(), y.skinVertices.size());
+    EXPECT_EQ(std::memcmp(x.skinVertices.data(), y.skinVertices.data(), x.skinVertices.size() * sizeof(SkinVertex)),
+              0);
+    ASSERT_EQ(x.lods.size(), y.lods.size());
+    for (size_t l = 0; l < x.lods.size(); ++l) {
+      EXPECT_EQ(x.lods[l].firstIndex, y.lods[l].firstIndex);
+      EXPECT_EQ(x.lods[l].indexCount, y.lods[l].indexCount);
+      EXPECT_GE(y.lods[l].error, x.lods[l].error + report.quantization.meshMaxPositionError[i]);
+    }
+    EXPECT_EQ(y.boundsSphere.x, x.boundsSphere.x);  // the centre stays, the radius may grow
+    EXPECT_GE(y.boundsSphere.w, x.boundsSphere.w);
+    // Half a step per axis, plus float rounding of the decode (a few ulps of the largest magnitude involved).
+    auto bound = [](float offset, float scale) {
+      return double(scale) / 65535.0 / 2.0 + 4.0 * DBL_EPSILON + 2.0 * FLT_EPSILON * (std::abs(offset) + scale);
+    };
+    const double centreX = y.boundsSphere.x, centreY = y.boundsSphere.y, centreZ = y.boundsSphere.z;
+    for (size_t v = 0; v < x.vertices.size(); ++v) {
+      const gpu::Vertex& a = x.vertices[v];
+      const gpu::Vertex& b = y.vertices[v];
+      const float pa[] = {a.px, a.py, a.pz}, pb[] = {b.px, b.py, b.pz};
+      for (int c = 0; c < 3; ++c) {
+        if (std::abs(double(pa[c]) - double(pb[c])) > bound(q.positionOffset[c], q.positionScale[c])) {
+          ADD_FAILURE() << "vertex " << v << " axis " << c << ": " << pa[c] << " -> " << pb[c];
+        }
+      }
+      if (std::abs(double(a.u) - double(b.u)) > bound(q.uvOffset[0], q.uvScale[0]) ||
+          std::abs(double(a.v) - double(b.v)) > bound(q.uvOffset[1], q.uvScale[1])) {
+        ADD_FAILURE() << "vertex " << v << " uv: " << a.u << "," << a.v << " -> " << b.u << "," << b.v;
+      }
+      if (a.normal != b.normal || a.color != b.color) {
+        ADD_FAILURE() << "vertex " << v << ": normal or colour changed";
+      }
+      const double d = std::sqrt((b.px - centreX) * (b.px - centreX) + (b.py - centreY) * (b.py - centreY) +
+                                 (b.pz - centreZ) * (b.pz - centreZ));
+      if (d > double(y.boundsSphere.w)) {
+        ADD_FAILURE() << "vertex " << v << " is " << d << " from the centre, outside radius " << y.boundsSphere.w;
+      }
+    }
+  }
+  // Everything but the vertices, bounds and LOD errors is exactly the plain round trip.
+  Scene rest = *back;
+  rest.meshes = scene.meshes;
+  expectScenesEqual(scene, rest);
+  // The saving is the difference of the vertex sections.
+  Result<std::vector<uint8_t>> plain = serializePack(scene);
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(report.quantization.bytesSaved,
+            int64_t(entryOf(*plain, sectionIndex(*plain, "vertices")).size) -
+                int64_t(qv.size + entryOf(*bytes, sectionIndex(*bytes, "quantization")).size));
+}
+
+TEST(PackQuantize, ReportedErrorsMatchAnIndependentRecomputation) {
+  const Scene scene = makeQuantizeTestScene();
+  PackWriteReport report;
+  Result<std::vector<uint8_t>> bytes = serializePack(scene, PackWriteOptions{true}, &report);
+  ASSERT_TRUE(bytes);
+  Result<Scene> back = parse(*bytes);
+  ASSERT_TRUE(back) << back.error().message;
+  // Recompute from what the reader decodes, in double: Euclidean distances per vertex.
+  double maxError = 0, sumSq = 0, maxRel = 0, sumSqRel = 0, maxUv = 0, maxNormal = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    const Mesh& x = scene.meshes[i];
+    const Mesh& y = back->meshes[i];
+    double meshMax = 0;
+    for (size_t v = 0; v < x.vertices.size(); ++v) {
+      const gpu::Vertex& a = x.vertices[v];
+      const gpu::Vertex& b = y.vertices[v];
+      const double dx = double(a.px) - b.px, dy = double(a.py) - b.py, dz = double(a.pz) - b.pz;
+      const double e = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const double rel = e / double(x.boundsSphere.w);
+      meshMax = std::max(meshMax, e);
+      maxRel = std::max(maxRel, rel);
+      sumSq += e * e;
+      sumSqRel += rel * rel;
+      maxUv = std::max(maxUv, std::hypot(double(a.u) - b.u, double(a.v) - b.v));
+      const glm::vec3 na = octDecode(a.normal), nb = octDecode(b.normal);
+      maxNormal = std::max(maxNormal, double(glm::length(na - nb)));
+      ++n;
+    }
+    maxError = std::max(maxError, meshMax);
+    EXPECT_NEAR(report.quantization.meshMaxPositionError[i], meshMax, 1e-7 * meshMax + 1e-12);
+    for (size_t l = 0; l < x.lods.size(); ++l) {
+      EXPECT_GE(double(y.lods[l].error), double(x.lods[l].error) + meshMax) << "mesh " << i << " LOD " << l;
+    }
+  }
+  const PackQuantizationReport& q = report.quantization;
+  EXPECT_GT(maxError, 0.0);
+  EXPECT_NEAR(q.maxPositionError, maxError, 1e-12 * maxError);
+  EXPECT_NEAR(q.rmsPositionError, std::sqrt(sumSq / double(n)), 1e-9 * maxError);
+  EXPECT_NEAR(q.maxRelativePositionError, maxRel, 1e-12 * maxRel);
+  EXPECT_NEAR(q.rmsRelativePositionError, std::sqrt(sumSqRel / double(n)), 1e-9 * maxRel);
+  EXPECT_NEAR(q.maxUvError, maxUv, 1e-12 * maxUv);
+  EXPECT_EQ(q.maxNormalError, 0.0);
+  EXPECT_EQ(maxNormal, 0.0);
+  // And the magnitudes are what 16 bits give: the knot spans a few units, so errors are ~1e-5.
+  EXPECT_LT(q.maxRelativePositionError, 2e-5);
+}
+
+TEST(PackReader, BadQuantizedSections) {
+  Result<std::vector<uint8_t>> bytes = serializePack(makeQuantizeTestScene(), PackWriteOptions{true});
+  ASSERT_TRUE(bytes);
+  Result<std::vector<uint8_t>> plain = serializePack(makeQuantizeTestScene());
+  ASSERT_TRUE(plain);
+  auto edit = [&](const char* section, size_t record, size_t at, auto value) {
+    std::vector<uint8_t> v = *bytes;
+    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
+    std::memcpy(v.data() + e.offset + record * e.elementSize + at, &value, sizeof(value));
+    reseal(v);
+    return parse(v);
+  };
+  EXPECT_TRUE(failsWith(edit("quantization", 1, 0, float{NAN}),
+                        "section 'quantization' record 1: field 'positionOffset' or 'uvOffset' is not finite"));
+  EXPECT_TRUE(failsWith(edit("quantization", 0, 24, float{INFINITY}),
+                        "section 'quantization' record 0: field 'positionOffset' or 'uvOffset' is not finite"));
+  EXPECT_TRUE(failsWith(edit("quantization", 0, 16, -1.0f),
+                        "section 'quantization' record 0: field 'positionScale' or 'uvScale' is not a finite "
+                        "value >= 0"));
+  EXPECT_TRUE(failsWith(edit("quantization", 1, 36, float{INFINITY}),
+                        "section 'quantization' record 1: field 'positionScale' or 'uvScale' is not a finite value"));
+  EXPECT_TRUE(failsWith(edit("quantization", 0, 12, 1e30f), "lies outside field 'boundsSphere'"));
+  EXPECT_TRUE(failsWith(edit("qvertices", 3, 6, uint16_t{7}),
+                        "section 'qvertices' record 3 (mesh 0 vertex 3): field 'reserved' is 7, expected 0"));
+  EXPECT_TRUE(failsWith(edit("meshes", 1, 8, ~uint64_t{0} - 5), "records of section 'qvertices'"));
+  for (const char* section : {"qvertices", "quantization"}) {
+    std::vector<uint8_t> v = *bytes;
+    v[entryOf(v, sectionIndex(v, section)).offset + 5] ^= 0x40;
+    EXPECT_TRUE(failsWith(parse(v), "section '" + std::string(section) + "': checksum mismatch"));
+  }
+  {
+    std::vector<uint8_t> v = *bytes;  // one record too few
+    const size_t idx = sectionIndex(v, "quantization");
+    pack::SectionEntry e = entryOf(v, idx);
+    e.count -= 1;
+    e.size -= sizeof(pack::QuantizationRecord);
+    setEntry(v, idx, e);
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "section 'quantization' has 1 records for 2 meshes"));
+  }
+  auto renamed = [&](const char* from, const char* to) {
+    std::vector<uint8_t> v = *bytes;
+    const size_t idx = sectionIndex(v, from);
+    pack::SectionEntry e = entryOf(v, idx);
+    std::memset(e.name, 0, sizeof(e.name));
+    std::strcpy(e.name, to);
+    setEntry(v, idx, e);
+    reseal(v);
+    return parse(v);
+  };
+  EXPECT_TRUE(failsWith(renamed("quantization", "quantizationX"), "section 'qvertices' needs section 'quantization'"));
+  EXPECT_TRUE(failsWith(renamed("qvertices", "qverticesX"),
+                        "required section 'vertices' (or 'qvertices' in a quantised pack) is missing"));
+  // Both vertex sections, and a quantization section without qvertices.
+  EXPECT_TRUE(failsWith(parse(withExtraSection(*bytes, "vertices", 32, sectionBytes(*plain, "vertices"))),
+                        "sections 'vertices' and 'qvertices' are both present; a pack stores exactly one of them"));
+  EXPECT_TRUE(failsWith(parse(withExtraSection(*plain, "quantization", 40, sectionBytes(*bytes, "quantization"))),
+                        "section 'quantization' is only valid with section 'qvertices'"));
+  // The helper itself produces readable packs: an unknown extra section is skipped.
+  EXPECT_TRUE(parse(withExtraSection(*bytes, "extra", 1, {1, 2, 3})));
+}
+
 // --- atomic writes
 // ------------------------------------------------------------------------------------------
 
@@ -657,7 +914,7 @@ TEST_F(PackFileTest, UnwritableDirectory) {
 // --- fuzz
 // ---------------------------------------------------------------------------------------------------
 
-void fuzzPack(const Scene& scene, uint64_t seed);
+void fuzzPack(const Scene& scene, uint64_t seed, const PackWriteOptions& options = {});
 
 // 2,000 random mutations of a valid pack (fixed seed): bit flips, random bytes, extreme integers written over
 // header/table/record fields, truncation and extension. Half of them are resealed (checksums recomputed) so
@@ -668,10 +925,12 @@ TEST(PackFuzz, RandomMutationsNeverCrash) {
     SCOPED_TRACE(textured ? "textured" : "plain");
     fuzzPack(textured ? makeTexturedTestScene() : makeTestScene(16, 6), textured ? 20240612 : 20240611);
   }
+  SCOPED_TRACE("quantised");
+  fuzzPack(makeTexturedTestScene(), 20261123, PackWriteOptions{true});
 }
 
-void fuzzPack(const Scene& scene, uint64_t seed) {
-  Result<std::vector<uint8_t>> original = serializePack(scene);
+void fuzzPack(const Scene& scene, uint64_t seed, const PackWriteOptions& options) {
+  Result<std::vector<uint8_t>> original = serializePack(scene, options);
   ASSERT_TRUE(original);
   Rng rng(seed);
   auto below = [&](uint64_t n) { return n == 0 ? 0 : rng.next() % n; };
