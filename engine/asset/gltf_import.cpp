@@ -1226,7 +1226,10 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
   const std::vector<double>& weights = *resolved->weights;
 
   const double det = glm::determinant(glm::dmat3(world));
-  if (!(std::abs(det) > 0.0)) {
+  // Not just det == 0: validateScene() rejects objects with |det| < 1e-30 as degenerate, so a node scaled by
+  // e.g. 1e-11 on every axis (det 1e-33) must be skipped here too, or a scene that imports would fail to
+  // validate after buildImportedScene() (found by GltfFuzz; regression: GltfFuzz.NearlySingularNodeIsSkipped).
+  if (!(std::abs(det) >= 1e-30)) {
     warn(nodeWhere + ": zero-scale (singular) transform; instance skipped");
     return {};
   }

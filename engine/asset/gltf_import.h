@@ -106,7 +106,8 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     M * tangent, and under a mirroring M that cross product flips, so the variant carries the flip.
 //   - Morph weights: a node whose weights differ from the mesh's gets its own mesh variant (weights are baked
 //     into the vertices, as importGltfMesh does).
-//   - Zero-determinant (degenerate) instances are skipped with a warning (they cover no pixels).
+//   - Zero-determinant (degenerate, |det| < 1e-30 as validateScene() has it) instances are skipped with a
+//     warning (they cover no pixels).
 //   - Materials: every glTF material, in file order (so glTF material i is materials[i]): base colour factor
 //     (linear RGBA), metallic and roughness factors, emissive factor, occlusion strength (all clamped to
 //     [0,1] with a warning), normal scale, KHR_materials_emissive_strength (finite, >= 0), alpha mode and
@@ -156,7 +157,7 @@ struct ImportedMesh {
 struct ImportedInstance {
   uint32_t mesh = 0;          // into ImportedScene::meshes
   uint32_t material = 0;      // into ImportedScene::materials (== meshes[mesh].material)
-  glm::dmat4 transform{1.0};  // object -> world, double precision, finite, |det| > 0
+  glm::dmat4 transform{1.0};  // object -> world, double precision, finite, |det| >= 1e-30
   int32_t node = -1;          // source glTF node index
   int32_t skin = -1;          // into ImportedScene::skins when the node is skinned (then `transform` is not
                               // applied to the skinned vertices), -1 otherwise
