@@ -23,6 +23,8 @@
 #include "core/image_io.h"
 #include "gpu/device.h"
 #include "render/renderer.h"
+#include "asset/pack_reader.h"
+#include "asset/pack_writer.h"
 #include "stats_output.h"
 
 namespace visbuf::tools {
@@ -67,6 +69,9 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   sub->add_option("--ids", c.ids, "visbuf ID target: auto (32 bits where they fit), wide (64 bits forced)")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "wide"}));
+  sub->add_option("--vertices", c.vertices, "vertex precision: float, quantized (as bake --quantize stores them)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"float", "quantized"}));
   sub->add_option("--lod", c.lod, "LOD thresholds in pixels of projected error; off = full detail")->delimiter(',');
   sub->add_option("--reference", c.reference,
                   "auto (forward with no culling and no LOD unless the scene has more than --reference-max-triangles "
@@ -160,6 +165,7 @@ struct Config {
   float lod;          // <= 0: off
   std::string lodLabel;
   bool wideIds = false;  // visbuf: the 64-bit ID target forced where the renderer would pick 32 bits
+  bool quantized = false;  // vertices quantised as `bake --quantize` stores them (pack round trip in memory)
 };
 
 
@@ -240,10 +246,12 @@ int runBench(const BenchCommand& c) {
         continue;
       }
       for (float l : lods)
-        for (const std::string& ids : c.ids) {
-          if (path == RenderPath::Forward && ids != c.ids.front()) continue;  // no ID target to vary
-          configs.push_back({path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide"});
-        }
+        for (const std::string& ids : c.ids)
+          for (const std::string& v : c.vertices) {
+            if (path == RenderPath::Forward && ids != c.ids.front()) continue;  // no ID target to vary
+            configs.push_back(
+                {path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide", v == "quantized"});
+          }
     }
   if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
 
@@ -285,13 +293,26 @@ int runBench(const BenchCommand& c) {
     auto renderer = Renderer::create(**device, *scene, rc);
     if (!renderer) return fail(renderer.error());
     Renderer& r = **renderer;
-    std::unique_ptr<Renderer> wideRenderer;  // --ids wide: the same scene with the 64-bit ID target forced
-    if (std::any_of(configs.begin(), configs.end(), [](const Config& k) { return k.wideIds; })) {
-      RendererConfig wc = rc;
-      wc.forceWideIds = true;
-      auto wr = Renderer::create(**device, *scene, wc);
-      if (!wr) return fail(wr.error());
-      wideRenderer = std::move(*wr);
+    // The other precision variants of the same scene: 64-bit IDs forced (--ids wide), quantised vertices
+    // (--vertices quantized: the scene through an in-memory pack written with quantisation and read back).
+    std::unique_ptr<Scene> quantizedScene;
+    if (std::any_of(configs.begin(), configs.end(), [](const Config& k) { return k.quantized; })) {
+      PackWriteOptions po;
+      po.quantize = true;
+      auto bytes = serializePack(*scene, po);
+      if (!bytes) return fail(bytes.error());
+      auto q = parsePack(bytes->data(), bytes->size(), "quantised scene");
+      if (!q) return fail(q.error());
+      quantizedScene = std::make_unique<Scene>(std::move(*q));
+    }
+    std::map<std::pair<bool, bool>, std::unique_ptr<Renderer>> variants;  // (wide IDs, quantised) -> renderer
+    for (const Config& k : configs) {
+      if ((!k.wideIds && !k.quantized) || variants.count({k.wideIds, k.quantized})) continue;
+      RendererConfig vc = rc;
+      vc.forceWideIds = k.wideIds;
+      auto vr = Renderer::create(**device, k.quantized ? *quantizedScene : *scene, vc);
+      if (!vr) return fail(vr.error());
+      variants[{k.wideIds, k.quantized}] = std::move(*vr);
     }
     const std::vector<Camera> path = cameraPath(*scene, c.warmup, c.frames);
 
@@ -346,7 +367,7 @@ int runBench(const BenchCommand& c) {
     info.referenceFrameMsMedian = median(refMs);
 
     for (const Config& k : configs) {
-      Renderer& rk = k.wideIds ? *wideRenderer : r;
+      Renderer& rk = k.wideIds || k.quantized ? *variants.at({k.wideIds, k.quantized}) : r;
       rk.clearHistory();
       const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f;
       std::vector<FrameStats> measured;
@@ -421,9 +442,9 @@ int runBench(const BenchCommand& c) {
         row.idMismatches = mismatches;
         row.idPixels = uint64_t(pixels) * measured.size();
       }
-      std::printf("  %-7s %-9s lod %-4s ids %-2s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+      std::printf("  %-7s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
                   renderPathName(k.path), cullModeName(k.cull), k.lodLabel.c_str(),
-                  row.idBits.c_str(), row.frameMedian, row.frameP95,
+                  row.idBits.c_str(), k.quantized ? "q16" : "float", row.frameMedian, row.frameP95,
                   row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
                   row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
       std::fflush(stdout);
@@ -496,6 +517,7 @@ int runBench(const BenchCommand& c) {
     x["lod"] = row.config.lodLabel;
     x["lodErrorPixels"] = row.config.lod;
     x["idBits"] = row.idBits;
+    x["vertices"] = row.config.quantized ? "quantized" : "float";
     nlohmann::json passes = nlohmann::json::object();
     for (const auto& [name, v] : row.passMs) passes[name] = {{"median", v.first}, {"p95", v.second}};
     x["passMs"] = passes;
@@ -526,7 +548,7 @@ int runBench(const BenchCommand& c) {
 
   // bench.csv
   std::string csv =
-      "scene,objects,path,cull,lod_px,id_bits,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
+      "scene,objects,path,cull,lod_px,id_bits,vertices,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
       "cpu_record_ms_median,wall_ms_median,triangles_median,objects_drawn_median,scene_bytes,"
       "target_bytes_per_pixel,psnr_mean_db,psnr_worst_db,max_abs_error,mean_abs_error,differing_fraction,"
       "id_mismatches,reference,pareto";
@@ -536,10 +558,10 @@ int runBench(const BenchCommand& c) {
   }
   csv += "\n";
   for (const Row& row : rows) {
-    csv += fmt::format("{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
+    csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
                        renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel,
-                       row.idBits, c.frames,
+                       row.idBits, row.config.quantized ? "quantized" : "float", c.frames,
                        row.frameMedian, row.frameP95, row.gpuMedian, row.gpuP95, row.cpuMedian, row.wallMedian,
                        row.trianglesMedian, row.drawnMedian, row.sceneBytes, row.targetBytesPerPixel,
                        dbText(row.psnrMean), dbText(row.psnrWorst), row.maxAbs, row.meanAbs, row.differingFraction,
@@ -562,16 +584,16 @@ int runBench(const BenchCommand& c) {
   for (const SceneInfo& s : scenes)
     md += fmt::format("- {} objects: {} objects, {} full-detail triangles; reference {} ({:.1f} ms a frame)\n",
                       objectsLabel(s.objects), s.sceneObjects, s.triangles, s.reference, s.referenceFrameMsMedian);
-  md += "\n| objects | path | cull | LOD px | IDs | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | drawn | "
+  md += "\n| objects | path | cull | LOD px | IDs | vertices | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | drawn | "
         "scene MiB | B/px | PSNR dB | worst dB | max err | px > 1/255 | ID mism. | P |\n";
-  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Row& row : rows) {
     std::string passes;
     for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
-    md += fmt::format("| {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} | {} | {} | "
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} | {} | {} | "
                       "{:.4f} | {:.3f}% | {} | {} |\n",
                       objectsLabel(row.objects), renderPathName(row.config.path), cullModeName(row.config.cull),
-                      row.config.lodLabel, row.idBits, row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
+                      row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
                       row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),

@@ -67,7 +67,8 @@ struct BenchCommand {
   std::vector<std::string> paths{"visbuf", "forward"};
   std::vector<std::string> cull{"none", "frustum", "occlusion"};
   std::vector<std::string> lod{"off", "0.5", "1", "2", "4"};
-  std::vector<std::string> ids{"auto"};                // visbuf ID target: auto (32 bits where they fit), wide
+  std::vector<std::string> ids{"auto"};
+  std::vector<std::string> vertices{"float"};          // vertex precision: float, quantized                // visbuf ID target: auto (32 bits where they fit), wide
   std::string reference = "auto";                      // auto | forward | visbuf-full
   uint64_t referenceMaxTriangles = 50'000'000;         // auto: forward reference up to this many triangles
   bool validation = false;
