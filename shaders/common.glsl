@@ -6,13 +6,16 @@
 #include "shared/types.h"
 
 layout(set = 0, binding = BINDING_FRAME) uniform FrameBlock { FrameData frame; };
+// 1: object records and vertices are read through their descriptor windows; 0 (a scene that fits one range
+// each): directly, with no per-fetch branch. Set per renderer (gpu::createComputePipeline).
+layout(constant_id = 0) const uint VB_WINDOWED = 1u;
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_OBJECTS_HIGH) readonly buffer ObjectBlockHigh { ObjectData objectsHigh[]; };
 
 // Object records live in one buffer seen through two descriptor windows (each at most maxStorageBufferRange).
 // (if/else, not ?: -- glslang emits an invalid store for a ternary over two blocks' structs.)
 ObjectData objectAt(uint i) {
-  if (i < frame.objectSplit) {
+  if (VB_WINDOWED == 0u || i < frame.objectSplit) {
     ObjectData o = objects[i];
     return o;
   }
@@ -28,6 +31,10 @@ layout(std430, set = 0, binding = BINDING_VERTICES_3) readonly buffer VertexBloc
 // The vertex pool through its descriptor windows (each at most maxStorageBufferRange; skinned instances'
 // regions make pools larger than one window).
 Vertex vertexAt(uint i) {
+  if (VB_WINDOWED == 0u) {
+    Vertex v = vertices0[i];
+    return v;
+  }
   uint w = i >> frame.vertexWindowShift, j = i - (w << frame.vertexWindowShift);
   if (w == 0u) {
     Vertex v = vertices0[j];

@@ -72,13 +72,21 @@ void Pipeline::reset() {
   pipeline_ = VK_NULL_HANDLE;
 }
 
-Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader) {
+namespace {
+const VkSpecializationMapEntry kWindowedEntry{0, 0, sizeof(uint32_t)};
+VkSpecializationInfo windowedInfo(const uint32_t* value) { return {1, &kWindowedEntry, sizeof(uint32_t), value}; }
+}  // namespace
+
+Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
+                               uint32_t windowed) {
   VkShaderModule module = createModule(device, shader);
+  const VkSpecializationInfo spec = windowedInfo(&windowed);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
   ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
   ci.stage.module = module;
   ci.stage.pName = "main";
+  ci.stage.pSpecializationInfo = &spec;
   ci.layout = layout;
   VkPipeline pipeline;
   VK_CHECK(vkCreateComputePipelines(device.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
@@ -97,6 +105,8 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
+  const VkSpecializationInfo spec = windowedInfo(&desc.windowed);
+  stages[0].pSpecializationInfo = stages[1].pSpecializationInfo = &spec;
 
   VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};  // pulled
   VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};

@@ -39,7 +39,11 @@ class Pipeline {
   VkPipeline pipeline_ = VK_NULL_HANDLE;
 };
 
-Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader);
+// Specialisation constant 0 of every frame shader (common.glsl VB_WINDOWED): 1 when the object records or the
+// vertex pool need more than one descriptor window, 0 to read them directly (the windows cost a branch per
+// fetch, measurable on lavapipe). Shaders that do not declare it ignore it.
+Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
+                               uint32_t windowed = 1);
 
 struct GraphicsPipelineDesc {
   std::string vertexShader;
@@ -48,6 +52,7 @@ struct GraphicsPipelineDesc {
   VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;
   VkCullModeFlags cullMode = VK_CULL_MODE_BACK_BIT;
   VkCompareOp depthCompare = VK_COMPARE_OP_GREATER;  // reverse-Z
+  uint32_t windowed = 1;  // specialisation constant 0 of both stages (see createComputePipeline)
 };
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
 

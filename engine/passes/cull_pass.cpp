@@ -4,8 +4,8 @@
 
 namespace visbuf::passes {
 
-CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout) {
-  return CullPass{gpu::createComputePipeline(device, layout, "cull.comp")};
+CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
+  return CullPass{gpu::createComputePipeline(device, layout, "cull.comp", windowed)};
 }
 
 void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,

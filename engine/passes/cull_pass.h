@@ -8,7 +8,7 @@ namespace visbuf::passes {
 
 struct CullPass {
   gpu::Pipeline pipeline;
-  static CullPass create(gpu::Device& device, VkPipelineLayout layout);
+  static CullPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
   // phase: CULL_PHASE_EARLY/LATE; drawBase: first slot of this phase in the draw buffer.
   // Occlusion mode also reads the depth pyramid and reads/writes the per-object history.
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount, uint32_t phase,

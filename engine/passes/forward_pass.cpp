@@ -4,8 +4,9 @@
 
 namespace visbuf::passes {
 
-ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout) {
+ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
   gpu::GraphicsPipelineDesc d;
+  d.windowed = windowed;
   d.vertexShader = "forward.vert";
   d.fragmentShader = "forward.frag";
   d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};

@@ -4,9 +4,9 @@
 
 namespace visbuf::passes {
 
-ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout) {
-  return ShadePass{gpu::createComputePipeline(device, layout, "shade.comp"),
-                   gpu::createComputePipeline(device, layout, "shade_attributes.comp")};
+ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
+  return ShadePass{gpu::createComputePipeline(device, layout, "shade.comp", windowed),
+                   gpu::createComputePipeline(device, layout, "shade_attributes.comp", windowed)};
 }
 
 void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,

@@ -4,9 +4,10 @@
 
 namespace visbuf::passes {
 
-VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout) {
+VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
   VisibilityPass p;
   gpu::GraphicsPipelineDesc d;
+  d.windowed = windowed;
   d.vertexShader = "visibility.vert";
   d.fragmentShader = "visibility.frag";
   d.colorFormats = {VK_FORMAT_R32_UINT};

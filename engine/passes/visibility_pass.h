@@ -25,7 +25,7 @@ struct VisibilityPass {
   gpu::Pipeline narrow;  // r32ui
   gpu::Pipeline wide;    // rg32ui
   gpu::Pipeline narrowOverdraw, wideOverdraw;  // debug variants counting raster writes per pixel
-  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout);
+  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
 };
 

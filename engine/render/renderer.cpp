@@ -824,10 +824,14 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                                  drawBytes / 1048576.0));
   impl->encoding = chooseIdEncoding(2 * impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
   impl->createLayouts();
-  impl->cull = passes::CullPass::create(device, impl->pipelineLayout);
-  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout);
-  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout);
-  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout);
+  // Descriptor windows only when needed: a scene whose objects and vertices fit one range reads them directly.
+  const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||
+                        impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
+  const uint32_t w = windowed ? 1u : 0u;
+  impl->cull = passes::CullPass::create(device, impl->pipelineLayout, w);
+  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, w);
+  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, w);
+  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, w);
   impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                   gpu::MemoryUse::HostVisible);
   impl->draws = gpu::Buffer(device, drawBytes,
