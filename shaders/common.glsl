@@ -4,6 +4,7 @@
 #define VISBUF_COMMON_GLSL
 
 #include "shared/types.h"
+#include "octahedral.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform FrameBlock { FrameData frame; };
 // 1: object records and vertices are read through their descriptor windows; 0 (a scene that fits one range
@@ -71,17 +72,6 @@ vec4 clipPosition(ObjectData o, vec3 p) {
 }
 
 vec3 vertexPosition(Vertex v) { return vec3(v.px, v.py, v.pz); }
-
-// Octahedral unit-vector decode (Cigolle et al. 2014, "A Survey of Efficient Representations for
-// Independent Unit Vectors").
-vec3 octDecode(uint packed) {
-  vec2 f = unpackSnorm2x16(packed);
-  vec3 n = vec3(f, 1.0 - abs(f.x) - abs(f.y));
-  float t = max(-n.z, 0.0);
-  n.x += n.x >= 0.0 ? -t : t;
-  n.y += n.y >= 0.0 ? -t : t;
-  return normalize(n);
-}
 
 // Normal to world space with the inverse transpose of the 3x3 part (its cofactor matrix, scaled by
 // sign(det)); not normalised, so that it commutes with interpolation.

@@ -6,6 +6,7 @@
 // bounding sphere and the LOD errors scaled by the pose (the CPU computed both, animation.h).
 #extension GL_GOOGLE_include_directive : require
 #include "shared/types.h"
+#include "octahedral.glsl"
 
 layout(local_size_x = SKIN_WORKGROUP_SIZE) in;
 
@@ -52,23 +53,6 @@ void storeVertex(uint i, Vertex v) {
   else vertices3[j] = v;
 }
 
-vec3 octDecodeSkin(uint packed) {
-  vec2 f = unpackSnorm2x16(packed);
-  vec3 n = vec3(f, 1.0 - abs(f.x) - abs(f.y));
-  float t = max(-n.z, 0.0);
-  n.x += n.x >= 0.0 ? -t : t;
-  n.y += n.y >= 0.0 ? -t : t;
-  return normalize(n);
-}
-
-uint octEncode(vec3 n) {
-  float l1 = abs(n.x) + abs(n.y) + abs(n.z);
-  if (!(l1 > 0.0)) return packSnorm2x16(vec2(0.0));  // (0,0) decodes to +Z
-  vec2 p = n.xy / l1;
-  if (n.z < 0.0) p = (1.0 - abs(p.yx)) * vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
-  return packSnorm2x16(p);
-}
-
 void main() {
   uint inst = gl_WorkGroupID.y + gl_WorkGroupID.z * 65535u;
   if (inst >= pc.phase) return;
@@ -96,7 +80,7 @@ void main() {
   // Normal: the cofactor of the blended 3x3 (inverse transpose up to scale), signed by its determinant.
   vec3 a = r0.xyz, b = r1.xyz, c = r2.xyz;
   vec3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
-  vec3 n = octDecodeSkin(rest.normal);
+  vec3 n = octDecode(rest.normal);
   vec3 sn = (dot(a, bc) < 0.0 ? -1.0 : 1.0) * vec3(dot(bc, n), dot(ca, n), dot(ab, n));
   Vertex o = rest;
   o.px = dot(r0, p);

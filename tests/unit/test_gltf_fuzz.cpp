@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "test_assets.h"
 #include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 #include "asset/scene_bake.h"
@@ -98,21 +99,7 @@ std::vector<uint8_t> makeGlb(const std::string& jsonText, const std::vector<uint
   return out;
 }
 
-std::string base64(const std::vector<uint8_t>& data) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (size_t i = 0; i < data.size(); i += 3) {
-    const uint32_t b0 = data[i];
-    const uint32_t b1 = i + 1 < data.size() ? data[i + 1] : 0;
-    const uint32_t b2 = i + 2 < data.size() ? data[i + 2] : 0;
-    const uint32_t triple = (b0 << 16) | (b1 << 8) | b2;
-    out += kAlphabet[(triple >> 18) & 63];
-    out += kAlphabet[(triple >> 12) & 63];
-    out += i + 1 < data.size() ? kAlphabet[(triple >> 6) & 63] : '=';
-    out += i + 2 < data.size() ? kAlphabet[triple & 63] : '=';
-  }
-  return out;
-}
+using test::base64;
 
 // A .glb: an indexed quad skinned to a 2-joint chain (node 0), the same quad with a sparse morph target under
 // a mirroring node (node 3), a material with an embedded texture, and an animation with LINEAR rotation, STEP

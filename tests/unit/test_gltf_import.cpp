@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "test_assets.h"
 #include "temp_dir_test.h"
 #include "asset/gltf_import.h"
 
@@ -36,21 +37,7 @@ constexpr int kShort = 5122;
 constexpr int kUShort = 5123;
 constexpr int kFloat = 5126;
 
-std::string base64(const std::vector<uint8_t>& data) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (size_t i = 0; i < data.size(); i += 3) {
-    const uint32_t b0 = data[i];
-    const uint32_t b1 = i + 1 < data.size() ? data[i + 1] : 0;
-    const uint32_t b2 = i + 2 < data.size() ? data[i + 2] : 0;
-    const uint32_t triple = (b0 << 16) | (b1 << 8) | b2;
-    out += kAlphabet[(triple >> 18) & 63];
-    out += kAlphabet[(triple >> 12) & 63];
-    out += i + 1 < data.size() ? kAlphabet[(triple >> 6) & 63] : '=';
-    out += i + 2 < data.size() ? kAlphabet[triple & 63] : '=';
-  }
-  return out;
-}
+using test::base64;
 
 // Builds a glTF document around one binary buffer: each add*() call appends raw data (4-byte aligned), a
 // bufferView over it and an accessor, and returns the accessor index.
@@ -789,7 +776,7 @@ std::optional<std::string> sharedAsset(const std::string& relative) {
   return std::nullopt;
 }
 
-#define REQUIRE_ASSET(var, relative)                            \
+#define REQUIRE_SHARED_ASSET(var, relative)                            \
   const std::optional<std::string> var = sharedAsset(relative); \
   if (!var) GTEST_SKIP() << "shared asset not available: " << (relative)
 
@@ -803,7 +790,7 @@ void expectFlatNormalsMatchWinding(const MeshSource& m) {
 }
 
 TEST(GltfImportAssets, Kitten) {
-  REQUIRE_ASSET(path, "Kitten/kitten.glb");
+  REQUIRE_SHARED_ASSET(path, "Kitten/kitten.glb");
   GltfImportReport report;
   auto mesh = importGltfMesh(*path, {}, &report);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
@@ -817,7 +804,7 @@ TEST(GltfImportAssets, Kitten) {
 TEST(GltfImportAssets, BoxMeshopt) {
   for (const char* file : {"BoxMeshopt/BoxMeshopt.gltf", "BoxMeshopt/BoxMeshopt.glb"}) {
     SCOPED_TRACE(file);
-    REQUIRE_ASSET(path, file);
+    REQUIRE_SHARED_ASSET(path, file);
     auto mesh = importGltfMesh(*path);
     ASSERT_TRUE(mesh.ok()) << mesh.error().message;
     expectValidMesh(*mesh);
@@ -831,7 +818,7 @@ TEST(GltfImportAssets, BoxMeshopt) {
 }
 
 TEST(GltfImportAssets, BoxInterleaved) {
-  REQUIRE_ASSET(path, "BoxInterleaved/glTF/BoxInterleaved.gltf");
+  REQUIRE_SHARED_ASSET(path, "BoxInterleaved/glTF/BoxInterleaved.gltf");
   auto mesh = importGltfMesh(*path);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   expectValidMesh(*mesh);
@@ -840,7 +827,7 @@ TEST(GltfImportAssets, BoxInterleaved) {
 }
 
 TEST(GltfImportAssets, TriangleWithoutIndices) {
-  REQUIRE_ASSET(path, "TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf");
+  REQUIRE_SHARED_ASSET(path, "TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf");
   auto mesh = importGltfMesh(*path);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   expectValidMesh(*mesh);
@@ -848,7 +835,7 @@ TEST(GltfImportAssets, TriangleWithoutIndices) {
 }
 
 TEST(GltfImportAssets, SimpleSparseAccessor) {
-  REQUIRE_ASSET(path, "SimpleSparseAccessor/glTF/SimpleSparseAccessor.gltf");
+  REQUIRE_SHARED_ASSET(path, "SimpleSparseAccessor/glTF/SimpleSparseAccessor.gltf");
   auto mesh = importGltfMesh(*path);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   expectValidMesh(*mesh);
@@ -868,7 +855,7 @@ TEST(GltfImportAssets, MeshPrimitiveModes) {
     std::snprintf(name, sizeof(name), "Mesh_PrimitiveMode/Mesh_PrimitiveMode/Mesh_PrimitiveMode_%02d.gltf",
                   i);
     SCOPED_TRACE(name);
-    REQUIRE_ASSET(path, std::string(name));
+    REQUIRE_SHARED_ASSET(path, std::string(name));
     GltfImportReport report;
     auto mesh = importGltfMesh(*path, {}, &report);
     const bool hasTriangles = (i >= 4 && i <= 6) || i >= 11;
@@ -886,7 +873,7 @@ TEST(GltfImportAssets, MeshPrimitiveModes) {
 }
 
 TEST(GltfImportAssets, EveryAssetImportsOrFailsCleanly) {
-  REQUIRE_ASSET(root, "");
+  REQUIRE_SHARED_ASSET(root, "");
   int imported = 0;
   for (const auto& entry : fs::recursive_directory_iterator(*root)) {
     const std::string ext = entry.path().extension().string();
