@@ -517,15 +517,20 @@ TEST(PackReader, BadReferencesInsideSections) {
                         "vertex 3 lies outside field 'boundsSphere'"));
 }
 
+// `pack` with `value` written at byte `at` of record `record` of `section`, checksums resealed, then parsed.
+template <typename T>
+Result<Scene> parseWithField(std::vector<uint8_t> pack, const char* section, size_t record, size_t at, T value) {
+  const pack::SectionEntry e = entryOf(pack, sectionIndex(pack, section));
+  std::memcpy(pack.data() + e.offset + record * e.elementSize + at, &value, sizeof(value));
+  reseal(pack);
+  return parse(pack);
+}
+
 TEST(PackReader, BadTexturesAndStreams) {
   Result<std::vector<uint8_t>> bytes = serializePack(makeTexturedTestScene());
   ASSERT_TRUE(bytes);
   auto edit = [&](const char* section, size_t record, size_t at, auto value) {
-    std::vector<uint8_t> v = *bytes;
-    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
-    std::memcpy(v.data() + e.offset + record * e.elementSize + at, &value, sizeof(value));
-    reseal(v);
-    return parse(v);
+    return parseWithField(*bytes, section, record, at, value);
   };
   EXPECT_TRUE(failsWith(edit("textures", 1, 20, uint32_t{9}), "section 'textures' record 1: 'sizeClass' 0 / 'layer' 9"));
   EXPECT_TRUE(failsWith(edit("textures", 1, 20, uint32_t{0}), "class 0 layer 0 is used twice"));
@@ -568,12 +573,8 @@ TEST(PackReader, BadTexturesAndStreams) {
 TEST(PackReader, BadReferencesInAnimationSections) {
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
   ASSERT_TRUE(bytes);
-  auto edit = [&](const char* section, size_t record, size_t offset, auto value) {
-    std::vector<uint8_t> v = *bytes;
-    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
-    std::memcpy(v.data() + e.offset + record * e.elementSize + offset, &value, sizeof(value));
-    reseal(v);
-    return parse(v);
+  auto edit = [&](const char* section, size_t record, size_t at, auto value) {
+    return parseWithField(*bytes, section, record, at, value);
   };
   EXPECT_TRUE(failsWith(edit("nodes", 2, 8, int32_t{9}), "section 'nodes' record 2: field 'parent' 9"));
   EXPECT_TRUE(failsWith(edit("nodes", 1, 8, int32_t{3}), "section 'nodes': node hierarchy has a cycle"));
@@ -790,11 +791,7 @@ TEST(PackReader, BadQuantizedSections) {
   Result<std::vector<uint8_t>> plain = serializePack(makeQuantizeTestScene());
   ASSERT_TRUE(plain);
   auto edit = [&](const char* section, size_t record, size_t at, auto value) {
-    std::vector<uint8_t> v = *bytes;
-    const pack::SectionEntry e = entryOf(v, sectionIndex(v, section));
-    std::memcpy(v.data() + e.offset + record * e.elementSize + at, &value, sizeof(value));
-    reseal(v);
-    return parse(v);
+    return parseWithField(*bytes, section, record, at, value);
   };
   EXPECT_TRUE(failsWith(edit("quantization", 1, 0, float{NAN}),
                         "section 'quantization' record 1: field 'positionOffset' or 'uvOffset' is not finite"));
