@@ -1,5 +1,5 @@
 // Shared declarations of every pass: bindings, the object transform (the one definition of the raster
-// math, used by the visibility, shading and forward shaders alike), normal decode and lighting.
+// math, used by the visibility, shading and forward shaders alike) and normal decode. Lighting: lighting.glsl.
 #ifndef VISBUF_COMMON_GLSL
 #define VISBUF_COMMON_GLSL
 
@@ -83,11 +83,5 @@ vec3 normalToWorld(ObjectData o, vec3 n) {
 }
 
 vec4 unpackColor(uint c) { return unpackUnorm4x8(c); }
-
-// The one lighting function of both paths: ambient + Lambert from one directional light.
-vec3 shadeSurface(vec3 normal, vec3 baseColor) {
-  float ndotl = max(dot(normal, frame.lightDir.xyz), 0.0);
-  return baseColor * (0.15 + frame.lightDir.w * ndotl);
-}
 
 #endif

@@ -1,11 +1,12 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-#include "common.glsl"
+#include "lighting.glsl"
 
 layout(location = 0) in vec3 inNormal;
 layout(location = 1) in vec4 inColor;
 layout(location = 2) flat in uint inMaterial;
 layout(location = 3) flat in uint inObject;
+layout(location = 4) in vec3 inPosition;  // camera-relative world
 layout(location = 0) out vec4 outColor;
 #if COUNT_OVERDRAW
 layout(early_fragment_tests) in;
@@ -22,7 +23,7 @@ void main() {
   imageAtomicAdd(overdraw, ivec2(gl_FragCoord.xy), 1u);
 #endif
   vec4 baseColor = materials[inMaterial].baseColor * inColor;
-  outColor = vec4(shadeSurface(normalize(inNormal), baseColor.rgb), 1.0);
+  outColor = vec4(shadeSurface(plainSurface(inPosition, normalize(inNormal), baseColor.rgb), uvec2(gl_FragCoord.xy)), 1.0);
 #if WRITE_IDS
   outId = uvec2(inObject + 1u, uint(gl_PrimitiveID));
 #endif

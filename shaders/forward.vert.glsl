@@ -8,11 +8,13 @@ layout(location = 0) out vec3 outNormal;  // world, not normalised (interpolatio
 layout(location = 1) out vec4 outColor;
 layout(location = 2) flat out uint outMaterial;
 layout(location = 3) flat out uint outObject;
+layout(location = 4) out vec3 outPosition;  // camera-relative world
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
   Vertex v = vertexAt(gl_VertexIndex);
   gl_Position = clipPosition(o, vertexPosition(v));
+  outPosition = objectToCamera(o, vertexPosition(v));
   outNormal = normalToWorld(o, octDecode(v.normal));
   outColor = unpackColor(v.color);
   outMaterial = o.materialIndex;

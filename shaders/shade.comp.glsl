@@ -4,7 +4,7 @@
 // analytic derivatives, attribute interpolation, lighting. Background pixels are skipped (the
 // colour image was cleared to the background before).
 #extension GL_GOOGLE_include_directive : require
-#include "common.glsl"
+#include "lighting.glsl"
 #include "shared/barycentrics.h"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
@@ -60,7 +60,9 @@ void main() {
   vec3 normal = normalize(normalToWorld(o, n));
   vec4 vc = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
   vec4 baseColor = materials[o.materialIndex].baseColor * vc;
-  imageStore(colorOut, p, vec4(shadeSurface(normal, baseColor.rgb), 1.0));
+  vec3 position = l.x * objectToCamera(o, vertexPosition(v0)) + l.y * objectToCamera(o, vertexPosition(v1)) +
+                  l.z * objectToCamera(o, vertexPosition(v2));
+  imageStore(colorOut, p, vec4(shadeSurface(plainSurface(position, normal, baseColor.rgb), uvec2(p)), 1.0));
 #if WRITE_ATTRIBUTES
   writeAttributes(p, o, v0, v1, v2, b, normal);
 #endif
