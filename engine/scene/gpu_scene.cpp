@@ -20,6 +20,34 @@ gpu::ObjectData packObject(const Object& object, const Scene& scene) {
   return d;
 }
 
+gpu::MaterialData packMaterial(const Material& m, const Scene& scene) {
+  gpu::MaterialData d{};
+  d.baseColor = m.baseColor;
+  d.emissive = glm::vec4(m.emissive * m.emissiveStrength, m.normalScale);
+  d.params = glm::vec4(m.metallic, m.roughness, m.occlusionStrength, m.alphaCutoff);
+  d.flags = (m.alphaMode == AlphaMode::Mask ? MATERIAL_FLAG_MASK : 0u) |
+            (m.alphaMode == AlphaMode::Blend ? MATERIAL_FLAG_BLEND : 0u) |
+            (m.doubleSided ? MATERIAL_FLAG_DOUBLE_SIDED : 0u);
+  const auto slots = textureSlots(m);
+  for (size_t i = 0; i < kTextureSlotCount; ++i) {
+    const TextureRef& t = *slots[i];
+    gpu::TextureSlotData& x = d.textures[i];
+    x.image = TEXTURE_NONE;
+    x.transform01 = glm::vec4(t.transform[0], t.transform[1]);
+    x.transform2 = glm::vec4(t.transform[2], 0.0f, 0.0f);
+    x.samplerBits = uint32_t(t.sampler.wrapS) << TEXTURE_SAMPLER_WRAP_S_SHIFT |
+                uint32_t(t.sampler.wrapT) << TEXTURE_SAMPLER_WRAP_T_SHIFT |
+                (t.sampler.magFilter == TextureFilter::Linear ? TEXTURE_SAMPLER_MAG_LINEAR : 0u) |
+                (t.sampler.minFilter == TextureFilter::Linear ? TEXTURE_SAMPLER_MIN_LINEAR : 0u) |
+                uint32_t(t.sampler.mipFilter) << TEXTURE_SAMPLER_MIP_SHIFT | t.texCoord << TEXTURE_SAMPLER_TEXCOORD_SHIFT;
+    if (t.baked >= 0 && size_t(t.baked) < scene.textures.size()) {
+      const Texture& tex = scene.textures[size_t(t.baked)];
+      x.image = tex.sizeClass << 16 | tex.layer;
+    }
+  }
+  return d;
+}
+
 gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placement, const Scene& scene) {
   Object placed = object;
   placed.transform = placement;
@@ -89,7 +117,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     g.skinned.push_back(r);
   }
   std::vector<gpu::MaterialData> materials;
-  for (const Material& m : scene.materials) materials.push_back({m.baseColor, glm::vec4(0.0f)});
+  for (const Material& m : scene.materials) materials.push_back(packMaterial(m, scene));
 
   const uint64_t limit = device.properties().limits.maxStorageBufferRange;
   auto check = [&](const char* what, uint64_t bytes) -> Status {

@@ -53,6 +53,10 @@ gpu::ObjectData packObject(const Object& object, const Scene& scene);
 // The same for a skinned object: its placement (SkinnedObject::placement) instead of its transform.
 gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placement, const Scene& scene);
 
+// Packs a material into its GPU record: factors, flags, and each texture slot's baked image (class, layer),
+// sampler bits and transform (TEXTURE_NONE where the slot has no baked texture).
+gpu::MaterialData packMaterial(const Material& material, const Scene& scene);
+
 // Validates and uploads. Fails with CapacityExceeded when a buffer would exceed the device's
 // maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit; the object records are read
 // through two descriptor windows (objectWindowSplit), so they may take twice that.

@@ -74,6 +74,34 @@
                                  // maxStorageBufferRange: 2M objects on lavapipe)
 #define BINDING_ATTRIBUTES 13  // float[ATTRIBUTE_FLOATS] per pixel: the shading pass's reconstruction (stress only)
 
+// Materials (types.h MaterialData). Flags: the glTF alpha mode and double-sidedness.
+#define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out
+#define MATERIAL_FLAG_BLEND 2u         // alphaMode BLEND: drawn by the transparency pass
+#define MATERIAL_FLAG_DOUBLE_SIDED 4u  // no back-face culling; back faces shade with the flipped normal
+#define TEXTURE_SLOTS 5                // base colour, metallic-roughness, normal, occlusion, emissive
+#define TEXTURE_SLOT_BASE_COLOR 0
+#define TEXTURE_SLOT_METALLIC_ROUGHNESS 1
+#define TEXTURE_SLOT_NORMAL 2
+#define TEXTURE_SLOT_OCCLUSION 3
+#define TEXTURE_SLOT_EMISSIVE 4
+#define TEXTURE_NONE 0xffffffffu
+// TextureSlotData.samplerBits: wrap S (2 bits) and T (2 bits) as scene/texture.h WrapMode, magnification
+// linear, minification linear, mip filter (2 bits, MipFilter), TEXCOORD set.
+#define TEXTURE_SAMPLER_WRAP_S_SHIFT 0
+#define TEXTURE_SAMPLER_WRAP_T_SHIFT 2
+#define TEXTURE_SAMPLER_MAG_LINEAR 16u
+#define TEXTURE_SAMPLER_MIN_LINEAR 32u
+#define TEXTURE_SAMPLER_MIP_SHIFT 6
+#define TEXTURE_SAMPLER_TEXCOORD_SHIFT 8
+// Baked textures: one texture2DArray per size class (scene/texture.h), bound as a fixed array of
+// MAX_TEXTURE_CLASSES (12 sizes x 2 colour spaces); unused entries hold a 1x1 placeholder. Lavapipe has no
+// dynamic indexing of sampled-image arrays, so shaders index it with constants only (material.glsl).
+#define MAX_TEXTURE_CLASSES 24
+#define BINDING_TEXTURE_CLASSES 18  // texture2DArray[MAX_TEXTURE_CLASSES]
+#define BINDING_VERTEX_EXTRAS 19    // VertexExtra[] (tangent, TEXCOORD_1) of meshes that have them
+// Bindings 20..27 are reserved for lights and the G-buffer baseline, 28..31 for alpha-masked and blended
+// geometry.
+
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
 //  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),
 //  8..9 TEXCOORD_0, 10..11 lambda1, lambda2, 12..13 d(lambda1)/dx,dy, 14..15 d(lambda2)/dx,dy (per pixel).

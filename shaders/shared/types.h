@@ -54,10 +54,28 @@ struct ObjectData {
 };
 #define OBJECT_FLAG_FLIP_WINDING 1u  // negative determinant: front faces are clockwise
 
-// Material: 32 bytes.
+// One texture slot of a material (48 bytes). image: TEXTURE_NONE, or (size class << 16) | layer of the baked
+// image (scene/texture.h); samplerBits: TEXTURE_SAMPLER_* bits; uv' = mat3x2(transform01.xy, transform01.zw,
+// transform2.xy) * vec3(uv, 1) (KHR_texture_transform, identity without it).
+struct TextureSlotData {
+  uint image;
+  uint samplerBits;
+  uint pad0;
+  uint pad1;
+  vec4 transform01;
+  vec4 transform2;
+};
+
+// Material (304 bytes): glTF metallic-roughness factors and its five texture slots (TEXTURE_SLOT_*).
 struct MaterialData {
-  vec4 baseColor;  // linear RGBA
-  vec4 params;     // x: ambient occlusion-free ambient term, yzw reserved
+  vec4 baseColor;  // linear RGBA factor
+  vec4 emissive;   // rgb: emissive factor x emissive strength; w: normal texture scale
+  vec4 params;     // x: metallic, y: roughness, z: occlusion strength, w: alpha cutoff (MASK)
+  uint flags;      // MATERIAL_FLAG_*
+  uint pad0;
+  uint pad1;
+  uint pad2;
+  TextureSlotData textures[TEXTURE_SLOTS];
 };
 
 // The indirect draw written by the cull pass: VkDrawIndexedIndirectCommand plus nothing else,
