@@ -52,6 +52,7 @@ Vertex vertexAt(uint i) {
   Vertex v = vertices3[j];
   return v;
 }
+layout(std430, set = 0, binding = BINDING_VERTEX_EXTRAS) readonly buffer VertexExtraBlock { VertexExtra vertexExtras[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
 
 // Object space -> camera-relative world space. The translation is made camera-relative first
@@ -81,6 +82,9 @@ vec3 normalToWorld(ObjectData o, vec3 n) {
   float s = dot(a, bc) < 0.0 ? -1.0 : 1.0;
   return s * vec3(dot(bc, n), dot(ca, n), dot(ab, n));
 }
+
+// A direction (tangent) to world space: the linear part only, like a position difference.
+vec3 objectToCameraVector(ObjectData o, vec3 v) { return vec3(dot(o.row0.xyz, v), dot(o.row1.xyz, v), dot(o.row2.xyz, v)); }
 
 vec4 unpackColor(uint c) { return unpackUnorm4x8(c); }
 

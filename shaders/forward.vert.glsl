@@ -9,6 +9,8 @@ layout(location = 1) out vec4 outColor;
 layout(location = 2) flat out uint outMaterial;
 layout(location = 3) flat out uint outObject;
 layout(location = 4) out vec3 outPosition;  // camera-relative world
+layout(location = 5) out vec4 outUv;        // TEXCOORD_0, TEXCOORD_1
+layout(location = 6) out vec4 outTangent;   // world xyz, w: bitangent sign (0: none)
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
@@ -19,4 +21,12 @@ void main() {
   outColor = unpackColor(v.color);
   outMaterial = o.materialIndex;
   outObject = gl_InstanceIndex;
+  outUv = vec4(v.u, v.v, 0.0, 0.0);
+  outTangent = vec4(0.0);
+  MeshData m = meshes[o.meshIndex];
+  if (m.extraOffset != EXTRA_NONE) {
+    VertexExtra e = vertexExtras[m.extraOffset + uint(gl_VertexIndex) - m.vertexOffset];
+    outUv.zw = vec2(e.u1, e.v1);
+    if (e.tangentW != 0.0) outTangent = vec4(objectToCameraVector(o, octDecode(e.tangent)), e.tangentW);
+  }
 }

@@ -4,7 +4,8 @@
 // analytic derivatives, attribute interpolation, lighting. Background pixels are skipped (the
 // colour image was cleared to the background before).
 #extension GL_GOOGLE_include_directive : require
-#include "lighting.glsl"
+#extension GL_EXT_samplerless_texture_functions : require
+#include "material.glsl"
 #include "shared/barycentrics.h"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
@@ -58,11 +59,40 @@ void main() {
 
   vec3 n = l.x * octDecode(v0.normal) + l.y * octDecode(v1.normal) + l.z * octDecode(v2.normal);
   vec3 normal = normalize(normalToWorld(o, n));
-  vec4 vc = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
-  vec4 baseColor = materials[o.materialIndex].baseColor * vc;
-  vec3 position = l.x * objectToCamera(o, vertexPosition(v0)) + l.y * objectToCamera(o, vertexPosition(v1)) +
-                  l.z * objectToCamera(o, vertexPosition(v2));
-  imageStore(colorOut, p, vec4(shadeSurface(plainSurface(position, normal, baseColor.rgb), uvec2(p)), 1.0));
+  vec3 p0 = objectToCamera(o, vertexPosition(v0)), p1 = objectToCamera(o, vertexPosition(v1)),
+       p2 = objectToCamera(o, vertexPosition(v2));
+  SurfaceInputs si;
+  si.position = l.x * p0 + l.y * p1 + l.z * p2;
+  si.normal = normal;
+  si.dpdx = b.ddx.x * p0 + b.ddx.y * p1 + b.ddx.z * p2;
+  si.dpdy = b.ddy.x * p0 + b.ddy.y * p1 + b.ddy.z * p2;
+  mat3x2 uv0 = mat3x2(vec2(v0.u, v0.v), vec2(v1.u, v1.v), vec2(v2.u, v2.v));
+  si.uv0 = uv0 * l;
+  si.duv0dx = uv0 * b.ddx;
+  si.duv0dy = uv0 * b.ddy;
+  si.tangent = vec4(0.0);
+  si.uv1 = vec2(0.0);
+  si.duv1dx = vec2(0.0);
+  si.duv1dy = vec2(0.0);
+  uint extra = meshes[o.meshIndex].extraOffset;
+  if (extra != EXTRA_NONE) {
+    VertexExtra e0 = vertexExtras[extra + indices[base + 0u]], e1 = vertexExtras[extra + indices[base + 1u]],
+                e2 = vertexExtras[extra + indices[base + 2u]];
+    mat3x2 uv1 = mat3x2(vec2(e0.u1, e0.v1), vec2(e1.u1, e1.v1), vec2(e2.u1, e2.v1));
+    si.uv1 = uv1 * l;
+    si.duv1dx = uv1 * b.ddx;
+    si.duv1dy = uv1 * b.ddy;
+    if (e0.tangentW != 0.0) {
+      vec3 t = l.x * octDecode(e0.tangent) + l.y * octDecode(e1.tangent) + l.z * octDecode(e2.tangent);
+      si.tangent = vec4(objectToCameraVector(o, t), e0.tangentW);  // mirrored instances: w flipped at import
+    }
+  }
+  si.color = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
+  // Orientation as the rasteriser sees it (counter-clockwise front faces; the homogeneous determinant keeps
+  // its sign for triangles crossing w = 0).
+  si.frontFacing = determinant(mat3(c0.xyw, c1.xyw, c2.xyw)) < 0.0;
+  Surface s = evaluateMaterial(o.materialIndex, si);
+  imageStore(colorOut, p, vec4(shadeSurface(s, uvec2(p)), 1.0));
 #if WRITE_ATTRIBUTES
   writeAttributes(p, o, v0, v1, v2, b, normal);
 #endif

@@ -9,6 +9,7 @@
 #include "asset/gltf_import.h"
 #include "asset/pack_reader.h"
 #include "asset/scene_bake.h"
+#include "asset/texture_bake.h"
 #include "scene/generate.h"
 
 namespace visbuf::tools {
@@ -89,6 +90,8 @@ Result<Scene> loadScene(const SceneOptions& o) {
   if (!imported) return imported.error();
   Result<Scene> scene = buildImportedScene(*imported);
   if (!scene) return scene.error();
+  // Its textures too, as `visbuf bake` does (default size cap), so the material is shaded as in a pack.
+  if (Status t = bakeTextures(*imported, {}, &*scene); !t) return t.error();
   scene->name = o.scene;
   return scene;
 }

@@ -73,14 +73,15 @@ void Pipeline::reset() {
 }
 
 namespace {
-const VkSpecializationMapEntry kWindowedEntry{0, 0, sizeof(uint32_t)};
-VkSpecializationInfo windowedInfo(const uint32_t* value) { return {1, &kWindowedEntry, sizeof(uint32_t), value}; }
+const VkSpecializationMapEntry kEntries[2] = {{0, 0, sizeof(uint32_t)}, {1, sizeof(uint32_t), sizeof(uint32_t)}};
+VkSpecializationInfo specializationInfo(const uint32_t (&values)[2]) { return {2, kEntries, sizeof(values), values}; }
 }  // namespace
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
-                               uint32_t windowed) {
+                               Specialization specialization) {
   VkShaderModule module = createModule(device, shader);
-  const VkSpecializationInfo spec = windowedInfo(&windowed);
+  const uint32_t values[2] = {specialization.windowed, specialization.textureClasses};
+  const VkSpecializationInfo spec = specializationInfo(values);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
   ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -105,7 +106,8 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
-  const VkSpecializationInfo spec = windowedInfo(&desc.windowed);
+  const uint32_t values[2] = {desc.windowed, desc.textureClasses};
+  const VkSpecializationInfo spec = specializationInfo(values);
   stages[0].pSpecializationInfo = stages[1].pSpecializationInfo = &spec;
 
   VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};  // pulled

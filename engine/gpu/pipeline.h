@@ -42,8 +42,17 @@ class Pipeline {
 // Specialisation constant 0 of every frame shader (common.glsl VB_WINDOWED): 1 when the object records or the
 // vertex pool need more than one descriptor window, 0 to read them directly (the windows cost a branch per
 // fetch, measurable on lavapipe). Shaders that do not declare it ignore it.
+// Specialisation constant 1 (material.glsl VB_TEXTURE_CLASSES): how many baked texture classes the scene has;
+// texture sampling code for classes beyond it (all of it for an untextured scene) is removed when the pipeline is
+// compiled, which keeps lavapipe's shader compile time and the shaders' size down.
+struct Specialization {
+  Specialization(uint32_t windowedValue = 1, uint32_t textureClassCount = 0)  // NOLINT: implicit from `windowed`
+      : windowed(windowedValue), textureClasses(textureClassCount) {}
+  uint32_t windowed;
+  uint32_t textureClasses;
+};
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
-                               uint32_t windowed = 1);
+                               Specialization spec = {});
 
 struct GraphicsPipelineDesc {
   std::string vertexShader;
@@ -53,6 +62,7 @@ struct GraphicsPipelineDesc {
   VkCullModeFlags cullMode = VK_CULL_MODE_BACK_BIT;
   VkCompareOp depthCompare = VK_COMPARE_OP_GREATER;  // reverse-Z
   uint32_t windowed = 1;  // specialisation constant 0 of both stages (see createComputePipeline)
+  uint32_t textureClasses = 0;  // specialisation constant 1 of both stages (see Specialization)
 };
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
 

@@ -1,5 +1,6 @@
 #include "gpu/resources.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -62,14 +63,20 @@ void Buffer::reset() {
 }
 
 Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
-             VkImageAspectFlags aspect, uint32_t mipLevels)
-    : device_(device.device()), format_(format), width_(width), height_(height), mipLevels_(mipLevels), aspect_(aspect) {
+             VkImageAspectFlags aspect, uint32_t mipLevels, uint32_t arrayLayers)
+    : device_(device.device()),
+      format_(format),
+      width_(width),
+      height_(height),
+      mipLevels_(mipLevels),
+      layers_(std::max(arrayLayers, 1u)),
+      aspect_(aspect) {
   VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   ici.imageType = VK_IMAGE_TYPE_2D;
   ici.format = format;
   ici.extent = {width, height, 1};
   ici.mipLevels = mipLevels;
-  ici.arrayLayers = 1;
+  ici.arrayLayers = layers_;
   ici.samples = VK_SAMPLE_COUNT_1_BIT;
   ici.tiling = VK_IMAGE_TILING_OPTIMAL;
   ici.usage = usage;
@@ -81,9 +88,9 @@ Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, V
   VK_CHECK(vkBindImageMemory(device_, image_, memory_, 0));
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   vci.image = image_;
-  vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  vci.viewType = arrayLayers > 0 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
   vci.format = format;
-  vci.subresourceRange = {aspect, 0, mipLevels, 0, 1};
+  vci.subresourceRange = {aspect, 0, mipLevels, 0, layers_};
   VK_CHECK(vkCreateImageView(device_, &vci, nullptr, &view_));
 }
 
@@ -109,6 +116,7 @@ Image& Image::operator=(Image&& o) noexcept {
     width_ = o.width_;
     height_ = o.height_;
     mipLevels_ = o.mipLevels_;
+    layers_ = o.layers_;
     aspect_ = o.aspect_;
   }
   return *this;
@@ -150,7 +158,7 @@ void imageBarrier(VkCommandBuffer cmd, const Image& image, VkImageLayout from, V
   b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.image = image.handle();
-  b.subresourceRange = {image.aspect(), 0, image.mipLevels(), 0, 1};
+  b.subresourceRange = {image.aspect(), 0, image.mipLevels(), 0, image.layers()};
   VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   di.imageMemoryBarrierCount = 1;
   di.pImageMemoryBarriers = &b;

@@ -42,7 +42,7 @@ class Image {
  public:
   Image() = default;
   Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
-        VkImageAspectFlags aspect, uint32_t mipLevels = 1);
+        VkImageAspectFlags aspect, uint32_t mipLevels = 1, uint32_t arrayLayers = 0);
   ~Image() { reset(); }
   Image(Image&& o) noexcept { *this = std::move(o); }
   Image& operator=(Image&& o) noexcept;
@@ -56,6 +56,7 @@ class Image {
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
   uint32_t mipLevels() const { return mipLevels_; }
+  uint32_t layers() const { return layers_; }  // array layers (its view is a 2D array view when created with > 0)
   VkImageAspectFlags aspect() const { return aspect_; }
   // A view of one mip level; the caller owns it (vkDestroyImageView).
   VkImageView createLevelView(uint32_t level) const;
@@ -69,6 +70,7 @@ class Image {
   VkFormat format_ = VK_FORMAT_UNDEFINED;
   uint32_t width_ = 0, height_ = 0;
   uint32_t mipLevels_ = 1;
+  uint32_t layers_ = 1;
   VkImageAspectFlags aspect_ = 0;
 };
 

@@ -9,6 +9,7 @@ namespace visbuf::gpu {
 
 static_assert(sizeof(Vertex) == 32);
 static_assert(sizeof(LodData) == 16);
+static_assert(sizeof(VertexExtra) == 16);
 static_assert(sizeof(MeshData) == 32 + 16 * MAX_LODS);
 static_assert(sizeof(SkinInstance) == 48);
 static_assert(sizeof(ObjectData) == 64, "per-object GPU data stays at 64 bytes");

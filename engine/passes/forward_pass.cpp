@@ -4,9 +4,10 @@
 
 namespace visbuf::passes {
 
-ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
+ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
   gpu::GraphicsPipelineDesc d;
-  d.windowed = windowed;
+  d.windowed = spec.windowed;
+  d.textureClasses = spec.textureClasses;
   d.vertexShader = "forward.vert";
   d.fragmentShader = "forward.frag";
   d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};

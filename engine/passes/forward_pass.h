@@ -21,7 +21,7 @@ struct ForwardPass {
   gpu::Pipeline pipeline;
   gpu::Pipeline pipelineWithIds;  // also writes (object + 1, triangle) to an rg32ui target (diagnostics, tests)
   gpu::Pipeline pipelineOverdraw; // debug: counts raster writes per pixel into BINDING_OVERDRAW
-  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
+  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   // ids: optional rg32ui target (cleared to 0) written with the same IDs the visibility path decodes.
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
               VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,

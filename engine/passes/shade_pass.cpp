@@ -4,9 +4,9 @@
 
 namespace visbuf::passes {
 
-ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
-  return ShadePass{gpu::createComputePipeline(device, layout, "shade.comp", windowed),
-                   gpu::createComputePipeline(device, layout, "shade_attributes.comp", windowed)};
+ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
+  return ShadePass{gpu::createComputePipeline(device, layout, "shade.comp", spec),
+                   gpu::createComputePipeline(device, layout, "shade_attributes.comp", spec)};
 }
 
 void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,

@@ -10,7 +10,7 @@ namespace visbuf::passes {
 struct ShadePass {
   gpu::Pipeline pipeline;
   gpu::Pipeline attributesPipeline;  // same shading, plus the attribute record (stress suite)
-  static ShadePass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
+  static ShadePass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width, uint32_t height,
               bool writeAttributes) const;
 };

@@ -155,6 +155,8 @@ struct Renderer::Impl {
         {BINDING_VERTICES_1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_VERTICES_2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_VERTICES_3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES, all, nullptr},
+        {BINDING_VERTEX_EXTRAS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -168,7 +170,8 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 13},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 14},
+                                    {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -287,6 +290,24 @@ struct Renderer::Impl {
     x.dstBinding = BINDING_PYRAMID;
     x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     x.pImageInfo = &pyramidInfo;
+    w.push_back(x);
+    // Texture classes: the scene's, then the placeholder in every unused slot (material.glsl); vertex extras.
+    std::array<VkDescriptorImageInfo, MAX_TEXTURE_CLASSES> textureInfos;
+    for (size_t i = 0; i < textureInfos.size(); ++i) {
+      const gpu::Image& t = i < gpuScene.textureClasses.size() ? gpuScene.textureClasses[i] : gpuScene.placeholderTexture;
+      textureInfos[i] = {VK_NULL_HANDLE, t.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    }
+    x.dstBinding = BINDING_TEXTURE_CLASSES;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE;
+    x.descriptorCount = MAX_TEXTURE_CLASSES;
+    x.pImageInfo = textureInfos.data();
+    w.push_back(x);
+    VkDescriptorBufferInfo extrasInfo{gpuScene.vertexExtras.handle(), 0, VK_WHOLE_SIZE};
+    x.dstBinding = BINDING_VERTEX_EXTRAS;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    x.descriptorCount = 1;
+    x.pImageInfo = nullptr;
+    x.pBufferInfo = &extrasInfo;
     w.push_back(x);
     vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
   }
@@ -830,8 +851,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const uint32_t w = windowed ? 1u : 0u;
   impl->cull = passes::CullPass::create(device, impl->pipelineLayout, w);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, w);
-  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, w);
-  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, w);
+  const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()));
+  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
+  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured);
   impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                   gpu::MemoryUse::HostVisible);
   impl->draws = gpu::Buffer(device, drawBytes,

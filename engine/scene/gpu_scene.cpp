@@ -69,14 +69,35 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   Status valid = validateScene(scene);
   if (!valid) return valid.error();
   GpuScene g;
+  if (scene.textureClasses.size() > MAX_TEXTURE_CLASSES)
+    return makeError(ErrorCode::CapacityExceeded,
+                     fmt::format("the scene has {} texture size classes, over the {} the shading pass binds",
+                                 scene.textureClasses.size(), MAX_TEXTURE_CLASSES));
   std::vector<gpu::Vertex> vertices;
   std::vector<uint32_t> indices;
+  std::vector<gpu::VertexExtra> extras;
   for (const Mesh& mesh : scene.meshes) {
     gpu::MeshData md{};
     md.boundsSphere = mesh.boundsSphere;
     md.vertexOffset = uint32_t(vertices.size());
     md.vertexCount = uint32_t(mesh.vertices.size());
     md.lodCount = uint32_t(mesh.lods.size());
+    md.extraOffset = EXTRA_NONE;
+    if (!mesh.tangents.empty() || !mesh.uvs1.empty()) {
+      md.extraOffset = uint32_t(extras.size());
+      for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+        gpu::VertexExtra e{};
+        if (!mesh.tangents.empty() && mesh.tangents[v].w != 0.0f) {
+          e.tangent = octEncode(glm::normalize(glm::vec3(mesh.tangents[v])));
+          e.tangentW = mesh.tangents[v].w < 0.0f ? -1.0f : 1.0f;
+        }
+        if (!mesh.uvs1.empty()) {
+          e.u1 = mesh.uvs1[v].x;
+          e.v1 = mesh.uvs1[v].y;
+        }
+        extras.push_back(e);
+      }
+    }
     for (size_t l = 0; l < mesh.lods.size(); ++l)
       md.lods[l] = {uint32_t(indices.size()) + mesh.lods[l].firstIndex, mesh.lods[l].indexCount, mesh.lods[l].error, 0};
     g.maxTrianglesPerDraw = std::max(g.maxTrianglesPerDraw, mesh.triangleCount(0));
@@ -143,6 +164,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
                                  poolLimit / 1048576.0, VERTEX_WINDOWS));
   for (auto [what, bytes] : {
                              std::pair{"index", indices.size() * sizeof(uint32_t)},
+                             std::pair{"vertex extras (tangents, TEXCOORD_1)", extras.size() * sizeof(gpu::VertexExtra)},
                              std::pair{"object (second window)",
                                        (objects.size() - objectWindowSplit(limit, uint32_t(objects.size()))) *
                                            sizeof(gpu::ObjectData)}}) {
@@ -156,9 +178,21 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.objects = gpu::uploadVector(device, objects, ssbo);
   g.materials = gpu::uploadVector(device, materials, ssbo);
   if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
+  g.vertexExtras = gpu::uploadVector(device, extras, ssbo);  // at least 16 bytes: always bindable
+  uint64_t textureBytes = 0;
+  for (const TextureClass& c : scene.textureClasses) {
+    g.textureClasses.push_back(uploadTextureClass(device, c));
+    textureBytes += c.texels.size();
+  }
+  TextureClass white;
+  white.size = 1;
+  white.layers = 1;
+  white.mipCount = 1;
+  white.texels = {255, 255, 255, 255};
+  g.placeholderTexture = uploadTextureClass(device, white);
   g.objectCount = uint32_t(objects.size());
   g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
-            (g.skinVertices ? g.skinVertices.size() : 0);
+            (g.skinVertices ? g.skinVertices.size() : 0) + g.vertexExtras.size() + textureBytes;
   return g;
 }
 

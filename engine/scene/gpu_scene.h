@@ -17,6 +17,9 @@ struct GpuScene {
   gpu::Buffer meshes;     // gpu::MeshData[]
   gpu::Buffer objects;    // gpu::ObjectData[]
   gpu::Buffer materials;  // gpu::MaterialData[]
+  gpu::Buffer vertexExtras;  // gpu::VertexExtra[] of the meshes with tangents or TEXCOORD_1 (MeshData.extraOffset)
+  std::vector<gpu::Image> textureClasses;  // Scene::textureClasses, same order: 2D arrays with full mip chains
+  gpu::Image placeholderTexture;           // 1x1x1 white: bound to the class slots the scene does not use
   std::vector<gpu::MeshData> meshTable;  // CPU copy (forward path, ID decoding)
   std::vector<uint32_t> objectMesh;      // meshTable slot each object draws (its own slot when skinned)
 
@@ -56,6 +59,10 @@ gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placem
 // Packs a material into its GPU record: factors, flags, and each texture slot's baked image (class, layer),
 // sampler bits and transform (TEXTURE_NONE where the slot has no baked texture).
 gpu::MaterialData packMaterial(const Material& material, const Scene& scene);
+
+// Uploads one baked texture class as a sampled 2D array image (R8G8B8A8 UNORM or SRGB by colour space), every
+// layer and mip level, left in SHADER_READ_ONLY_OPTIMAL.
+gpu::Image uploadTextureClass(gpu::Device& device, const TextureClass& textureClass);
 
 // Validates and uploads. Fails with CapacityExceeded when a buffer would exceed the device's
 // maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit; the object records are read

@@ -99,6 +99,7 @@
 #define MAX_TEXTURE_CLASSES 24
 #define BINDING_TEXTURE_CLASSES 18  // texture2DArray[MAX_TEXTURE_CLASSES]
 #define BINDING_VERTEX_EXTRAS 19    // VertexExtra[] (tangent, TEXCOORD_1) of meshes that have them
+#define EXTRA_NONE 0xffffffffu      // MeshData.extraOffset of a mesh without VertexExtra records
 // Bindings 20..27 are reserved for lights and the G-buffer baseline, 28..31 for alpha-masked and blended
 // geometry.
 

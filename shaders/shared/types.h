@@ -23,6 +23,13 @@ struct Vertex {
   uint pad;
 };
 
+// Optional per-vertex attributes beyond Vertex (16 bytes), only for meshes that have them: tangent and TEXCOORD_1.
+struct VertexExtra {
+  uint tangent;    // octahedral-encoded unit tangent (xyz); 0 with tangentW 0: none
+  float tangentW;  // bitangent sign (+-1), 0: the mesh has no tangents (derived per pixel)
+  float u1, v1;    // TEXCOORD_1 (0 when the mesh has none)
+};
+
 // One LOD level: a range of the unified index pool. 16 bytes.
 struct LodData {
   uint firstIndex;  // into the unified index buffer
@@ -37,7 +44,7 @@ struct MeshData {
   uint vertexOffset;  // added to every index (vertexOffset of the draw)
   uint vertexCount;
   uint lodCount;      // >= 1; lods[0] is the full mesh
-  uint pad;
+  uint extraOffset;   // first VertexExtra of the mesh (indexed by mesh-local vertex), EXTRA_NONE without
   LodData lods[MAX_LODS];
 };
 
