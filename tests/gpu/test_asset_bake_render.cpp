@@ -1,0 +1,227 @@
+// Every glTF file of ../shared/assets end to end, as `visbuf bake` and `visbuf render` take it: import, build
+// (meshoptimizer + LOD chain), texture bake, pack written to a temporary folder, read back, and both scenes
+// (baked in memory, loaded from the pack) rendered by the visbuf and the forward path on the test device
+// (lavapipe in CI) with validation on, at 160x120 from the scene's default camera; skinned scenes at time 0
+// and at a later time of their clip.
+//
+// References and bounds:
+//   - pack vs in memory: the pack stores the very vertices, indices, objects and camera the bake produced, so
+//     the IDs must be identical and the colour within 1e-6 per channel (the same shader on the same inputs;
+//     the bound leaves room only for a driver that is not bit-reproducible);
+//   - visbuf vs forward (hardware interpolation): the bounds of tests/gpu/test_shading.cpp (same triangle at
+//     every pixel on a CPU device, at most 0.1 % of the covered pixels elsewhere; where the triangle is the
+//     same, every channel within 2e-3, mean within 5e-5, PSNR >= 80 dB);
+//   - at least one covered pixel per frame (the default camera frames the scene).
+// Files known to be bad must fail with a precise message instead: AssimpBadData's BoxWithInfinites (infinite
+// vertex data) and the Mesh_PrimitiveMode files that hold only points or lines ("no triangle geometry").
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "../unit/temp_dir_test.h"
+#include "../unit/test_assets.h"
+#include "asset/gltf_import.h"
+#include "asset/pack_reader.h"
+#include "asset/pack_writer.h"
+#include "asset/scene_bake.h"
+#include "asset/texture_bake.h"
+#include "gpu_test_util.h"
+
+using namespace visbuf;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr uint32_t kWidth = 160, kHeight = 120;
+constexpr double kPackMaxAbs = 1e-6;  // pack-loaded vs in-memory colour, per channel
+// visbuf vs forward: the Shading.* bounds (tests/gpu/test_shading.cpp).
+constexpr double kMaxAbs = 2e-3;
+constexpr double kMeanAbs = 5e-5;
+constexpr double kMinPsnr = 80.0;
+// Texture cap for the test's bake: texture pixels are not compared here (the shading does not sample them
+// yet), but they are decoded, resized, mip-mapped, written and checksum-verified like any bake's.
+constexpr uint32_t kTextureCap = 256;
+
+// The files that must NOT bake, with a piece of the message that must say why.
+const std::map<std::string, std::string>& expectedFailures() {
+  static const std::map<std::string, std::string> failures = [] {
+    std::map<std::string, std::string> m = {{"BoxWithInfinites.glb", "non-finite"}};
+    // Mesh_PrimitiveMode_NN: 00-03 and 07-10 are POINTS / LINES / LINE_LOOP / LINE_STRIP (with and without
+    // indices), skipped with a warning, which leaves no triangles; 04-06 and 11-15 are strips, fans, lists.
+    for (int i : {0, 1, 2, 3, 7, 8, 9, 10})
+      m[fmt::format("Mesh_PrimitiveMode_{:02}.gltf", i)] = "no triangle geometry";
+    return m;
+  }();
+  return failures;
+}
+
+// Every .gltf / .glb under the assets folder, sorted (so failures read the same on every run).
+std::vector<fs::path> assetFiles() {
+  std::vector<fs::path> files;
+  const fs::path root = test::assetPath("");
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
+    const std::string ext = entry.path().extension().string();
+    if (entry.is_regular_file() && (ext == ".gltf" || ext == ".glb")) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Import + build + texture bake: what `visbuf bake` produces before it writes.
+Result<Scene> bakeInMemory(const fs::path& file) {
+  auto imported = importGltfScene(file.string());
+  if (!imported) return imported.error();
+  auto scene = buildImportedScene(*imported);
+  if (!scene) return scene.error();
+  TextureBakeOptions to;
+  to.maxTextureSize = kTextureCap;
+  if (Status s = bakeTextures(*imported, to, &scene.value()); !s) return s.error();
+  return scene;
+}
+
+// The animation times a scene is rendered at: 0, and for skinned scenes 60 % into the first skinned
+// object's clip (or 0.5 s when that clip is empty).
+std::vector<double> renderTimes(const Scene& scene) {
+  if (scene.skinnedObjects.empty()) return {0.0};
+  const int32_t clip = scene.skinnedObjects.front().clip;
+  double later = 0.5;
+  if (clip >= 0 && size_t(clip) < scene.animations.size() && scene.animations[size_t(clip)].duration > 0.0)
+    later = 0.6 * scene.animations[size_t(clip)].duration;
+  return {0.0, later};
+}
+
+struct Frames {
+  FrameResult visbuf, forward;
+};
+
+Frames renderBoth(Renderer& r, const Camera& cam, double time) {
+  Frames f;
+  FrameOptions fo;
+  fo.lodErrorPixels = 0.0f;  // full detail: the forward path then draws exactly the same triangles
+  fo.readIds = true;
+  fo.animationTime = time;
+  fo.path = RenderPath::Visbuf;
+  auto vis = r.renderFrame(cam, fo);
+  fo.path = RenderPath::Forward;
+  auto fwd = r.renderFrame(cam, fo);
+  EXPECT_TRUE(vis.ok()) << (vis.ok() ? "" : vis.error().message);
+  EXPECT_TRUE(fwd.ok()) << (fwd.ok() ? "" : fwd.error().message);
+  if (vis.ok()) f.visbuf = std::move(*vis);
+  if (fwd.ok()) f.forward = std::move(*fwd);
+  return f;
+}
+
+// visbuf vs forward on one frame, with the Shading.* bounds. Returns the covered pixel count.
+size_t expectVisbufMatchesForward(const Frames& f, const std::string& name) {
+  size_t covered = 0, mismatch = 0;
+  std::vector<float> visSame = f.visbuf.color, fwdSame = f.forward.color;
+  for (size_t p = 0; p < f.visbuf.ids.size() / 2; ++p) {
+    covered += f.visbuf.ids[2 * p] != 0;
+    if (f.visbuf.ids[2 * p] != f.forward.ids[2 * p] || f.visbuf.ids[2 * p + 1] != f.forward.ids[2 * p + 1]) {
+      ++mismatch;
+      for (int c = 0; c < 4; ++c) visSame[p * 4 + c] = fwdSame[p * 4 + c] = 0.0f;
+    }
+  }
+  const ImageError e = compareColor(visSame, fwdSame);
+  std::printf("  %s: %zu px covered, %zu with another triangle; visbuf vs forward max %.2e, mean %.2e, PSNR %.1f dB\n",
+              name.c_str(), covered, mismatch, e.maxAbs, e.meanAbs, e.psnr);
+  EXPECT_EQ(f.visbuf.stats.trianglesDrawn, f.forward.stats.trianglesDrawn) << name;
+  if (test::testDevice().isCpu()) {
+    EXPECT_EQ(mismatch, 0u) << name;
+  } else {
+    EXPECT_LE(double(mismatch), 1e-3 * double(covered)) << name;
+  }
+  EXPECT_LE(e.maxAbs, kMaxAbs) << name;
+  EXPECT_LE(e.meanAbs, kMeanAbs) << name;
+  EXPECT_GE(e.psnr, kMinPsnr) << name;
+  EXPECT_GT(covered, 0u) << name << ": the default camera must see the scene";
+  return covered;
+}
+
+// The pack-loaded scene's frame against the in-memory one's: same IDs, colour within kPackMaxAbs.
+void expectSameFrame(const FrameResult& pack, const FrameResult& memory, const std::string& name) {
+  EXPECT_TRUE(pack.ids == memory.ids) << name << ": the pack-loaded scene shows other triangles";
+  ASSERT_EQ(pack.color.size(), memory.color.size()) << name;
+  double maxAbs = 0.0;
+  for (size_t i = 0; i < pack.color.size(); ++i)
+    maxAbs = std::max(maxAbs, double(std::abs(pack.color[i] - memory.color[i])));
+  EXPECT_LE(maxAbs, kPackMaxAbs) << name << ": pack-loaded vs in-memory colour";
+}
+
+class AssetBakeRender : public test::TempDirTest {};
+
+}  // namespace
+
+TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
+  if (!fs::is_directory(test::assetPath(""))) GTEST_SKIP() << "shared assets not present: " << test::assetPath("");
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  const auto start = std::chrono::steady_clock::now();
+  size_t rendered = 0, rejected = 0;
+  std::set<std::string> failedAsExpected;
+  for (const fs::path& file : assetFiles()) {
+    const std::string name = fs::relative(file, test::assetPath("")).string();
+    SCOPED_TRACE(name);
+    auto memory = bakeInMemory(file);
+    const auto bad = expectedFailures().find(file.filename().string());
+    if (bad != expectedFailures().end()) {
+      ASSERT_FALSE(memory.ok()) << name << " must be rejected";
+      EXPECT_EQ(memory.error().code, ErrorCode::MalformedInput) << memory.error().message;
+      EXPECT_NE(memory.error().message.find(bad->second), std::string::npos)
+          << "the message must say why (" << bad->second << "): " << memory.error().message;
+      EXPECT_NE(memory.error().message.find(file.filename().string()), std::string::npos)
+          << "the message must name the file: " << memory.error().message;
+      std::printf("%s: rejected as expected: %s\n", name.c_str(), memory.error().message.c_str());
+      failedAsExpected.insert(file.filename().string());
+      ++rejected;
+      continue;
+    }
+    ASSERT_TRUE(memory.ok()) << memory.error().message;
+
+    const fs::path packPath = dir_ / (file.stem().string() + ".vbp");
+    PackWriteReport written;
+    ASSERT_TRUE(writePack(*memory, packPath.string(), &written).ok());
+    auto pack = readPack(packPath.string());
+    ASSERT_TRUE(pack.ok()) << pack.error().message;
+    EXPECT_EQ(pack->totalTriangles(), memory->totalTriangles());
+    EXPECT_EQ(pack->objects.size(), memory->objects.size());
+    EXPECT_EQ(pack->textures.size(), memory->textures.size());
+    EXPECT_EQ(pack->skinnedObjects.size(), memory->skinnedObjects.size());
+
+    auto rMemory = Renderer::create(dev, *memory, {.width = kWidth, .height = kHeight});
+    auto rPack = Renderer::create(dev, *pack, {.width = kWidth, .height = kHeight});
+    ASSERT_TRUE(rMemory.ok()) << rMemory.error().message;
+    ASSERT_TRUE(rPack.ok()) << rPack.error().message;
+    std::printf("%s: %zu object(s), %llu triangles, %zu texture(s), pack %llu bytes\n", name.c_str(),
+                memory->objects.size(), static_cast<unsigned long long>(memory->totalTriangles()),
+                memory->textures.size(), static_cast<unsigned long long>(written.fileBytes));
+    for (double t : renderTimes(*memory)) {
+      const std::string frameName = fmt::format("{} t={:.2f}", name, t);
+      SCOPED_TRACE(frameName);
+      const Frames m = renderBoth(**rMemory, memory->defaultCamera, t);
+      const Frames p = renderBoth(**rPack, pack->defaultCamera, t);
+      if (HasFailure()) break;
+      expectVisbufMatchesForward(m, frameName);
+      expectSameFrame(p.visbuf, m.visbuf, frameName + " visbuf");
+      expectSameFrame(p.forward, m.forward, frameName + " forward");
+      if (HasFailure()) {
+        test::saveOnFailure("asset_bake_render_" + file.stem().string(), m.visbuf, m.forward);
+        break;
+      }
+    }
+    ++rendered;
+  }
+  // Every expected failure was met (a renamed or removed file would otherwise leave a rule untested).
+  for (const auto& [file, why] : expectedFailures()) {
+    EXPECT_TRUE(failedAsExpected.count(file)) << file << " (" << why << ") was not found in the assets folder";
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("%zu file(s) baked, packed and rendered, %zu rejected as expected, %.1f s\n", rendered, rejected,
+              seconds);
+  EXPECT_GT(rendered, 0u);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
