@@ -16,6 +16,7 @@
 // vertex data) and the Mesh_PrimitiveMode files that hold only points or lines ("no triangle geometry").
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -152,6 +153,60 @@ void expectSameFrame(const FrameResult& pack, const FrameResult& memory, const s
   EXPECT_LE(maxAbs, kPackMaxAbs) << name << ": pack-loaded vs in-memory colour";
 }
 
+// Round trip: the pack gives back the baked meshes exactly (vertices byte for byte, every LOD's indices).
+void expectSameGeometry(const Scene& pack, const Scene& memory) {
+  ASSERT_EQ(pack.meshes.size(), memory.meshes.size());
+  for (size_t i = 0; i < memory.meshes.size(); ++i) {
+    const Mesh& a = pack.meshes[i];
+    const Mesh& b = memory.meshes[i];
+    ASSERT_EQ(a.vertices.size(), b.vertices.size()) << "mesh " << i;
+    EXPECT_TRUE(std::memcmp(a.vertices.data(), b.vertices.data(), b.vertices.size() * sizeof(gpu::Vertex)) == 0)
+        << "mesh " << i << ": vertices differ after the round trip";
+    EXPECT_EQ(a.indices, b.indices) << "mesh " << i;
+    ASSERT_EQ(a.lods.size(), b.lods.size()) << "mesh " << i;
+    for (size_t l = 0; l < b.lods.size(); ++l) {
+      EXPECT_EQ(a.lods[l].firstIndex, b.lods[l].firstIndex) << "mesh " << i << " LOD " << l;
+      EXPECT_EQ(a.lods[l].indexCount, b.lods[l].indexCount) << "mesh " << i << " LOD " << l;
+      EXPECT_EQ(a.lods[l].error, b.lods[l].error) << "mesh " << i << " LOD " << l;
+    }
+  }
+}
+
+// Round trip with --quantize (in memory): same indices; every decoded position within the mesh's reported max
+// error, and within half a 16-bit step of the mesh's box (|extent| / 2 / 65535, plus float rounding of the
+// decode: 1e-6 of the largest coordinate) -- an independent bound on the writer's own measurement.
+void expectQuantizedRoundTrip(const Scene& memory, const std::string& name) {
+  PackWriteOptions po;
+  po.quantize = true;
+  PackWriteReport report;
+  auto bytes = serializePack(memory, po, &report);
+  ASSERT_TRUE(bytes.ok()) << bytes.error().message;
+  auto q = parsePack(bytes->data(), bytes->size(), name + " (quantised)");
+  ASSERT_TRUE(q.ok()) << q.error().message;
+  ASSERT_EQ(q->meshes.size(), memory.meshes.size());
+  for (size_t i = 0; i < memory.meshes.size(); ++i) {
+    const Mesh& a = q->meshes[i];
+    const Mesh& b = memory.meshes[i];
+    ASSERT_EQ(a.vertices.size(), b.vertices.size());
+    EXPECT_EQ(a.indices, b.indices) << "mesh " << i;
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (uint32_t v = 0; v < b.vertices.size(); ++v) {
+      lo = glm::min(lo, glm::dvec3(b.position(v)));
+      hi = glm::max(hi, glm::dvec3(b.position(v)));
+    }
+    const glm::dvec3 extent = hi - lo;
+    const glm::dvec3 magnitude = glm::max(glm::abs(lo), glm::abs(hi));
+    const double halfStep =
+        0.5 * glm::length(extent) / 65535.0 + 1e-6 * std::max({magnitude.x, magnitude.y, magnitude.z});
+    double maxError = 0.0;
+    for (uint32_t v = 0; v < b.vertices.size(); ++v)
+      maxError = std::max(maxError, glm::length(glm::dvec3(a.position(v)) - glm::dvec3(b.position(v))));
+    EXPECT_LE(maxError, double(report.quantization.meshMaxPositionError[i]) * (1.0 + 1e-6) + 1e-12)
+        << "mesh " << i << ": decoded positions beyond the reported error";
+    EXPECT_LE(maxError, halfStep) << "mesh " << i << ": more than half a 16-bit step of the mesh's box";
+  }
+}
+
 class AssetBakeRender : public test::TempDirTest {};
 
 }  // namespace
@@ -187,10 +242,11 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
     ASSERT_TRUE(writePack(*memory, packPath.string(), &written).ok());
     auto pack = readPack(packPath.string());
     ASSERT_TRUE(pack.ok()) << pack.error().message;
-    EXPECT_EQ(pack->totalTriangles(), memory->totalTriangles());
     EXPECT_EQ(pack->objects.size(), memory->objects.size());
     EXPECT_EQ(pack->textures.size(), memory->textures.size());
     EXPECT_EQ(pack->skinnedObjects.size(), memory->skinnedObjects.size());
+    expectSameGeometry(*pack, *memory);
+    expectQuantizedRoundTrip(*memory, name);
 
     auto rMemory = Renderer::create(dev, *memory, {.width = kWidth, .height = kHeight});
     auto rPack = Renderer::create(dev, *pack, {.width = kWidth, .height = kHeight});
