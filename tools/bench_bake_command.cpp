@@ -53,7 +53,9 @@ void addBenchBakeCommand(CLI::App& app, BenchBakeCommand& c, int argc, char** ar
   sub->add_option("--repeats", c.repeats, "measured runs per file (medians)")
       ->check(CLI::Range(1u, 1000u))
       ->capture_default_str();
-  sub->add_option("--warmup", c.warmup, "unmeasured runs before them")->check(CLI::Range(0u, 100u))->capture_default_str();
+  sub->add_option("--warmup", c.warmup, "unmeasured runs before them")
+      ->check(CLI::Range(0u, 100u))
+      ->capture_default_str();
   sub->add_option("--max-texture-size", c.maxTextureSize, "texture cap of the bake (power of two, 1..16384)")
       ->capture_default_str();
   sub->add_flag("--quantize", c.quantize, "also write, load and upload a pack of quantised vertices");
@@ -436,8 +438,8 @@ int runBenchBake(const BenchBakeCommand& c) {
   // bench-bake.md
   std::string md = fmt::format("`{}`\n\n", c.commandLine);
   md += fmt::format(
-      "{}, {}; {} warm-up + {} measured runs per file, times in ms as wall-clock median ± median absolute deviation (process CPU time median in brackets: on a "
-      "machine shared with other work the wall time grows with the contention, the CPU time does not); "
+      "{}, {}; {} warm-up + {} measured runs per file, times in ms as wall-clock median ± median absolute "
+      "deviation (process CPU time median in brackets: on a machine shared with other work the wall time grows with the contention, the CPU time does not); "
       "textures capped at {}. tris = triangles imported (LOD 0 before optimisation); ktri/s = thousand tris per "
       "second of geometry time, wall (CPU); "
       " bake MB/s = source bytes (glTF + its buffers and images) / (import + geometry + textures + write); "

@@ -11,7 +11,9 @@
 //   - visbuf vs forward (hardware interpolation): the bounds of tests/gpu/test_shading.cpp (same triangle at
 //     every pixel on a CPU device, at most 0.1 % of the covered pixels elsewhere; where the triangle is the
 //     same, every channel within 2e-3, mean within 5e-5, PSNR >= 80 dB);
-//   - at least one covered pixel per frame (the default camera frames the scene).
+//   - at least one covered pixel per frame (the default camera frames the scene);
+//   - the Mesh_PrimitiveMode strips, fans and indexed lists cover the same pixels as its plain TRIANGLES file,
+//     with the same colour within the visbuf-vs-forward bound.
 // Files known to be bad must fail with a precise message instead: AssimpBadData's BoxWithInfinites (infinite
 // vertex data) and the Mesh_PrimitiveMode files that hold only points or lines ("no triangle geometry").
 #include <algorithm>
@@ -218,6 +220,7 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
   const auto start = std::chrono::steady_clock::now();
   size_t rendered = 0, rejected = 0;
   std::set<std::string> failedAsExpected;
+  std::map<std::string, FrameResult> primitiveModes;  // Mesh_PrimitiveMode_NN.gltf -> its visbuf frame
   for (const fs::path& file : assetFiles()) {
     const std::string name = fs::relative(file, test::assetPath("")).string();
     SCOPED_TRACE(name);
@@ -262,6 +265,8 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
       const Frames p = renderBoth(**rPack, pack->defaultCamera, t);
       if (HasFailure()) break;
       expectVisbufMatchesForward(m, frameName);
+      if (t == 0.0 && file.filename().string().rfind("Mesh_PrimitiveMode_", 0) == 0)
+        primitiveModes[file.filename().string()] = m.visbuf;
       expectSameFrame(p.visbuf, m.visbuf, frameName + " visbuf");
       expectSameFrame(p.forward, m.forward, frameName + " forward");
       if (HasFailure()) {
@@ -270,6 +275,23 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
       }
     }
     ++rendered;
+  }
+  // Strips and fans (04, 05; indexed 11, 12) and the indexed lists (13-15) are the same quad as the plain
+  // non-indexed TRIANGLES file (06), framed by the same camera: the same pixels covered, the same colour
+  // (within the visbuf-vs-forward bound: normals are generated per file), whatever the triangle order.
+  if (const auto ref = primitiveModes.find("Mesh_PrimitiveMode_06.gltf"); ref != primitiveModes.end()) {
+    EXPECT_EQ(primitiveModes.size(), 8u) << "expected 8 Mesh_PrimitiveMode files with triangles";
+    for (const auto& [file, frame] : primitiveModes) {
+      size_t coverageDiffers = 0;
+      double maxAbs = 0.0;
+      for (size_t p = 0; p < frame.ids.size() / 2; ++p) {
+        coverageDiffers += (frame.ids[2 * p] != 0) != (ref->second.ids[2 * p] != 0);
+        for (int c = 0; c < 4; ++c)
+          maxAbs = std::max(maxAbs, double(std::abs(frame.color[4 * p + c] - ref->second.color[4 * p + c])));
+      }
+      EXPECT_EQ(coverageDiffers, 0u) << file << " vs Mesh_PrimitiveMode_06.gltf (TRIANGLES)";
+      EXPECT_LE(maxAbs, kMaxAbs) << file << " vs Mesh_PrimitiveMode_06.gltf (TRIANGLES)";
+    }
   }
   // Every expected failure was met (a renamed or removed file would otherwise leave a rule untested).
   for (const auto& [file, why] : expectedFailures()) {
