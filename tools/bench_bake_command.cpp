@@ -439,10 +439,10 @@ int runBenchBake(const BenchBakeCommand& c) {
   std::string md = fmt::format("`{}`\n\n", c.commandLine);
   md += fmt::format(
       "{}, {}; {} warm-up + {} measured runs per file, times in ms as wall-clock median ± median absolute "
-      "deviation (process CPU time median in brackets: on a machine shared with other work the wall time grows with the contention, the CPU time does not); "
-      "textures capped at {}. tris = triangles imported (LOD 0 before optimisation); ktri/s = thousand tris per "
-      "second of geometry time, wall (CPU); "
-      " bake MB/s = source bytes (glTF + its buffers and images) / (import + geometry + textures + write); "
+      "deviation (process CPU time median in brackets: on a machine shared with other work the wall time grows "
+      "with the contention, the CPU time does not); textures capped at {}. tris = triangles imported (LOD 0 "
+      "before optimisation); ktri/s = thousand tris per second of geometry time, wall (CPU); bake MB/s = source "
+      "bytes (glTF + its buffers and images) / (import + geometry + textures + write); "
       "load MB/s = pack bytes / load time; ×glTF = (import + geometry) / load; LOD err = the coarsest level's "
       "recorded error / mesh radius (max over meshes); resized = textures resized (non-power-of-two or over the "
       "cap) / textures.\n\n",
