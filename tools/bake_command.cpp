@@ -165,6 +165,21 @@ int runBake(const BakeCommand& c) {
   const double writeSeconds = secondsSince(writeStart);
   const double totalSeconds = secondsSince(start);
 
+  // Meshes that cannot be simplified as asked: buildMesh ends a chain early when a level would keep more than
+  // minReduction of the previous one (meshoptimizer found nothing more to remove: topology, borders, seams).
+  std::vector<bool> stalled(scene->meshes.size(), false);
+  for (size_t i = 0; i < scene->meshes.size(); ++i) {
+    const Mesh& m = scene->meshes[i];
+    const uint32_t coarsest = m.triangleCount(m.lods.size() - 1);
+    if (m.lods.size() < options.maxLods && coarsest > options.minTriangles) {
+      stalled[i] = true;
+      std::fprintf(stderr,
+                   "visbuf bake: warning: mesh %zu '%s' cannot be simplified below %u triangles: its LOD chain ends "
+                   "after %zu of %u level(s) (no simplification kept between 1 triangle and %.0f %% of them)\n",
+                   i, m.name.c_str(), coarsest, m.lods.size(), options.maxLods, 100.0 * options.minReduction);
+    }
+  }
+
   // Summary: per mesh, triangles in (the imported source) and out per LOD with its recorded error.
   nlohmann::json json;
   json["input"] = c.input;
@@ -184,6 +199,7 @@ int runBake(const BakeCommand& c) {
                          {"instances", instances[i]},
                          {"vertices", m.vertices.size()},
                          {"trianglesIn", in},
+                         {"simplificationStalled", bool(stalled[i])},
                          {"lods", nlohmann::json::array()}};
     // The error recorded in the pack: quantised, the mesh's measured max position error is added.
     const double extra = q.enabled ? double(q.meshMaxPositionError[i]) : 0.0;

@@ -79,6 +79,23 @@ struct BenchCommand {
 void addBenchCommand(CLI::App& app, BenchCommand& cmd, int argc, char** argv);
 int runBench(const BenchCommand& cmd);
 
+// visbuf bench-bake (tools/bench_bake_command.cpp): bake throughput and pack load time per glTF file of a
+// folder. Exit codes: 0 ok, 1 failure, 2 usage, 3 validation messages.
+struct BenchBakeCommand {
+  std::string assets = VISBUF_DEFAULT_ASSETS_DIR;  // searched recursively for .gltf / .glb
+  uint32_t repeats = 5;                            // measured runs per file
+  uint32_t warmup = 1;
+  uint32_t maxTextureSize = 2048;                  // as bake --max-texture-size
+  bool quantize = false;                           // also a quantised pack (write, load, upload, error)
+  std::string device = "auto";
+  bool validation = false;
+  std::string output = "bench-bake-out";
+  std::string commandLine;
+};
+
+void addBenchBakeCommand(CLI::App& app, BenchBakeCommand& cmd, int argc, char** argv);
+int runBenchBake(const BenchBakeCommand& cmd);
+
 // visbuf stress (tools/stress_command.cpp): named numerical-stability and scale cases with explicit bounds.
 // Exit codes: 0 every bound holds, 1 a bound failed / bad input, 2 usage, 3 validation messages.
 struct StressCommand {

@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   visbuf::tools::addBakeCommand(app, bake);
   visbuf::tools::BenchCommand bench;
   visbuf::tools::addBenchCommand(app, bench, argc, argv);
+  visbuf::tools::BenchBakeCommand benchBake;
+  visbuf::tools::addBenchBakeCommand(app, benchBake, argc, argv);
   visbuf::tools::StressCommand stress;
   visbuf::tools::addStressCommand(app, stress, argc, argv);
   try {
@@ -25,6 +27,7 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("render")) return visbuf::tools::runRender(render);
   if (app.got_subcommand("bake")) return visbuf::tools::runBake(bake);
   if (app.got_subcommand("bench")) return visbuf::tools::runBench(bench);
+  if (app.got_subcommand("bench-bake")) return visbuf::tools::runBenchBake(benchBake);
   if (app.got_subcommand("stress")) return visbuf::tools::runStress(stress);
   return 2;
 }
