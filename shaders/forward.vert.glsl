@@ -9,6 +9,7 @@ layout(location = 1) out vec4 outColor;
 layout(location = 2) flat out uint outMaterial;
 layout(location = 3) flat out uint outObject;
 layout(location = 4) out vec3 outPosition;  // camera-relative world
+layout(location = 5) out vec2 outUv0;
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
@@ -19,4 +20,5 @@ void main() {
   outColor = unpackColor(v.color);
   outMaterial = o.materialIndex;
   outObject = gl_InstanceIndex;
+  outUv0 = vec2(v.u, v.v);
 }

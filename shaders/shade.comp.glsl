@@ -29,6 +29,14 @@ void writeAttributes(ivec2 p, ObjectData o, Vertex v0, Vertex v1, Vertex v2, Bar
 }
 #endif
 
+// The face the rasteriser saw, as forward.frag's gl_FrontFacing (counter-clockwise on screen) and the object's
+// winding: the sign of the determinant of the clip positions' (x, y, w), valid for triangles crossing w = 0 too
+// (Olano & Greer, "Triangle Scan Conversion using 2D Homogeneous Coordinates", 1997).
+bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
+  bool ccw = determinant(mat3(c0.xyw, c1.xyw, c2.xyw)) < 0.0;
+  return ccw != ((o.flags & OBJECT_FLAG_FLIP_WINDING) != 0u);
+}
+
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
@@ -58,6 +66,8 @@ void main() {
 
   vec3 n = l.x * octDecode(v0.normal) + l.y * octDecode(v1.normal) + l.z * octDecode(v2.normal);
   vec3 normal = normalize(normalToWorld(o, n));
+  if ((materials[o.materialIndex].flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u && !frontFacing(o, c0, c1, c2))
+    normal = -normal;  // a double-sided material's back face shades with the flipped normal (glTF)
   vec4 vc = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
   vec4 baseColor = materials[o.materialIndex].baseColor * vc;
   vec3 position = l.x * objectToCamera(o, vertexPosition(v0)) + l.y * objectToCamera(o, vertexPosition(v1)) +

@@ -21,6 +21,15 @@
 #include "visibility.frag.h"
 #include "visibility.vert.h"
 #include "visibility_wide.frag.h"
+#include "visibility_masked.vert.h"
+#include "visibility_masked.frag.h"
+#include "visibility_masked_wide.frag.h"
+#include "visibility_masked_overdraw.frag.h"
+#include "visibility_masked_wide_overdraw.frag.h"
+#include "forward_masked.frag.h"
+#include "forward_masked_ids.frag.h"
+#include "forward_masked_overdraw.frag.h"
+#include "transparent.frag.h"
 
 namespace visbuf::gpu {
 
@@ -41,6 +50,15 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("forward_overdraw.frag", spv_forward_overdraw_frag)
   VB_SHADER("visibility_overdraw.frag", spv_visibility_overdraw_frag)
   VB_SHADER("visibility_wide_overdraw.frag", spv_visibility_wide_overdraw_frag)
+  VB_SHADER("visibility_masked.vert", spv_visibility_masked_vert)
+  VB_SHADER("visibility_masked.frag", spv_visibility_masked_frag)
+  VB_SHADER("visibility_masked_wide.frag", spv_visibility_masked_wide_frag)
+  VB_SHADER("visibility_masked_overdraw.frag", spv_visibility_masked_overdraw_frag)
+  VB_SHADER("visibility_masked_wide_overdraw.frag", spv_visibility_masked_wide_overdraw_frag)
+  VB_SHADER("forward_masked.frag", spv_forward_masked_frag)
+  VB_SHADER("forward_masked_ids.frag", spv_forward_masked_ids_frag)
+  VB_SHADER("forward_masked_overdraw.frag", spv_forward_masked_overdraw_frag)
+  VB_SHADER("transparent.frag", spv_transparent_frag)
 #undef VB_SHADER
   std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
   std::abort();
@@ -123,10 +141,18 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
   VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
   ds.depthTestEnable = VK_TRUE;
-  ds.depthWriteEnable = VK_TRUE;
+  ds.depthWriteEnable = desc.depthWrite ? VK_TRUE : VK_FALSE;
   ds.depthCompareOp = desc.depthCompare;
   std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorFormats.size());
-  for (auto& b : blends) b.colorWriteMask = 0xF;
+  for (auto& b : blends) {
+    b.colorWriteMask = 0xF;
+    if (desc.premultipliedBlend) {  // out = src + (1 - src.a) * dst
+      b.blendEnable = VK_TRUE;
+      b.srcColorBlendFactor = b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+      b.dstColorBlendFactor = b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+      b.colorBlendOp = b.alphaBlendOp = VK_BLEND_OP_ADD;
+    }
+  }
   VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
   cb.attachmentCount = static_cast<uint32_t>(blends.size());
   cb.pAttachments = blends.data();

@@ -16,7 +16,8 @@ gpu::ObjectData packObject(const Object& object, const Scene& scene) {
   d.meshIndex = object.mesh;
   d.materialIndex = object.material;
   d.maxScale = float(maxScaleOf(m) * (1.0 + 1e-6));
-  d.flags = 0;
+  // Mirrored instances keep their front faces front: the raster culls them from the other side.
+  d.flags = glm::determinant(glm::dmat3(m)) < 0.0 ? OBJECT_FLAG_FLIP_WINDING : 0u;
   return d;
 }
 
@@ -118,6 +119,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   }
   std::vector<gpu::MaterialData> materials;
   for (const Material& m : scene.materials) materials.push_back(packMaterial(m, scene));
+  g.objectList.reserve(objects.size());
+  for (const gpu::ObjectData& o : objects) g.objectList.push_back(gpu::drawListOf(o.flags, materials[o.materialIndex].flags));
 
   const uint64_t limit = device.properties().limits.maxStorageBufferRange;
   auto check = [&](const char* what, uint64_t bytes) -> Status {

@@ -54,6 +54,18 @@ struct ObjectData {
 };
 #define OBJECT_FLAG_FLIP_WINDING 1u  // negative determinant: front faces are clockwise
 
+// The draw list of an object (config.h DRAW_LIST_*) from its flags and its material's flags; DRAW_LIST_NONE for
+// BLEND materials. The cull pass and the CPU (list capacities, forward path) route with this one function.
+#ifdef __cplusplus
+inline
+#endif
+uint drawListOf(uint objectFlags, uint materialFlags) {
+  if ((materialFlags & MATERIAL_FLAG_BLEND) != 0u) return DRAW_LIST_NONE;
+  uint base = (materialFlags & MATERIAL_FLAG_MASK) != 0u ? DRAW_LIST_MASKED : DRAW_LIST_OPAQUE;
+  if ((materialFlags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u) return base + 2u;
+  return (objectFlags & OBJECT_FLAG_FLIP_WINDING) != 0u ? base + 1u : base;
+}
+
 // One texture slot of a material (48 bytes). image: TEXTURE_NONE, or (size class << 16) | layer of the baked
 // image (scene/texture.h); samplerBits: TEXTURE_SAMPLER_* bits; uv' = mat3x2(transform01.xy, transform01.zw,
 // transform2.xy) * vec3(uv, 1) (KHR_texture_transform, identity without it).
