@@ -83,7 +83,7 @@ void main() {
     // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
     ObjectData o = objectAt(id);
     meshIndex = o.meshIndex;
-    list = drawListOf(o.flags, materials[o.materialIndex].flags);
+    list = objectDrawList(o.flags);  // set at upload (drawListOf): no material fetch per object
     vec4 sphere = meshes[meshIndex].boundsSphere;
     vec3 c = objectToCamera(o, sphere.xyz);
     float r = sphere.w * o.maxScale;

@@ -44,7 +44,8 @@
 // Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
 // state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and
 // capacity; a list with no objects in the scene has capacity 0 and is never recorded. BLEND objects are in no
-// list (the transparency pass draws them). FLIPPED: negative-determinant transforms, front faces clockwise.
+// list (the transparency pass draws them); ObjectData.flags holds each object's list (objectDrawList). FLIPPED:
+// negative-determinant transforms, front faces clockwise.
 #define DRAW_LIST_OPAQUE 0
 #define DRAW_LIST_OPAQUE_FLIPPED 1
 #define DRAW_LIST_OPAQUE_DOUBLE_SIDED 2  // no face culling
