@@ -2,6 +2,7 @@
 //
 //   setup ─► cull.comp ─► visibility.{vert,frag} ─► shade.comp ─► readback      (visbuf path)
 //   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
+//   both: ─► transparent_pass before the readback, only for scenes with BLEND materials
 //
 // Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
 // crashed on a dispatch + barrier + timestamps in one command buffer).
@@ -409,8 +410,7 @@ std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camer
                                                                      FrameStats& st) const {
   // Culled like the forward path's objects (they are not in the GPU's draw lists), then sorted back to front.
   std::vector<passes::TransparentDraw> out;
-  if (st.lodHistogram.empty()) st.lodHistogram.assign(MAX_LODS, 0);
-  FrameStats mine;
+  FrameStats mine;  // (their triangles and LODs are reported apart from the opaque draws')
   mine.lodHistogram.assign(MAX_LODS, 0);
   const glm::dvec3 forwardDir = glm::normalize(camera.target - camera.position);
   for (uint32_t i : blendObjects) {
@@ -471,7 +471,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   constexpr VkAccessFlags2 kDepthAccess =
       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
 
-  auto recordCull = [&](uint32_t phase, uint32_t drawBase, const char* name) {
+  auto recordCull = [&](uint32_t phase, const char* name) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
     // Counters reset (setup) and, in the late phase, the pyramid and the early draws' reads.
@@ -482,7 +482,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     uint32_t t = timestamps->begin(cmd, name);
-    cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase, drawBase);
+    cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
@@ -530,13 +530,13 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     recordRaster(CULL_PHASE_EARLY, true, occlusion ? "raster early" : "visibility");
     if (occlusion) recordRaster(CULL_PHASE_LATE, false, "raster late");
   } else if (!occlusion) {
-    recordCull(CULL_PHASE_EARLY, 0, "cull");
+    recordCull(CULL_PHASE_EARLY, "cull");
     recordRaster(CULL_PHASE_EARLY, true, "visibility");
   } else {
-    recordCull(CULL_PHASE_EARLY, 0, "cull early");
+    recordCull(CULL_PHASE_EARLY, "cull early");
     recordRaster(CULL_PHASE_EARLY, true, "raster early");
     if (!usePyramid) {  // the late phase runs frustum + sub-pixel tests only
-      recordCull(CULL_PHASE_LATE, capacity, "cull late");
+      recordCull(CULL_PHASE_LATE, "cull late");
       recordRaster(CULL_PHASE_LATE, false, "raster late");
     }
   }
@@ -553,7 +553,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     pyramid.record(cmd);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
-    recordCull(CULL_PHASE_LATE, capacity, "cull late");
+    recordCull(CULL_PHASE_LATE, "cull late");
     recordRaster(CULL_PHASE_LATE, false, "raster late");
   }
 
