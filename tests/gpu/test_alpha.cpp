@@ -487,3 +487,30 @@ TEST(Transparency, AlphaBlendModeTestBlendsAndCutsOut) {
   }
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
+
+// A scene of BLEND objects only: no draw list has objects (nothing rasterised into the IDs), and the
+// transparency pass alone draws, the same in both paths.
+TEST(Transparency, OnlyBlendedObjects) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene s;
+  s.meshes.push_back(plainCard());
+  s.materials = {material(AlphaMode::Blend, true, {0.9f, 0.5f, 0.1f, 0.4f})};
+  s.objects = {{placeCard({0.0, 0.0, 0.0}, 2.0), 0, 0}, {placeCard({0.5, 0.3, -1.0}, 2.0), 0, 0}};
+  s.defaultCamera.position = {0.0, 0.0, 5.0};
+  auto r = Renderer::create(dev, s, {.width = 64, .height = 48});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  auto vis = render(**r, s.defaultCamera, RenderPath::Visbuf, CullMode::Occlusion);
+  auto fwd = render(**r, s.defaultCamera, RenderPath::Forward, CullMode::Frustum);
+  ASSERT_TRUE(vis.ok() && fwd.ok());
+  EXPECT_EQ(vis->stats.drawsRendered, 0u);
+  EXPECT_EQ(vis->stats.transparentDraws, 2u);
+  EXPECT_EQ(fwd->stats.transparentDraws, 2u);
+  EXPECT_TRUE(std::all_of(vis->ids.begin(), vis->ids.end(), [](uint32_t v) { return v == 0; }));
+  const test::ImageError e = test::compareColor(vis->color, fwd->color);
+  EXPECT_LE(e.maxAbs, kMaxAbs);
+  size_t tinted = 0;  // pixels the cards changed from the background
+  for (size_t p = 0; p < vis->color.size(); p += 4) tinted += std::abs(vis->color[p] - 0.10f) > 0.05f;
+  EXPECT_GT(tinted, 200u);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
