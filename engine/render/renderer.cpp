@@ -418,10 +418,13 @@ std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camer
     glm::dvec3 centre;
     if (!cullObject(i, camera, math, options, mine, t.draw, centre)) continue;
     const Material& m = scene.materials[scene.objects[i].material];
-    // Face culling as an opaque object of the same winding and sidedness.
-    t.draw.list = m.doubleSided ? DRAW_LIST_OPAQUE_DOUBLE_SIDED
-                  : glm::determinant(glm::dmat3(scene.objects[i].transform)) < 0.0 ? DRAW_LIST_OPAQUE_FLIPPED
-                                                                                      : DRAW_LIST_OPAQUE;
+    // Face culling as an opaque object of the same winding and sidedness (a skinned object: its placement's).
+    glm::dmat4 placed = scene.objects[i].transform;
+    for (const SkinnedObject& so : scene.skinnedObjects)
+      if (so.object == i) placed = so.placement;
+    t.draw.list = m.doubleSided                                   ? DRAW_LIST_OPAQUE_DOUBLE_SIDED
+                  : glm::determinant(glm::dmat3(placed)) < 0.0 ? DRAW_LIST_OPAQUE_FLIPPED
+                                                                  : DRAW_LIST_OPAQUE;
     t.viewDepth = glm::dot(centre - camera.position, forwardDir);
     out.push_back(t);
   }
