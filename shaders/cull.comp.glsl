@@ -12,12 +12,14 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
 #include "common.glsl"
 
 layout(local_size_x = CULL_WORKGROUP_SIZE) in;
 layout(std430, set = 0, binding = BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
 layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
 layout(std430, set = 0, binding = BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
+layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
 layout(set = 0, binding = BINDING_PYRAMID) uniform sampler2D pyramid;
 layout(push_constant) uniform Push { PassConstants pc; };
 
@@ -74,21 +76,23 @@ void main() {
   bool draw = false;
   uint lod = 0;
   uint meshIndex = 0;
+  uint list = DRAW_LIST_NONE;
   uint frustumCulled = 0, occluded = 0, subpixel = 0;
   if (valid) {
     // Only the fields needed are loaded: copying the whole 224-byte MeshData per thread made the pass
     // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
     ObjectData o = objectAt(id);
     meshIndex = o.meshIndex;
+    list = objectDrawList(o.flags);  // set at upload (drawListOf): no material fetch per object
     vec4 sphere = meshes[meshIndex].boundsSphere;
     vec3 c = objectToCamera(o, sphere.xyz);
     float r = sphere.w * o.maxScale;
     bool inFrustum = frame.cullMode == CULL_NONE || frustumVisible(c, r);
     if (frame.cullMode != CULL_OCCLUSION) {
-      draw = inFrustum;
+      draw = inFrustum && list != DRAW_LIST_NONE;  // BLEND objects: the transparency pass
       frustumCulled = inFrustum ? 0u : 1u;
     } else if (pc.phase == CULL_PHASE_EARLY) {
-      draw = inFrustum && history[id] != 0u;  // culled objects are counted by the late phase
+      draw = inFrustum && history[id] != 0u && list != DRAW_LIST_NONE;  // culled ones: counted late
     } else {
       bool drawnEarly = inFrustum && history[id] != 0u;  // exactly the early phase's decision
       uint test = inFrustum ? occlusionTest(c, r) : 3u;
@@ -96,7 +100,7 @@ void main() {
       occluded = test == 1u ? 1u : 0u;
       subpixel = test == 2u ? 1u : 0u;
       history[id] = test == 0u ? 1u : 0u;
-      draw = test == 0u && !drawnEarly;
+      draw = test == 0u && !drawnEarly && list != DRAW_LIST_NONE;
     }
     if (draw && frame.lodErrorPixels > 0.0) {
       // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist.
@@ -114,25 +118,38 @@ void main() {
   uint culledSum = subgroupAdd(frustumCulled);
   uint occludedSum = subgroupAdd(occluded);
   uint subpixelSum = subgroupAdd(subpixel);
-  uvec4 ballot = subgroupBallot(draw);
-  uint drawCount = subgroupBallotBitCount(ballot);
+  // Slots: one atomic per subgroup and draw list present in it (a scene with one list loops once).
   const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
-  uint base = 0;
   if (subgroupElect()) {
     if (culledSum > 0) atomicAdd(stats[STAT_FRUSTUM_CULLED], culledSum);
     if (occludedSum > 0) atomicAdd(stats[STAT_OCCLUSION_CULLED], occludedSum);
     if (subpixelSum > 0) atomicAdd(stats[STAT_SUBPIXEL_CULLED], subpixelSum);
-    if (drawCount > 0) base = atomicAdd(stats[counter], drawCount);
   }
-  base = subgroupBroadcastFirst(base);
+  uint slot = 0;
+  bool pending = draw;
+  while (subgroupAny(pending)) {
+    uint current = subgroupMin(pending ? list : DRAW_LIST_NONE);
+    bool mine = pending && list == current;
+    uvec4 ballot = subgroupBallot(mine);
+    uint count = subgroupBallotBitCount(ballot);
+    uint base = 0;
+    if (subgroupElect()) {
+      atomicAdd(stats[counter], count);
+      base = atomicAdd(stats[STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + current], count);
+    }
+    base = subgroupBroadcastFirst(base);
+    if (mine) slot = base + subgroupBallotExclusiveBitCount(ballot);
+    pending = pending && !mine;
+  }
   if (!draw) return;
-  uint slot = base + subgroupBallotExclusiveBitCount(ballot);
-  if (slot >= frame.drawCapacity) {
+  uvec4 region = drawLists[list];  // x: early first slot, y: late first slot, z: capacity
+  if (slot >= region.z) {
     atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
     return;
   }
   LodData l = meshes[meshIndex].lods[lod];
-  draws[pc.drawBase + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
+  uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
+  draws[first + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
   atomicAdd(stats[STAT_TRIANGLES_DRAWN], l.indexCount / 3u);
   atomicAdd(stats[STAT_LOD_HISTOGRAM + lod], 1u);
 }

@@ -12,6 +12,11 @@
 
 #include "lighting.glsl"
 
+// 0: the untextured variant of a material shader (shaders/CMakeLists.txt), without any sampling code.
+#ifndef VB_TEXTURED
+#define VB_TEXTURED 1
+#endif
+
 layout(set = 0, binding = BINDING_TEXTURE_CLASSES) uniform texture2DArray textureClasses[MAX_TEXTURE_CLASSES];
 // The scene's texture class count (gpu::Specialization): the sampling code of the classes beyond it is removed
 // when the pipeline is compiled (all of it for an untextured scene).
@@ -105,12 +110,16 @@ vec4 sampleImage(uint image, uint bits, vec2 uv, vec2 duvdx, vec2 duvdy) {
 // A material's texture slot at the pixel: its TEXCOORD set, KHR_texture_transform (applied to the gradients
 // too), the sample. White where the slot has no texture.
 vec4 sampleSlot(TextureSlotData slot, SurfaceInputs si) {
+#if !VB_TEXTURED
+  return vec4(1.0);
+#else
   if (VB_TEXTURE_CLASSES == 0u || slot.image == TEXTURE_NONE) return vec4(1.0);
   bool second = ((slot.samplerBits >> TEXTURE_SAMPLER_TEXCOORD_SHIFT) & 0xffu) == 1u;
   vec2 uv = second ? si.uv1 : si.uv0;
   vec2 dx = second ? si.duv1dx : si.duv0dx, dy = second ? si.duv1dy : si.duv0dy;
   mat2 m = mat2(slot.transform01.xy, slot.transform01.zw);
   return sampleImage(slot.image, slot.samplerBits, m * uv + slot.transform2.xy, m * dx, m * dy);
+#endif
 }
 
 // Alpha of a material at the pixel (base colour factor x texture x vertex colour), for MASK and BLEND.
@@ -150,13 +159,13 @@ Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
   vec4 base = m.baseColor * si.color * sampleSlot(m.textures[TEXTURE_SLOT_BASE_COLOR], si);
   vec4 mr = sampleSlot(m.textures[TEXTURE_SLOT_METALLIC_ROUGHNESS], si);
   float occlusion = 1.0;
-  if (VB_TEXTURE_CLASSES > 0u && m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
+  if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
     occlusion = 1.0 + m.params.z * (sampleSlot(m.textures[TEXTURE_SLOT_OCCLUSION], si).r - 1.0);
   vec3 emissive = m.emissive.rgb;
-  if (VB_TEXTURE_CLASSES > 0u && m.textures[TEXTURE_SLOT_EMISSIVE].image != TEXTURE_NONE)
+  if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && m.textures[TEXTURE_SLOT_EMISSIVE].image != TEXTURE_NONE)
     emissive *= sampleSlot(m.textures[TEXTURE_SLOT_EMISSIVE], si).rgb;
   TextureSlotData ns = m.textures[TEXTURE_SLOT_NORMAL];
-  if (VB_TEXTURE_CLASSES > 0u && ns.image != TEXTURE_NONE) {
+  if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && ns.image != TEXTURE_NONE) {
     vec3 t, b;
     bool second = ((ns.samplerBits >> TEXTURE_SAMPLER_TEXCOORD_SHIFT) & 0xffu) == 1u;
     if (tangentFrame(si, n, second, t, b)) {

@@ -30,6 +30,14 @@ void writeAttributes(ivec2 p, ObjectData o, Vertex v0, Vertex v1, Vertex v2, Bar
 }
 #endif
 
+// The face the rasteriser saw, as forward.frag's gl_FrontFacing (counter-clockwise on screen) and the object's
+// winding: the sign of the determinant of the clip positions' (x, y, w), valid for triangles crossing w = 0 too
+// (Olano & Greer, "Triangle Scan Conversion using 2D Homogeneous Coordinates", 1997).
+bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
+  bool ccw = determinant(mat3(c0.xyw, c1.xyw, c2.xyw)) < 0.0;
+  return ccw != ((o.flags & OBJECT_FLAG_FLIP_WINDING) != 0u);
+}
+
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
@@ -88,9 +96,7 @@ void main() {
     }
   }
   si.color = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
-  // Orientation as the rasteriser sees it (counter-clockwise front faces; the homogeneous determinant keeps
-  // its sign for triangles crossing w = 0).
-  si.frontFacing = determinant(mat3(c0.xyw, c1.xyw, c2.xyw)) < 0.0;
+  si.frontFacing = frontFacing(o, c0, c1, c2);
   Surface s = evaluateMaterial(o.materialIndex, si);
   imageStore(colorOut, p, vec4(shadeSurface(s, uvec2(p)), 1.0));
 #if WRITE_ATTRIBUTES

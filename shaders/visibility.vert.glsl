@@ -1,15 +1,34 @@
 #version 460
 // Visibility pass, vertex stage: pulls the vertex from the unified pool (gl_VertexIndex already
 // includes the draw's vertexOffset); gl_InstanceIndex is firstInstance = object ID.
+// ALPHA_MASK variant (masked draw lists): also the material and what maskAlpha() needs, interpolated.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_ARB_shader_draw_parameters : require
 #include "common.glsl"
 
 layout(location = 0) flat out uint outDrawSlot;
+#if ALPHA_MASK
+layout(location = 1) flat out uint outMaterial;
+layout(location = 2) out vec2 outUv0;
+layout(location = 3) out vec2 outUv1;
+layout(location = 4) out vec4 outColor;
+#endif
 layout(push_constant) uniform Push { PassConstants pc; };
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
-  gl_Position = clipPosition(o, vertexPosition(vertexAt(gl_VertexIndex)));
+  Vertex v = vertexAt(gl_VertexIndex);
+  gl_Position = clipPosition(o, vertexPosition(v));
   outDrawSlot = pc.drawBase + gl_DrawIDARB;  // late-phase draws follow the early ones
+#if ALPHA_MASK
+  outMaterial = o.materialIndex;
+  outUv0 = vec2(v.u, v.v);
+  outUv1 = vec2(0.0);
+  MeshData m = meshes[o.meshIndex];
+  if (m.extraOffset != EXTRA_NONE) {
+    VertexExtra e = vertexExtras[m.extraOffset + uint(gl_VertexIndex) - m.vertexOffset];
+    outUv1 = vec2(e.u1, e.v1);
+  }
+  outColor = unpackColor(v.color);
+#endif
 }

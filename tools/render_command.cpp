@@ -30,7 +30,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->capture_default_str();
   sub->add_option("--lod-error", c.lodError, "LOD threshold in pixels of projected error")->capture_default_str();
   sub->add_flag("--no-lod", c.noLod, "always draw the full-detail mesh");
-  sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per frame (default: one per object)");
+  sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per phase and draw list (default: one per object)");
   sub->add_flag("--wide-ids", c.wideIds, "force the 64-bit visibility target");
   sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
   sub->add_option("--time", c.time, "animation time in seconds (skinned scenes: every instance's pose)")

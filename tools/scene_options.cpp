@@ -15,7 +15,7 @@
 namespace visbuf::tools {
 
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
-  app.add_option("--scene", o.scene, "field | city | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
+  app.add_option("--scene", o.scene, "field | city | foliage | foliage-opaque | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
       ->capture_default_str();
   app.add_option("--objects,--instances", o.objects, "number of objects (field: instances; city: approx. total)");
   app.add_option("--seed", o.seed, "scene generator seed")->capture_default_str();
@@ -44,6 +44,13 @@ Result<Scene> loadScene(const SceneOptions& o) {
     return makeFieldScene(p);
   }
   if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+  if (o.scene == "foliage" || o.scene == "foliage-opaque") {  // alpha-masked cards; the same cards opaque
+    FoliageParams p;
+    if (o.objects) p.cards = o.objects;
+    p.seed = o.seed;
+    p.masked = o.scene == "foliage";
+    return makeFoliageScene(p);
+  }
   if (o.scene == "city") {
     CityParams p;
     if (o.objects) p.objects = o.objects;

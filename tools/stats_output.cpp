@@ -17,6 +17,9 @@ std::string formatStats(const FrameStats& s) {
                      s.objectsTested, s.frustumCulled, s.occlusionCulled, s.subpixelCulled, s.drawsRendered,
                      s.drawsEarly, s.drawsLate);
   out += fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
+  if (s.transparentDraws)
+    out += fmt::format("transparent   {} objects, {} triangles (sorted back to front)\n", s.transparentDraws,
+                       s.transparentTriangles);
   std::string lods;
   for (size_t i = 0; i < s.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.lodHistogram[i]);
   out += fmt::format("lod histogram [{}]\n", lods);
@@ -61,6 +64,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["drawCapacity"] = s.drawCapacity;
   j["drawOverflow"] = s.drawOverflow;
   j["trianglesDrawn"] = s.trianglesDrawn;
+  j["transparentDraws"] = s.transparentDraws;
+  j["transparentTriangles"] = s.transparentTriangles;
   j["lodHistogram"] = s.lodHistogram;
   j["ids"] = {{"wide", s.ids.wide}, {"triangleBits", s.ids.triangleBits}, {"slotBits", s.ids.slotBits},
               {"description", s.ids.describe()}};

@@ -21,10 +21,33 @@
 #include "visibility.frag.h"
 #include "visibility.vert.h"
 #include "visibility_wide.frag.h"
+#include "visibility_masked.vert.h"
+#include "visibility_masked.frag.h"
+#include "visibility_masked_wide.frag.h"
+#include "visibility_masked_overdraw.frag.h"
+#include "visibility_masked_wide_overdraw.frag.h"
+#include "forward_masked.frag.h"
+#include "forward_masked_ids.frag.h"
+#include "forward_masked_overdraw.frag.h"
+#include "transparent.frag.h"
+#include "visibility_masked_textured.frag.h"
+#include "visibility_masked_wide_textured.frag.h"
+#include "visibility_masked_overdraw_textured.frag.h"
+#include "visibility_masked_wide_overdraw_textured.frag.h"
+#include "shade_textured.comp.h"
+#include "shade_attributes_textured.comp.h"
+#include "forward_textured.frag.h"
+#include "forward_ids_textured.frag.h"
+#include "forward_overdraw_textured.frag.h"
+#include "forward_masked_textured.frag.h"
+#include "forward_masked_ids_textured.frag.h"
+#include "forward_masked_overdraw_textured.frag.h"
+#include "transparent_textured.frag.h"
 
 namespace visbuf::gpu {
 
-std::span<const uint32_t> shaderCode(const std::string& name) {
+namespace {
+std::span<const uint32_t> findShader(const std::string& name) {
 #define VB_SHADER(file, sym) \
   if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
   VB_SHADER("cull.comp", spv_cull_comp)
@@ -41,14 +64,48 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("forward_overdraw.frag", spv_forward_overdraw_frag)
   VB_SHADER("visibility_overdraw.frag", spv_visibility_overdraw_frag)
   VB_SHADER("visibility_wide_overdraw.frag", spv_visibility_wide_overdraw_frag)
+  VB_SHADER("visibility_masked.vert", spv_visibility_masked_vert)
+  VB_SHADER("visibility_masked.frag", spv_visibility_masked_frag)
+  VB_SHADER("visibility_masked_wide.frag", spv_visibility_masked_wide_frag)
+  VB_SHADER("visibility_masked_overdraw.frag", spv_visibility_masked_overdraw_frag)
+  VB_SHADER("visibility_masked_wide_overdraw.frag", spv_visibility_masked_wide_overdraw_frag)
+  VB_SHADER("forward_masked.frag", spv_forward_masked_frag)
+  VB_SHADER("forward_masked_ids.frag", spv_forward_masked_ids_frag)
+  VB_SHADER("forward_masked_overdraw.frag", spv_forward_masked_overdraw_frag)
+  VB_SHADER("transparent.frag", spv_transparent_frag)
+  VB_SHADER("visibility_masked_textured.frag", spv_visibility_masked_textured_frag)
+  VB_SHADER("visibility_masked_wide_textured.frag", spv_visibility_masked_wide_textured_frag)
+  VB_SHADER("visibility_masked_overdraw_textured.frag", spv_visibility_masked_overdraw_textured_frag)
+  VB_SHADER("visibility_masked_wide_overdraw_textured.frag", spv_visibility_masked_wide_overdraw_textured_frag)
+  VB_SHADER("shade_textured.comp", spv_shade_textured_comp)
+  VB_SHADER("shade_attributes_textured.comp", spv_shade_attributes_textured_comp)
+  VB_SHADER("forward_textured.frag", spv_forward_textured_frag)
+  VB_SHADER("forward_ids_textured.frag", spv_forward_ids_textured_frag)
+  VB_SHADER("forward_overdraw_textured.frag", spv_forward_overdraw_textured_frag)
+  VB_SHADER("forward_masked_textured.frag", spv_forward_masked_textured_frag)
+  VB_SHADER("forward_masked_ids_textured.frag", spv_forward_masked_ids_textured_frag)
+  VB_SHADER("forward_masked_overdraw_textured.frag", spv_forward_masked_overdraw_textured_frag)
+  VB_SHADER("transparent_textured.frag", spv_transparent_textured_frag)
 #undef VB_SHADER
-  std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
-  std::abort();
+  return {};
+}
+}  // namespace
+
+std::span<const uint32_t> shaderCode(const std::string& name) {
+  std::span<const uint32_t> code = findShader(name);
+  if (code.empty()) {
+    std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
+    std::abort();
+  }
+  return code;
 }
 
 namespace {
-VkShaderModule createModule(Device& device, const std::string& name) {
-  auto code = shaderCode(name);
+// textured: the NAME_textured.STAGE variant where the shader has one (material shaders, shaders/CMakeLists.txt).
+VkShaderModule createModule(Device& device, const std::string& name, bool textured) {
+  std::span<const uint32_t> code;
+  if (textured) code = findShader(name.substr(0, name.rfind('.')) + "_textured" + name.substr(name.rfind('.')));
+  if (code.empty()) code = shaderCode(name);
   VkShaderModuleCreateInfo ci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   ci.codeSize = code.size_bytes();
   ci.pCode = code.data();
@@ -79,7 +136,7 @@ VkSpecializationInfo specializationInfo(const uint32_t (&values)[2]) { return {2
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization specialization) {
-  VkShaderModule module = createModule(device, shader);
+  VkShaderModule module = createModule(device, shader, specialization.textureClasses > 0);
   const uint32_t values[2] = {specialization.windowed, specialization.textureClasses};
   const VkSpecializationInfo spec = specializationInfo(values);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
@@ -96,8 +153,8 @@ Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const st
 }
 
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc) {
-  VkShaderModule vs = createModule(device, desc.vertexShader);
-  VkShaderModule fs = createModule(device, desc.fragmentShader);
+  VkShaderModule vs = createModule(device, desc.vertexShader, desc.textureClasses > 0);
+  VkShaderModule fs = createModule(device, desc.fragmentShader, desc.textureClasses > 0);
   VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
                                                {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
   stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
@@ -125,10 +182,18 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
   VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
   ds.depthTestEnable = VK_TRUE;
-  ds.depthWriteEnable = VK_TRUE;
+  ds.depthWriteEnable = desc.depthWrite ? VK_TRUE : VK_FALSE;
   ds.depthCompareOp = desc.depthCompare;
   std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorFormats.size());
-  for (auto& b : blends) b.colorWriteMask = 0xF;
+  for (auto& b : blends) {
+    b.colorWriteMask = 0xF;
+    if (desc.premultipliedBlend) {  // out = src + (1 - src.a) * dst
+      b.blendEnable = VK_TRUE;
+      b.srcColorBlendFactor = b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+      b.dstColorBlendFactor = b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+      b.colorBlendOp = b.alphaBlendOp = VK_BLEND_OP_ADD;
+    }
+  }
   VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
   cb.attachmentCount = static_cast<uint32_t>(blends.size());
   cb.pAttachments = blends.data();

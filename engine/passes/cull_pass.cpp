@@ -9,10 +9,10 @@ CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t
 }
 
 void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
-                      uint32_t phase, uint32_t drawBase) const {
+                      uint32_t phase) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
-  gpu::PassConstants pc{phase, drawBase, 0, 0};
+  gpu::PassConstants pc{phase, 0, 0, 0};  // (drawBase: the visibility pass's; lists come from BINDING_DRAW_LISTS)
   vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
 }

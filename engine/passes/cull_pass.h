@@ -1,5 +1,6 @@
-// Cull pass (shaders/cull.comp.glsl): one thread per object, frustum + LOD, appends draw commands.
-// Reads: frame, objects, meshes. Writes: draws (indirect arguments), stats (counters, draw count).
+// Cull pass (shaders/cull.comp.glsl): one thread per object, frustum + LOD, appends draw commands to the
+// object's draw list (config.h DRAW_LIST_*). Reads: frame, objects, meshes, draw lists (BINDING_DRAW_LISTS: each
+// list's region per phase). Writes: draws (indirect arguments), stats (counters, one draw count per list).
 #pragma once
 
 #include "gpu/pipeline.h"
@@ -9,10 +10,10 @@ namespace visbuf::passes {
 struct CullPass {
   gpu::Pipeline pipeline;
   static CullPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
-  // phase: CULL_PHASE_EARLY/LATE; drawBase: first slot of this phase in the draw buffer.
-  // Occlusion mode also reads the depth pyramid and reads/writes the per-object history.
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount, uint32_t phase,
-              uint32_t drawBase) const;
+  // phase: CULL_PHASE_EARLY/LATE. Occlusion mode also reads the depth pyramid and reads/writes the per-object
+  // history.
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
+              uint32_t phase) const;
 };
 
 }  // namespace visbuf::passes

@@ -1,24 +1,31 @@
 #include "passes/forward_pass.h"
 
+#include <string>
+
 #include "passes/visibility_pass.h"
 
 namespace visbuf::passes {
 
-ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
-  gpu::GraphicsPipelineDesc d;
-  d.windowed = spec.windowed;
-  d.textureClasses = spec.textureClasses;
-  d.vertexShader = "forward.vert";
-  d.fragmentShader = "forward.frag";
-  d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
+ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask) {
   ForwardPass p;
-  p.pipeline = gpu::createGraphicsPipeline(device, layout, d);
-  d.fragmentShader = "forward_ids.frag";
-  d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT, VK_FORMAT_R32G32_UINT};
-  p.pipelineWithIds = gpu::createGraphicsPipeline(device, layout, d);
-  d.fragmentShader = "forward_overdraw.frag";
-  d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
-  p.pipelineOverdraw = gpu::createGraphicsPipeline(device, layout, d);
+  for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
+    if (!(listMask >> list & 1u)) continue;
+    const std::string prefix = drawListMasked(list) ? "forward_masked" : "forward";
+    gpu::GraphicsPipelineDesc d;
+    d.windowed = spec.windowed;
+    d.textureClasses = spec.textureClasses;
+    d.cullMode = drawListCullMode(list);
+    d.vertexShader = "forward.vert";
+    d.fragmentShader = prefix + ".frag";
+    d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
+    p.pipelines[list][Plain] = gpu::createGraphicsPipeline(device, layout, d);
+    d.fragmentShader = prefix + "_ids.frag";
+    d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT, VK_FORMAT_R32G32_UINT};
+    p.pipelines[list][WithIds] = gpu::createGraphicsPipeline(device, layout, d);
+    d.fragmentShader = prefix + "_overdraw.frag";
+    d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
+    p.pipelines[list][Overdraw] = gpu::createGraphicsPipeline(device, layout, d);
+  }
   return p;
 }
 
@@ -27,11 +34,17 @@ void ForwardPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescrip
                          const std::vector<ForwardDraw>& draws, const gpu::Image* ids, bool countOverdraw) const {
   if (countOverdraw) ids = nullptr;  // one diagnostic at a time
   beginRendering(cmd, color, background, depth, false, ids, VkClearColorValue{});
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS,
-                    (countOverdraw ? pipelineOverdraw : ids ? pipelineWithIds : pipeline).handle());
+  const Variant variant = countOverdraw ? Overdraw : ids ? WithIds : Plain;
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
-  for (const ForwardDraw& d : draws) vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.objectId);
+  uint32_t bound = DRAW_LIST_NONE;
+  for (const ForwardDraw& d : draws) {
+    if (d.list != bound) {
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines[d.list][variant].handle());
+      bound = d.list;
+    }
+    vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.objectId);
+  }
   vkCmdEndRendering(cmd);
 }
 

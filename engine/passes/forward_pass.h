@@ -1,13 +1,16 @@
 // Forward reference pass (shaders/forward.{vert,frag}.glsl): one vkCmdDrawIndexed per object that the
 // CPU kept, hardware attribute interpolation, the same lighting. The accuracy reference and the
-// "without visbuf" baseline. Reads: frame, objects, vertices, index buffer, materials.
-// Writes: colour (rgba16f attachment), depth.
+// "without visbuf" baseline. Draws are grouped by draw list (config.h DRAW_LIST_*) with the same raster state
+// as the visibility pass's lists: masked lists discard below the cutoff, face culling per list.
+// Reads: frame, objects, vertices, index buffer, materials. Writes: colour (rgba16f attachment), depth.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "gpu/pipeline.h"
 #include "gpu/resources.h"
+#include "shared/config.h"
 
 namespace visbuf::passes {
 
@@ -15,14 +18,17 @@ struct ForwardDraw {
   uint32_t indexCount, firstIndex;
   int32_t vertexOffset;
   uint32_t objectId;
+  uint32_t list = 0;  // draw list (DRAW_LIST_*): raster state
 };
 
 struct ForwardPass {
-  gpu::Pipeline pipeline;
-  gpu::Pipeline pipelineWithIds;  // also writes (object + 1, triangle) to an rg32ui target (diagnostics, tests)
-  gpu::Pipeline pipelineOverdraw; // debug: counts raster writes per pixel into BINDING_OVERDRAW
-  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
+  // Per draw list: plain; also writing (object + 1, triangle) to an rg32ui target (diagnostics, tests); debug,
+  // counting raster writes per pixel into BINDING_OVERDRAW. Created only for the lists in listMask.
+  enum Variant { Plain, WithIds, Overdraw, VariantCount };
+  std::array<std::array<gpu::Pipeline, VariantCount>, DRAW_LISTS> pipelines;
+  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask);
   // ids: optional rg32ui target (cleared to 0) written with the same IDs the visibility path decodes.
+  // draws: in any order; the pipeline is rebound where the list changes (sort by list to bind each once).
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
               VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
               const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr, bool countOverdraw = false) const;

@@ -1,25 +1,42 @@
 #include "passes/visibility_pass.h"
 
+#include <string>
+
 #include "shared/types.h"
 
 namespace visbuf::passes {
 
-VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
+bool drawListMasked(uint32_t list) { return list >= DRAW_LIST_MASKED && list < DRAW_LISTS; }
+
+VkCullModeFlags drawListCullMode(uint32_t list) {
+  switch (list) {
+    case DRAW_LIST_OPAQUE_FLIPPED:
+    case DRAW_LIST_MASKED_FLIPPED: return VK_CULL_MODE_FRONT_BIT;
+    case DRAW_LIST_OPAQUE_DOUBLE_SIDED:
+    case DRAW_LIST_MASKED_DOUBLE_SIDED: return VK_CULL_MODE_NONE;
+    default: return VK_CULL_MODE_BACK_BIT;
+  }
+}
+
+VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
+                                      uint32_t listMask) {
   VisibilityPass p;
-  gpu::GraphicsPipelineDesc d;
-  d.windowed = windowed;
-  d.vertexShader = "visibility.vert";
-  d.fragmentShader = "visibility.frag";
-  d.colorFormats = {VK_FORMAT_R32_UINT};
-  p.narrow = gpu::createGraphicsPipeline(device, layout, d);
-  d.fragmentShader = "visibility_wide.frag";
-  d.colorFormats = {VK_FORMAT_R32G32_UINT};
-  p.wide = gpu::createGraphicsPipeline(device, layout, d);
-  d.fragmentShader = "visibility_wide_overdraw.frag";
-  p.wideOverdraw = gpu::createGraphicsPipeline(device, layout, d);
-  d.fragmentShader = "visibility_overdraw.frag";
-  d.colorFormats = {VK_FORMAT_R32_UINT};
-  p.narrowOverdraw = gpu::createGraphicsPipeline(device, layout, d);
+  for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
+    if (!(listMask >> list & 1u)) continue;
+    const bool masked = drawListMasked(list);
+    const std::string prefix = masked ? "visibility_masked" : "visibility";
+    gpu::GraphicsPipelineDesc d;
+    d.windowed = spec.windowed;
+    d.textureClasses = spec.textureClasses;
+    d.cullMode = drawListCullMode(list);
+    d.vertexShader = prefix + ".vert";
+    const char* suffix[VariantCount] = {".frag", "_wide.frag", "_overdraw.frag", "_wide_overdraw.frag"};
+    for (int v = 0; v < VariantCount; ++v) {
+      d.fragmentShader = prefix + suffix[v];
+      d.colorFormats = {v == Wide || v == WideOverdraw ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32_UINT};
+      p.pipelines[list][size_t(v)] = gpu::createGraphicsPipeline(device, layout, d);
+    }
+  }
   return p;
 }
 
@@ -60,15 +77,17 @@ void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDesc
   nothing.uint32[1] = VIS_NOTHING;
   beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear);
   const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
-  const gpu::Pipeline& pipeline = in.countOverdraw ? (isWide ? wideOverdraw : narrowOverdraw) : (isWide ? wide : narrow);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle());
+  const Variant variant = in.countOverdraw ? (isWide ? WideOverdraw : NarrowOverdraw) : (isWide ? Wide : Narrow);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
-  gpu::PassConstants pc{0, in.drawBase, 0, 0};
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
-  if (in.maxDraws > 0)
-    vkCmdDrawIndexedIndirectCount(cmd, in.draws, VkDeviceSize(in.drawBase) * sizeof(gpu::DrawCommand), in.drawCount,
-                                  in.drawCountOffset, in.maxDraws, sizeof(gpu::DrawCommand));
+  for (const VisibilityList& l : in.lists) {
+    if (l.maxDraws == 0) continue;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines[l.list][variant].handle());
+    gpu::PassConstants pc{0, l.drawBase, 0, 0};
+    vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+    vkCmdDrawIndexedIndirectCount(cmd, in.draws, VkDeviceSize(l.drawBase) * sizeof(gpu::DrawCommand), in.drawCount,
+                                  VkDeviceSize(l.countIndex) * sizeof(uint32_t), l.maxDraws, sizeof(gpu::DrawCommand));
+  }
   vkCmdEndRendering(cmd);
 }
 

@@ -1,12 +1,31 @@
 // Visibility pass (shaders/visibility.{vert,frag}.glsl): vkCmdDrawIndexedIndirectCount over the cull
-// pass's commands into the ID target (r32ui or rg32ui) and reverse-Z D32 depth (cleared to 0).
-// Reads: frame, objects, vertices, index buffer, draws + draw count. Writes: ID target, depth.
+// pass's commands into the ID target (r32ui or rg32ui) and reverse-Z D32 depth (cleared to 0), one indirect
+// draw per draw list (config.h DRAW_LIST_*) in one rendering instance: opaque lists with the plain pipeline,
+// masked lists with the ALPHA_MASK variant (discard below the cutoff); face culling per list.
+// Reads: frame, objects, vertices, materials, index buffer, draws + draw counts. Writes: ID target, depth.
 #pragma once
+
+#include <array>
+#include <vector>
 
 #include "gpu/pipeline.h"
 #include "gpu/resources.h"
+#include "shared/config.h"
 
 namespace visbuf::passes {
+
+// Raster state of a draw list: masked lists discard; FLIPPED lists cull front faces (their objects' front faces
+// are clockwise on screen: every pipeline keeps counter-clockwise as its front face, so gl_FrontFacing reads the
+// same everywhere); DOUBLE_SIDED lists cull nothing.
+bool drawListMasked(uint32_t list);
+VkCullModeFlags drawListCullMode(uint32_t list);
+
+struct VisibilityList {
+  uint32_t list = DRAW_LIST_OPAQUE;
+  uint32_t drawBase = 0;    // first slot of this list and phase: commands are read from draws at drawBase * 20 bytes
+  uint32_t countIndex = 0;  // uint index of its draw count in the drawCount buffer
+  uint32_t maxDraws = 0;    // the list's capacity
+};
 
 struct VisibilityInputs {
   const gpu::Image* ids = nullptr;
@@ -14,18 +33,17 @@ struct VisibilityInputs {
   VkBuffer indexBuffer = VK_NULL_HANDLE;
   VkBuffer draws = VK_NULL_HANDLE;
   VkBuffer drawCount = VK_NULL_HANDLE;
-  VkDeviceSize drawCountOffset = 0;
-  uint32_t maxDraws = 0;
-  uint32_t drawBase = 0;  // first slot of this phase: commands are read from draws at drawBase * 20 bytes
+  std::vector<VisibilityList> lists;  // drawn in this order (opaque first: masked fragments then fail depth early)
   bool clear = true;      // early/only phase clears IDs and depth; the late phase loads them
   bool countOverdraw = false;  // debug: the variant that counts raster writes into BINDING_OVERDRAW
 };
 
 struct VisibilityPass {
-  gpu::Pipeline narrow;  // r32ui
-  gpu::Pipeline wide;    // rg32ui
-  gpu::Pipeline narrowOverdraw, wideOverdraw;  // debug variants counting raster writes per pixel
-  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
+  // Per draw list: r32ui, rg32ui, and the debug variants counting raster writes per pixel (narrow, wide).
+  // Created only for the lists in listMask (bit l: list l has objects in the scene).
+  enum Variant { Narrow, Wide, NarrowOverdraw, WideOverdraw, VariantCount };
+  std::array<std::array<gpu::Pipeline, VariantCount>, DRAW_LISTS> pipelines;
+  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
 };
 

@@ -2,6 +2,7 @@
 //
 //   setup ─► cull.comp ─► visibility.{vert,frag} ─► shade.comp ─► readback      (visbuf path)
 //   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
+//   both: ─► transparent_pass before the readback, only for scenes with BLEND materials
 //
 // Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
 // crashed on a dispatch + barrier + timestamps in one command buffer).
@@ -25,6 +26,7 @@
 #include "passes/forward_pass.h"
 #include "passes/shade_pass.h"
 #include "passes/skin_pass.h"
+#include "passes/transparent_pass.h"
 #include "render/animation_state.h"
 #include "passes/visibility_pass.h"
 #include "render/frame_math.h"
@@ -56,7 +58,7 @@ IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw,
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 10;  // setup, skin, 2 x (cull, raster), pyramid, shade, readback
+constexpr uint32_t kCommandBuffers = 11;  // setup, skin, 2 x (cull, raster), pyramid, shade, transparent, readback
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
 
@@ -81,7 +83,13 @@ struct Renderer::Impl {
   RendererConfig config;
   GpuScene gpuScene;
   IdEncoding encoding;
-  uint32_t capacity = 0;
+  uint32_t capacity = 0;      // draws per phase (all draw lists together): draws[0, capacity) early, then late
+  // Draw lists (config.h DRAW_LIST_*): list l holds slots [listFirst[l], + listCapacity[l]) of each phase's region;
+  // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (BINDING_DRAW_LISTS).
+  std::array<uint32_t, DRAW_LISTS> listFirst{}, listCapacity{};
+  uint32_t listMask = 0;                 // bit l: listCapacity[l] > 0
+  std::vector<uint32_t> blendObjects;    // objects with BLEND materials (the transparency pass), scene order
+  gpu::Buffer drawLists;
   uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
   uint32_t vertexShift = 0;  // vertices per vertex-pool window: 1 << vertexShift (vertexWindowShift)
 
@@ -97,6 +105,7 @@ struct Renderer::Impl {
   passes::VisibilityPass visibility;
   passes::ShadePass shade;
   passes::ForwardPass forward;
+  passes::TransparentPass transparent;  // created only when blendObjects is not empty
   passes::DepthPyramidPass pyramid;
   std::unique_ptr<AnimationState> animation;  // skinned scenes only
   passes::SkinPass skin;
@@ -157,6 +166,7 @@ struct Renderer::Impl {
         {BINDING_VERTICES_3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES, all, nullptr},
         {BINDING_VERTEX_EXTRAS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_DRAW_LISTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -170,7 +180,7 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 14},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15},
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
@@ -245,7 +255,7 @@ struct Renderer::Impl {
     const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
     const bool highUsed = objectSplit < gpuScene.objectCount;
     const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
-    VkDescriptorBufferInfo bufs[14] = {
+    VkDescriptorBufferInfo bufs[15] = {
         {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
         {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
@@ -253,13 +263,14 @@ struct Renderer::Impl {
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
         {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
-        vw[1], vw[2], vw[3]};
-    const uint32_t bufBindings[14] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
+        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[15] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
                                       BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
                                       BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
-                                      BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3};
+                                      BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3,
+                                      BINDING_DRAW_LISTS};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 14; ++i) {
+    for (int i = 0; i < 15; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -356,37 +367,123 @@ struct Renderer::Impl {
   void recordVisbuf(const FrameOptions& options, uint32_t& used);
   std::vector<passes::ForwardDraw> forwardCull(const Camera& camera, const FrameMath& math,
                                                const FrameOptions& options, FrameStats& stats) const;
+  bool cullObject(uint32_t i, const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
+                  passes::ForwardDraw& draw, glm::dvec3& centre) const;
+  std::vector<passes::TransparentDraw> transparentCull(const Camera& camera, const FrameMath& math,
+                                                       const FrameOptions& options, FrameStats& st) const;
+  void recordTransparent(const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
+                         uint32_t& used);
+  // Slots of the draw buffer: [0, capacity) early (or only) phase, [capacity, 2 capacity) late; within a phase
+  // the draw lists' regions. Draws a phase actually wrote: min(count, capacity) per list.
+  uint32_t listDrawn(const uint32_t* s, uint32_t phase, uint32_t list) const {
+    return std::min(s[STAT_LIST_DRAWS + phase * DRAW_LISTS + list], listCapacity[list]);
+  }
 };
+
+// The "what a user does without us" baseline's per-object test: CPU frustum culling (double precision) and the
+// same LOD rule. False: culled. centre: the world bounds centre (transparency sorts by it).
+bool Renderer::Impl::cullObject(uint32_t i, const Camera& camera, const FrameMath& math, const FrameOptions& options,
+                                FrameStats& st, passes::ForwardDraw& draw, glm::dvec3& centre) const {
+  const Object& o = scene.objects[i];
+  const Mesh& mesh = scene.meshes[o.mesh];
+  double scale = 0.0;
+  glm::dvec4 s;
+  if (!animation || !animation->skinnedBounds(i, &s, &scale)) {  // skinned: the current pose's bound
+    scale = maxScaleOf(o.transform);
+    s = objectBoundsWorld(scene, o, scale);
+  }
+  centre = glm::dvec3(s);
+  if (options.cull != CullMode::None && !sphereInFrustum(math, camera, glm::dvec3(s), s.w)) {
+    ++st.frustumCulled;
+    return false;
+  }
+  double dist = glm::length(glm::dvec3(s) - camera.position) - s.w;
+  uint32_t lod = selectLod(mesh, scale, dist, math, camera.nearPlane, options.lodErrorPixels);
+  const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[i]];
+  draw = {md.lods[lod].indexCount, md.lods[lod].firstIndex, int32_t(md.vertexOffset), i, gpuScene.objectList[i]};
+  st.trianglesDrawn += md.lods[lod].indexCount / 3;
+  st.lodHistogram[lod]++;
+  return true;
+}
 
 std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camera, const FrameMath& math,
                                                              const FrameOptions& options, FrameStats& st) const {
-  // The "what a user does without us" baseline: per-object CPU frustum culling (double precision)
-  // and the same LOD rule, then one draw per object.
+  // One draw per object, grouped by draw list (opaque first, as the visibility pass draws them); BLEND objects
+  // are the transparency pass's.
   std::vector<passes::ForwardDraw> out;
   st.lodHistogram.assign(MAX_LODS, 0);
   for (uint32_t i = 0; i < scene.objects.size(); ++i) {
-    const Object& o = scene.objects[i];
-    const Mesh& mesh = scene.meshes[o.mesh];
-    double scale = 0.0;
-    glm::dvec4 s;
-    if (!animation || !animation->skinnedBounds(i, &s, &scale)) {  // skinned: the current pose's bound
-      scale = maxScaleOf(o.transform);
-      s = objectBoundsWorld(scene, o, scale);
-    }
-    if (options.cull != CullMode::None && !sphereInFrustum(math, camera, glm::dvec3(s), s.w)) {
-      ++st.frustumCulled;
-      continue;
-    }
-    double dist = glm::length(glm::dvec3(s) - camera.position) - s.w;
-    uint32_t lod = selectLod(mesh, scale, dist, math, camera.nearPlane, options.lodErrorPixels);
-    const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[i]];
-    out.push_back({md.lods[lod].indexCount, md.lods[lod].firstIndex, int32_t(md.vertexOffset), i});
-    st.trianglesDrawn += md.lods[lod].indexCount / 3;
-    st.lodHistogram[lod]++;
+    if (gpuScene.objectList[i] == DRAW_LIST_NONE) continue;
+    passes::ForwardDraw d;
+    glm::dvec3 centre;
+    if (cullObject(i, camera, math, options, st, d, centre)) out.push_back(d);
   }
+  if (listMask & ~1u)
+    std::stable_sort(out.begin(), out.end(),
+                     [](const passes::ForwardDraw& a, const passes::ForwardDraw& b) { return a.list < b.list; });
   st.objectsTested = uint32_t(scene.objects.size());
   st.drawsAppended = st.drawsRendered = uint32_t(out.size());
   return out;
+}
+
+std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camera& camera, const FrameMath& math,
+                                                                     const FrameOptions& options,
+                                                                     FrameStats& st) const {
+  // Culled like the forward path's objects (they are not in the GPU's draw lists), then sorted back to front.
+  std::vector<passes::TransparentDraw> out;
+  FrameStats mine;  // (their triangles and LODs are reported apart from the opaque draws')
+  mine.lodHistogram.assign(MAX_LODS, 0);
+  const glm::dvec3 forwardDir = glm::normalize(camera.target - camera.position);
+  for (uint32_t i : blendObjects) {
+    passes::TransparentDraw t;
+    glm::dvec3 centre;
+    if (!cullObject(i, camera, math, options, mine, t.draw, centre)) continue;
+    const Material& m = scene.materials[scene.objects[i].material];
+    // Face culling as an opaque object of the same winding and sidedness (a skinned object: its placement's).
+    glm::dmat4 placed = scene.objects[i].transform;
+    for (const SkinnedObject& so : scene.skinnedObjects)
+      if (so.object == i) placed = so.placement;
+    t.draw.list = m.doubleSided                                   ? DRAW_LIST_OPAQUE_DOUBLE_SIDED
+                  : glm::determinant(glm::dmat3(placed)) < 0.0 ? DRAW_LIST_OPAQUE_FLIPPED
+                                                                  : DRAW_LIST_OPAQUE;
+    t.viewDepth = glm::dot(centre - camera.position, forwardDir);
+    out.push_back(t);
+  }
+  passes::sortBackToFront(out);
+  st.transparentDraws = uint32_t(out.size());
+  st.transparentTriangles = mine.trianglesDrawn;
+  return out;
+}
+
+void Renderer::Impl::recordTransparent(const Camera& camera, const FrameMath& math, const FrameOptions& options,
+                                       FrameStats& st, uint32_t& used) {
+  std::vector<passes::TransparentDraw> draws = transparentCull(camera, math, options, st);
+  VkCommandBuffer cmd = cmds[used++];
+  beginCmd(cmd);
+  const bool visbuf = options.path == RenderPath::Visbuf;
+  // Colour: the shading pass's storage writes (visbuf) or the forward pass's attachment writes; depth: the last
+  // raster's writes, now only tested.
+  if (visbuf)
+    gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                      VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  else
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                       VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  constexpr VkPipelineStageFlags2 kDepthStages =
+      VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+  gpu::memoryBarrier(cmd, kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kDepthStages,
+                     VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
+  uint32_t t = timestamps->begin(cmd, "transparent");
+  transparent.record(cmd, pipelineLayout, set, color, depth, gpuScene.indices.handle(), draws);
+  timestamps->end(cmd, t);
+  if (visbuf)  // back to the layout the visbuf path's readback expects
+    gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
+  VK_CHECK(vkEndCommandBuffer(cmd));
 }
 
 void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
@@ -398,7 +495,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   constexpr VkAccessFlags2 kDepthAccess =
       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
 
-  auto recordCull = [&](uint32_t phase, uint32_t drawBase, const char* name) {
+  auto recordCull = [&](uint32_t phase, const char* name) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
     // Counters reset (setup) and, in the late phase, the pyramid and the early draws' reads.
@@ -409,11 +506,11 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     uint32_t t = timestamps->begin(cmd, name);
-    cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase, drawBase);
+    cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
-  auto recordRaster = [&](uint32_t drawBase, uint32_t countIndex, bool clear, const char* name) {
+  auto recordRaster = [&](uint32_t phase, bool clear, const char* name) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
@@ -443,9 +540,9 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     in.indexBuffer = gpuScene.indices.handle();
     in.draws = draws.handle();
     in.drawCount = stats.handle();
-    in.drawCountOffset = countIndex * sizeof(uint32_t);
-    in.maxDraws = capacity;
-    in.drawBase = drawBase;
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+      if (listCapacity[l] > 0)
+        in.lists.push_back({l, phase * capacity + listFirst[l], STAT_LIST_DRAWS + phase * DRAW_LISTS + l, listCapacity[l]});
     in.clear = clear;
     in.countOverdraw = options.countOverdraw;
     visibility.record(cmd, pipelineLayout, set, in);
@@ -454,17 +551,17 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   };
 
   if (frozen) {  // the draw lists and their counts are the frozen frame's: raster them as they are
-    recordRaster(0, STAT_DRAW_COUNT, true, occlusion ? "raster early" : "visibility");
-    if (occlusion) recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, "raster late");
+    recordRaster(CULL_PHASE_EARLY, true, occlusion ? "raster early" : "visibility");
+    if (occlusion) recordRaster(CULL_PHASE_LATE, false, "raster late");
   } else if (!occlusion) {
-    recordCull(CULL_PHASE_EARLY, 0, "cull");
-    recordRaster(0, STAT_DRAW_COUNT, true, "visibility");
+    recordCull(CULL_PHASE_EARLY, "cull");
+    recordRaster(CULL_PHASE_EARLY, true, "visibility");
   } else {
-    recordCull(CULL_PHASE_EARLY, 0, "cull early");
-    recordRaster(0, STAT_DRAW_COUNT, true, "raster early");
+    recordCull(CULL_PHASE_EARLY, "cull early");
+    recordRaster(CULL_PHASE_EARLY, true, "raster early");
     if (!usePyramid) {  // the late phase runs frustum + sub-pixel tests only
-      recordCull(CULL_PHASE_LATE, capacity, "cull late");
-      recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, "raster late");
+      recordCull(CULL_PHASE_LATE, "cull late");
+      recordRaster(CULL_PHASE_LATE, false, "raster late");
     }
   }
   if (!frozen && occlusion && usePyramid) {
@@ -480,8 +577,8 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     pyramid.record(cmd);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
-    recordCull(CULL_PHASE_LATE, capacity, "cull late");
-    recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, "raster late");
+    recordCull(CULL_PHASE_LATE, "cull late");
+    recordRaster(CULL_PHASE_LATE, false, "raster late");
   }
 
   // shade
@@ -631,6 +728,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     VK_CHECK(vkEndCommandBuffer(cmd));
     st.targetBytesPerPixel = 4 /*depth*/ + 8 /*colour*/;
   }
+  if (!blendObjects.empty()) recordTransparent(camera, math, options, st, used);
 
   // readback
   cmd = cmds[used++];
@@ -730,8 +828,11 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.frustumCulled = s[STAT_FRUSTUM_CULLED];
     st.occlusionCulled = s[STAT_OCCLUSION_CULLED];
     st.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
-    st.drawsEarly = std::min(s[STAT_DRAW_COUNT], capacity);
-    st.drawsLate = std::min(s[STAT_DRAW_COUNT_LATE], capacity);
+    st.drawsEarly = st.drawsLate = 0;
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+      st.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l);
+      st.drawsLate += listDrawn(s, CULL_PHASE_LATE, l);
+    }
     st.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
     st.drawsRendered = st.drawsEarly + st.drawsLate;
     st.drawOverflow = s[STAT_DRAW_OVERFLOW];
@@ -764,8 +865,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
       while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
       result.drawnLods.push_back(lod);
     };
-    for (uint32_t i = 0; i < st.drawsEarly; ++i) add(dr[i]);
-    for (uint32_t i = 0; i < st.drawsLate; ++i) add(dr[capacity + i]);
+    const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
+    for (uint32_t phase : {CULL_PHASE_EARLY, CULL_PHASE_LATE})
+      for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+        for (uint32_t i = 0; i < listDrawn(s, phase, l); ++i) add(dr[phase * capacity + listFirst[l] + i]);
   }
   if (readPyramid) {
     const float* p = static_cast<const float*>(pyramidReadback.mapped());
@@ -787,6 +890,14 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     result.ids.assign(raw, raw + pixels * 2);
   } else if (readIds) {
     result.ids.assign(pixels * 2, 0);
+    const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
+    auto slotWritten = [&](uint32_t slot) {  // within the part of its list's region the cull pass wrote
+      if (slot >= 2 * capacity) return false;
+      const uint32_t phase = slot < capacity ? 0 : 1, local = slot - phase * capacity;
+      for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+        if (local >= listFirst[l] && local < listFirst[l] + listCapacity[l]) return local - listFirst[l] < listDrawn(s, phase, l);
+      return false;
+    };
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
     for (size_t i = 0; i < pixels; ++i) {
@@ -801,7 +912,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
         slot = v >> encoding.triangleBits;
         tri = v & ((1u << encoding.triangleBits) - 1u);
       }
-      if (slot < capacity ? slot >= st.drawsEarly : slot - capacity >= st.drawsLate) {  // GPU misbehaved: loud
+      if (!slotWritten(slot)) {  // GPU misbehaved: loud
         result.ids[2 * i] = 0xFFFFFFFFu;
         continue;
       }
@@ -834,9 +945,30 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const uint64_t maxRange = device.properties().limits.maxStorageBufferRange;
   impl->objectSplit = objectWindowSplit(maxRange, impl->gpuScene.objectCount);
   impl->vertexShift = vertexWindowShift(maxRange);
-  impl->capacity = config.drawCapacity ? config.drawCapacity
-                                       : uint32_t(std::clamp<uint64_t>(impl->gpuScene.objectCount, 1,
-                                                                       maxRange / (2 * sizeof(gpu::DrawCommand))));
+  // Draw lists: each list's capacity is its object count (a list can never hold more), capped by
+  // config.drawCapacity (per list) or, by default, shared out so that both phases fit one descriptor range.
+  std::array<uint64_t, DRAW_LISTS> listObjects{};
+  uint64_t listed = 0;
+  for (uint32_t i = 0; i < impl->gpuScene.objectCount; ++i) {
+    const uint32_t l = impl->gpuScene.objectList[i];
+    if (l == DRAW_LIST_NONE)
+      impl->blendObjects.push_back(i);
+    else
+      ++listObjects[l], ++listed;
+  }
+  const uint64_t rangeSlots = maxRange / (2 * sizeof(gpu::DrawCommand));
+  for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+    uint64_t c = listObjects[l];
+    if (config.drawCapacity)
+      c = std::min<uint64_t>(c, config.drawCapacity);
+    else if (listed > rangeSlots)
+      c = std::max<uint64_t>(c ? 1 : 0, c * rangeSlots / listed);
+    impl->listFirst[l] = impl->capacity;
+    impl->listCapacity[l] = uint32_t(c);
+    impl->capacity += uint32_t(c);
+    if (c) impl->listMask |= 1u << l;
+  }
+  impl->capacity = std::max(impl->capacity, 1u);  // (a scene of only BLEND objects: no list, one unused slot)
   // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
   const uint64_t drawBytes = 2 * uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
   if (drawBytes > device.properties().limits.maxStorageBufferRange)
@@ -850,10 +982,17 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                         impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
   const uint32_t w = windowed ? 1u : 0u;
   impl->cull = passes::CullPass::create(device, impl->pipelineLayout, w);
-  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, w);
   const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()));
+  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
-  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured);
+  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
+  if (!impl->blendObjects.empty())
+    impl->transparent = passes::TransparentPass::create(device, impl->pipelineLayout, textured);
+  std::array<glm::uvec4, DRAW_LISTS> lists{};
+  for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+    lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l], 0u};
+  impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
+  std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
   impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                   gpu::MemoryUse::HostVisible);
   impl->draws = gpu::Buffer(device, drawBytes,

@@ -29,7 +29,7 @@ const char* cullModeName(CullMode mode);
 struct RendererConfig {
   uint32_t width = 1920;
   uint32_t height = 1080;
-  uint32_t drawCapacity = 0;  // max draw commands per phase; 0 = one per object (never overflows)
+  uint32_t drawCapacity = 0;  // max draw commands per phase and draw list; 0 = one per object (never overflows)
   bool forceWideIds = false;  // use the 64-bit ID target even when 32 bits fit
 };
 
@@ -72,7 +72,9 @@ struct FrameStats {
   uint32_t drawsLate = 0;        // occlusion mode: draws of the late phase (newly visible)
   uint32_t drawsAppended = 0;   // draws the cull pass produced (visible objects)
   uint32_t drawsRendered = 0;   // min(appended, capacity)
-  uint32_t drawCapacity = 0;
+  uint32_t drawCapacity = 0;    // per phase, all draw lists together
+  uint32_t transparentDraws = 0;      // BLEND objects drawn by the transparency pass (CPU-culled, sorted)
+  uint64_t transparentTriangles = 0;  // their triangles (not in trianglesDrawn)
   uint32_t drawOverflow = 0;    // visible objects dropped for lack of capacity (reported, never silent)
   uint64_t trianglesDrawn = 0;
   std::vector<uint32_t> lodHistogram;  // draws per LOD level

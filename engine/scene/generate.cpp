@@ -230,4 +230,47 @@ Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& p
   return s;
 }
 
+Result<Scene> makeFoliageScene(const FoliageParams& params) {
+  if (params.cards == 0) return makeError(ErrorCode::InvalidArgument, "foliage: --objects must be at least 1");
+  MeshSource card;
+  card.name = "card";
+  card.positions = {{-0.5f, -0.5f, 0.0f}, {0.5f, -0.5f, 0.0f}, {0.5f, 0.5f, 0.0f}, {-0.5f, 0.5f, 0.0f}};
+  card.normals.assign(4, glm::vec3(0.0f, 0.0f, 1.0f));
+  card.uvs = {{0.0f, 1.0f}, {1.0f, 1.0f}, {1.0f, 0.0f}, {0.0f, 0.0f}};
+  card.colors = {0x00ffffffu, 0xffffffffu, 0xffffffffu, 0x00ffffffu};  // alpha 0 at x = -0.5, 1 at x = +0.5
+  card.indices = {0, 1, 2, 0, 2, 3};
+  Result<Mesh> mesh = buildMesh(card);
+  if (!mesh) return mesh.error();
+  Scene scene;
+  scene.name = params.masked ? "foliage" : "foliage-opaque";
+  scene.meshes.push_back(std::move(mesh.value()));
+  for (glm::vec4 c : {glm::vec4(0.25f, 0.6f, 0.2f, 1.0f), glm::vec4(0.4f, 0.7f, 0.25f, 1.0f),
+                      glm::vec4(0.55f, 0.6f, 0.2f, 1.0f)}) {
+    Material m;
+    m.name = "leaf";
+    m.baseColor = c;
+    m.alphaMode = params.masked ? AlphaMode::Mask : AlphaMode::Opaque;
+    m.alphaCutoff = 0.5f;
+    m.doubleSided = true;
+    m.metallic = 0.0f;
+    scene.materials.push_back(m);
+  }
+  Rng rng(params.seed);
+  scene.objects.reserve(params.cards);
+  for (uint32_t i = 0; i < params.cards; ++i) {
+    glm::dvec3 pos(rng.uniform(-params.extent, params.extent), rng.uniform(0.0, params.extent / 3.0),
+                   rng.uniform(-params.extent, params.extent));
+    glm::dvec3 axis(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    if (glm::length(axis) < 1e-6) axis = {0, 1, 0};
+    const double angle = rng.uniform(0.0, 2.0 * M_PI), scale = rng.uniform(1.0, 3.0);
+    glm::dmat4 t = glm::translate(glm::dmat4(1.0), pos) * glm::rotate(glm::dmat4(1.0), angle, glm::normalize(axis)) *
+                   glm::scale(glm::dmat4(1.0), glm::dvec3(scale));
+    scene.objects.push_back({t, 0, uint32_t(i % scene.materials.size())});
+  }
+  scene.defaultCamera.position = {0.0, params.extent / 4.0, params.extent * 1.3};
+  scene.defaultCamera.target = {0.0, params.extent / 8.0, 0.0};
+  scene.defaultCamera.nearPlane = 0.1;
+  return scene;
+}
+
 }  // namespace visbuf

@@ -45,6 +45,16 @@ struct CityParams {
 // A grid of buildings with street clutter and a street-level camera: heavy occlusion.
 Result<Scene> makeCityScene(const CityParams& params);
 
+struct FoliageParams {
+  uint32_t cards = 20000;
+  uint64_t seed = 1;
+  double extent = 30.0;  // card centres uniform in [-extent, extent] x [0, extent / 3] x [-extent, extent]
+  bool masked = true;    // MASK (cutoff 0.5) or the same cards OPAQUE: the masked pipeline's cost, measured
+};
+// Foliage-like: double-sided unit cards (scaled 1..3) at random orientations whose COLOR_0 alpha runs from 0 to 1
+// across each card, so a MASK material with cutoff 0.5 keeps exactly half of every card.
+Result<Scene> makeFoliageScene(const FoliageParams& params);
+
 // Deterministic generator (splitmix64), identical on every platform.
 class Rng {
  public:

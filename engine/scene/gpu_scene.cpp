@@ -6,6 +6,13 @@
 
 namespace visbuf {
 
+namespace {
+uint32_t materialFlagsOf(const Material& m) {
+  return (m.alphaMode == AlphaMode::Mask ? MATERIAL_FLAG_MASK : 0u) |
+         (m.alphaMode == AlphaMode::Blend ? MATERIAL_FLAG_BLEND : 0u) | (m.doubleSided ? MATERIAL_FLAG_DOUBLE_SIDED : 0u);
+}
+}  // namespace
+
 gpu::ObjectData packObject(const Object& object, const Scene& scene) {
   gpu::ObjectData d{};
   const glm::dmat4& m = object.transform;
@@ -16,7 +23,12 @@ gpu::ObjectData packObject(const Object& object, const Scene& scene) {
   d.meshIndex = object.mesh;
   d.materialIndex = object.material;
   d.maxScale = float(maxScaleOf(m) * (1.0 + 1e-6));
-  d.flags = 0;
+  // Mirrored instances keep their front faces front: the raster culls them from the other side.
+  d.flags = glm::determinant(glm::dmat3(m)) < 0.0 ? OBJECT_FLAG_FLIP_WINDING : 0u;
+  const uint32_t materialFlags =
+      object.material < scene.materials.size() ? materialFlagsOf(scene.materials[object.material]) : 0u;
+  const uint32_t list = gpu::drawListOf(d.flags, materialFlags);
+  d.flags |= (list == DRAW_LIST_NONE ? 15u : list) << OBJECT_DRAW_LIST_SHIFT;
   return d;
 }
 
@@ -25,9 +37,7 @@ gpu::MaterialData packMaterial(const Material& m, const Scene& scene) {
   d.baseColor = m.baseColor;
   d.emissive = glm::vec4(m.emissive * m.emissiveStrength, m.normalScale);
   d.params = glm::vec4(m.metallic, m.roughness, m.occlusionStrength, m.alphaCutoff);
-  d.flags = (m.alphaMode == AlphaMode::Mask ? MATERIAL_FLAG_MASK : 0u) |
-            (m.alphaMode == AlphaMode::Blend ? MATERIAL_FLAG_BLEND : 0u) |
-            (m.doubleSided ? MATERIAL_FLAG_DOUBLE_SIDED : 0u);
+  d.flags = materialFlagsOf(m);
   const auto slots = textureSlots(m);
   for (size_t i = 0; i < kTextureSlotCount; ++i) {
     const TextureRef& t = *slots[i];
@@ -139,6 +149,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   }
   std::vector<gpu::MaterialData> materials;
   for (const Material& m : scene.materials) materials.push_back(packMaterial(m, scene));
+  g.objectList.reserve(objects.size());
+  for (const gpu::ObjectData& o : objects) g.objectList.push_back(gpu::objectDrawList(o.flags));
 
   const uint64_t limit = device.properties().limits.maxStorageBufferRange;
   auto check = [&](const char* what, uint64_t bytes) -> Status {

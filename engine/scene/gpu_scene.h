@@ -22,6 +22,7 @@ struct GpuScene {
   gpu::Image placeholderTexture;           // 1x1x1 white: bound to the class slots the scene does not use
   std::vector<gpu::MeshData> meshTable;  // CPU copy (forward path, ID decoding)
   std::vector<uint32_t> objectMesh;      // meshTable slot each object draws (its own slot when skinned)
+  std::vector<uint32_t> objectList;      // draw list of each object (gpu::drawListOf; DRAW_LIST_NONE: BLEND)
 
   // Skinned instances (Scene::skinnedObjects, same order): each owns a region of the vertex pool that the
   // skinning pass rewrites, and a mesh table slot (the source mesh's LODs pointing at that region, bounds

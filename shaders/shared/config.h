@@ -37,7 +37,23 @@
 #define STAT_OCCLUSION_CULLED 6    // late phase: rejected by the depth pyramid
 #define STAT_SUBPIXEL_CULLED 7     // late phase: bounds cover no pixel centre
 #define STAT_LOD_HISTOGRAM 8       // MAX_LODS counters: draws per LOD level
-#define STAT_COUNT (STAT_LOD_HISTOGRAM + MAX_LODS)
+#define STAT_LIST_DRAWS (STAT_LOD_HISTOGRAM + MAX_LODS)  // 2 x DRAW_LISTS: draws appended to list l in phase p
+                                                         // at [p * DRAW_LISTS + l] (the indirect draw counts)
+#define STAT_COUNT (STAT_LIST_DRAWS + 2 * DRAW_LISTS)
+
+// Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
+// state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and
+// capacity; a list with no objects in the scene has capacity 0 and is never recorded. BLEND objects are in no
+// list (the transparency pass draws them); ObjectData.flags holds each object's list (objectDrawList). FLIPPED:
+// negative-determinant transforms, front faces clockwise.
+#define DRAW_LIST_OPAQUE 0
+#define DRAW_LIST_OPAQUE_FLIPPED 1
+#define DRAW_LIST_OPAQUE_DOUBLE_SIDED 2  // no face culling
+#define DRAW_LIST_MASKED 3               // alpha-tested (discard below the cutoff)
+#define DRAW_LIST_MASKED_FLIPPED 4
+#define DRAW_LIST_MASKED_DOUBLE_SIDED 5
+#define DRAW_LISTS 6
+#define DRAW_LIST_NONE 0xffffffffu
 
 // Skinning pass (shaders/skin.comp.glsl): its own descriptor set, one thread per instance vertex.
 #define SKIN_WORKGROUP_SIZE 64
@@ -102,6 +118,7 @@
 #define EXTRA_NONE 0xffffffffu      // MeshData.extraOffset of a mesh without VertexExtra records
 // Bindings 20..27 are reserved for lights and the G-buffer baseline, 28..31 for alpha-masked and blended
 // geometry.
+#define BINDING_DRAW_LISTS 28  // uvec4[DRAW_LISTS]: x first slot (early phase), y first slot (late), z capacity
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
 //  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),

@@ -60,6 +60,28 @@ struct ObjectData {
   uint flags;      // OBJECT_FLAG_*
 };
 #define OBJECT_FLAG_FLIP_WINDING 1u  // negative determinant: front faces are clockwise
+#define OBJECT_DRAW_LIST_SHIFT 4u     // bits 4..7: the object's draw list (drawListOf at upload), 15: none (BLEND)
+
+// The draw list of an object (config.h DRAW_LIST_*) from its flags and its material's flags; DRAW_LIST_NONE for
+// BLEND materials. The cull pass and the CPU (list capacities, forward path) route with this one function.
+#ifdef __cplusplus
+inline
+#endif
+uint drawListOf(uint objectFlags, uint materialFlags) {
+  if ((materialFlags & MATERIAL_FLAG_BLEND) != 0u) return DRAW_LIST_NONE;
+  uint base = (materialFlags & MATERIAL_FLAG_MASK) != 0u ? DRAW_LIST_MASKED : DRAW_LIST_OPAQUE;
+  if ((materialFlags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u) return base + 2u;
+  return (objectFlags & OBJECT_FLAG_FLIP_WINDING) != 0u ? base + 1u : base;
+}
+
+// The draw list stored in an object's flags (the cull pass reads it without fetching the material).
+#ifdef __cplusplus
+inline
+#endif
+uint objectDrawList(uint objectFlags) {
+  uint l = (objectFlags >> OBJECT_DRAW_LIST_SHIFT) & 15u;
+  return l == 15u ? DRAW_LIST_NONE : l;
+}
 
 // One texture slot of a material (48 bytes). image: TEXTURE_NONE, or (size class << 16) | layer of the baked
 // image (scene/texture.h); samplerBits: TEXTURE_SAMPLER_* bits; uv' = mat3x2(transform01.xy, transform01.zw,

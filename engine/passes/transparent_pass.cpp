@@ -1,0 +1,49 @@
+#include "passes/transparent_pass.h"
+
+#include <algorithm>
+
+#include "passes/visibility_pass.h"
+
+namespace visbuf::passes {
+
+void sortBackToFront(std::vector<TransparentDraw>& draws) {
+  std::stable_sort(draws.begin(), draws.end(),
+                   [](const TransparentDraw& a, const TransparentDraw& b) { return a.viewDepth > b.viewDepth; });
+}
+
+TransparentPass TransparentPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
+  TransparentPass p;
+  for (uint32_t list = 0; list < p.pipelines_.size(); ++list) {
+    gpu::GraphicsPipelineDesc d;
+    d.windowed = spec.windowed;
+    d.textureClasses = spec.textureClasses;
+    d.cullMode = drawListCullMode(list);
+    d.vertexShader = "forward.vert";
+    d.fragmentShader = "transparent.frag";
+    d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
+    d.depthWrite = false;
+    d.premultipliedBlend = true;
+    p.pipelines_[list] = gpu::createGraphicsPipeline(device, layout, d);
+  }
+  return p;
+}
+
+void TransparentPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+                             const gpu::Image& color, const gpu::Image& depth, VkBuffer indexBuffer,
+                             const std::vector<TransparentDraw>& draws) const {
+  beginRendering(cmd, color, VkClearColorValue{}, depth, true);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
+  uint32_t bound = DRAW_LIST_NONE;
+  for (const TransparentDraw& t : draws) {
+    const ForwardDraw& d = t.draw;
+    if (d.list != bound) {
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines_[d.list].handle());
+      bound = d.list;
+    }
+    vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.objectId);
+  }
+  vkCmdEndRendering(cmd);
+}
+
+}  // namespace visbuf::passes

@@ -1,0 +1,39 @@
+// Transparency pass (shaders/forward.vert.glsl + transparent variant of forward.frag.glsl): glTF BLEND objects
+// drawn forward on top of the shaded colour image, back to front per object, depth-tested against the opaque
+// depth (GREATER, reverse-Z) without writing it, premultiplied blending (colour = src + (1 - src.a) * dst).
+// Recorded by the frame script only for scenes with BLEND materials, in both paths.
+// Reads: frame, objects, vertices, index buffer, materials, depth. Writes: colour (blended).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+#include "passes/forward_pass.h"
+
+namespace visbuf::passes {
+
+struct TransparentDraw {
+  ForwardDraw draw;         // draw.list: the opaque list of the same raster state (face culling), 0..2
+  double viewDepth = 0.0;   // distance of the bounds centre along the view direction (double precision)
+};
+
+// Back to front: largest view depth first; equal depths keep their order (stable), so frames are repeatable.
+// Objects are sorted as wholes by their bounds centre: intersecting transparent objects, and an object's own
+// overlapping triangles, are not sorted per triangle.
+void sortBackToFront(std::vector<TransparentDraw>& draws);
+
+class TransparentPass {
+ public:
+  static TransparentPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
+  // color: rgba16f in COLOR_ATTACHMENT_OPTIMAL, loaded; depth: D32 in DEPTH_ATTACHMENT_OPTIMAL, loaded, not
+  // written. draws: drawn in the given order (sortBackToFront).
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+              const gpu::Image& depth, VkBuffer indexBuffer, const std::vector<TransparentDraw>& draws) const;
+
+ private:
+  std::array<gpu::Pipeline, 3> pipelines_;  // per face-culling state: DRAW_LIST_OPAQUE, _FLIPPED, _DOUBLE_SIDED
+};
+
+}  // namespace visbuf::passes
