@@ -15,6 +15,10 @@
 #include "visibility_overdraw.frag.h"
 #include "visibility_wide_overdraw.frag.h"
 #include "forward.vert.h"
+#include "gbuffer.frag.h"
+#include "gbuffer.vert.h"
+#include "gbuffer_lighting.comp.h"
+#include "gbuffer_overdraw.frag.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
 #include "skin.comp.h"
@@ -41,6 +45,10 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("forward_overdraw.frag", spv_forward_overdraw_frag)
   VB_SHADER("visibility_overdraw.frag", spv_visibility_overdraw_frag)
   VB_SHADER("visibility_wide_overdraw.frag", spv_visibility_wide_overdraw_frag)
+  VB_SHADER("gbuffer.vert", spv_gbuffer_vert)
+  VB_SHADER("gbuffer.frag", spv_gbuffer_frag)
+  VB_SHADER("gbuffer_overdraw.frag", spv_gbuffer_overdraw_frag)
+  VB_SHADER("gbuffer_lighting.comp", spv_gbuffer_lighting_comp)
 #undef VB_SHADER
   std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
   std::abort();

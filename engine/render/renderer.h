@@ -20,7 +20,9 @@
 
 namespace visbuf {
 
-enum class RenderPath { Visbuf, Forward };
+// GBuffer: the visbuf path's culling (both occlusion phases) feeding a deferred G-buffer raster + lighting pass
+// (the baseline of the benchmark; no IDs).
+enum class RenderPath { Visbuf, Forward, GBuffer };
 enum class CullMode { None, Frustum, Occlusion };
 
 const char* renderPathName(RenderPath path);
@@ -89,7 +91,15 @@ struct FrameStats {
   bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
   double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
-  uint64_t targetBytesPerPixel = 0;
+  uint64_t targetBytesPerPixel = 0;  // bytes per pixel of the path's screen targets (raster targets, depth, colour)
+  // Bytes one depth-passing raster fragment writes: visbuf ID + depth, G-buffer targets + depth, forward colour +
+  // depth.
+  uint32_t rasterBytesPerFragment = 0;
+  // With countOverdraw: depth-passing raster fragments per pixel (all pixels), and the bytes written per pixel =
+  // fragments x rasterBytesPerFragment + the resolve's colour write (visbuf/G-buffer: 8 per covered pixel).
+  // Clears are not counted. 0 without countOverdraw.
+  double rasterWritesPerPixel = 0.0;
+  double bytesWrittenPerPixel = 0.0;
 };
 
 struct FrameResult {
