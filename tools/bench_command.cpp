@@ -569,21 +569,20 @@ int runBench(const BenchCommand& c) {
   std::string csv =
       "scene,objects,path,cull,lod_px,id_bits,vertices,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
       "cpu_record_ms_median,wall_ms_median,triangles_median,objects_drawn_median,scene_bytes,"
-      "target_bytes_per_pixel,raster_writes_per_pixel,bytes_written_per_pixel,psnr_mean_db,psnr_worst_db,max_abs_error,mean_abs_error,differing_fraction,"
+      "target_bytes_per_pixel,psnr_mean_db,psnr_worst_db,max_abs_error,mean_abs_error,differing_fraction,"
       "id_mismatches,reference,pareto";
   for (std::string n : passNames) {  // "depth pyramid" -> pass_depth_pyramid_ms_median
     std::replace(n.begin(), n.end(), ' ', '_');
     csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
   }
-  csv += "\n";
+  csv += ",raster_writes_per_pixel,bytes_written_per_pixel\n";  // last: the columns before are fixed
   for (const Row& row : rows) {
-    csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{:.4f},{:.2f},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
+    csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
                        renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel,
                        row.idBits, row.config.quantized ? "quantized" : "float", c.frames,
                        row.frameMedian, row.frameP95, row.gpuMedian, row.gpuP95, row.cpuMedian, row.wallMedian,
                        row.trianglesMedian, row.drawnMedian, row.sceneBytes, row.targetBytesPerPixel,
-                       row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
                        dbText(row.psnrMean), dbText(row.psnrWorst), row.maxAbs, row.meanAbs, row.differingFraction,
                        row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"), row.reference,
                        row.pareto ? 1 : 0);
@@ -591,7 +590,7 @@ int runBench(const BenchCommand& c) {
       const auto* p = passOf(row, n);
       csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
     }
-    csv += "\n";
+    csv += fmt::format(",{:.4f},{:.2f}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel);
   }
 
   // bench.md
