@@ -9,6 +9,10 @@ layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
 layout(set = 0, binding = BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_TARGETS];
 layout(set = 0, binding = BINDING_GBUFFER_DEPTH) uniform sampler2D gbufferDepth;
 layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+#if WRITE_ATTRIBUTES
+// Test variant: the rebuilt position and the depth in the attribute record's slots 0..3 (config.h), slot 7 = 1.
+layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
+#endif
 
 // Inverse of the reverse-Z infinite projection (render/frame_math.cpp): depth = near / -z_view,
 // ndc.xy = proj.xy * view.xy / -z_view; the view is rotation only, so its inverse is its transpose.
@@ -38,4 +42,12 @@ void main() {
   s.occlusion = material.z;
   s.emissive = emissive;
   imageStore(colorOut, p, vec4(shadeSurface(s, uvec2(p)), 1.0));
+#if WRITE_ATTRIBUTES
+  uint record = (uint(p.y) * uint(frame.viewport.x) + uint(p.x)) * ATTRIBUTE_FLOATS;
+  attributes[record + 0u] = s.position.x;
+  attributes[record + 1u] = s.position.y;
+  attributes[record + 2u] = s.position.z;
+  attributes[record + 3u] = depth;
+  attributes[record + 7u] = 1.0;
+#endif
 }

@@ -18,6 +18,7 @@
 #include "gbuffer.frag.h"
 #include "gbuffer.vert.h"
 #include "gbuffer_lighting.comp.h"
+#include "gbuffer_lighting_attributes.comp.h"
 #include "gbuffer_overdraw.frag.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
@@ -49,6 +50,7 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("gbuffer.frag", spv_gbuffer_frag)
   VB_SHADER("gbuffer_overdraw.frag", spv_gbuffer_overdraw_frag)
   VB_SHADER("gbuffer_lighting.comp", spv_gbuffer_lighting_comp)
+  VB_SHADER("gbuffer_lighting_attributes.comp", spv_gbuffer_lighting_attributes_comp)
 #undef VB_SHADER
   std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
   std::abort();

@@ -376,7 +376,7 @@ struct Renderer::Impl {
 
   Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
   void recordVisbuf(const FrameOptions& options, uint32_t& used);
-  void recordGBufferLighting(uint32_t& used);
+  void recordGBufferLighting(uint32_t& used, bool writeAttributes);
   std::vector<passes::ForwardDraw> forwardCull(const Camera& camera, const FrameMath& math,
                                                const FrameOptions& options, FrameStats& stats) const;
 };
@@ -536,7 +536,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     recordRaster(capacity, STAT_DRAW_COUNT_LATE, false, rasterLate);
   }
   if (deferred) {
-    recordGBufferLighting(used);
+    recordGBufferLighting(used, options.readAttributes);
     return;
   }
 
@@ -567,7 +567,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
 
 // G-buffer baseline: after the last raster phase the targets and the depth become sampled images of the
 // lighting pass, which writes the covered pixels of the (background-cleared) colour image.
-void Renderer::Impl::recordGBufferLighting(uint32_t& used) {
+void Renderer::Impl::recordGBufferLighting(uint32_t& used, bool writeAttributes) {
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   for (const gpu::Image& t : gbufferTargets)
@@ -586,7 +586,12 @@ void Renderer::Impl::recordGBufferLighting(uint32_t& used) {
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height);
+  if (writeAttributes) {
+    vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height, writeAttributes);
   timestamps->end(cmd, t);
   VK_CHECK(vkEndCommandBuffer(cmd));
 }
@@ -610,7 +615,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   const bool frozen = gpuCulled && options.freezeCulling && haveDraws;
   const bool occlusionFrame = gpuCulled && !frozen && options.cull == CullMode::Occlusion;
   usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
-  const bool readAttributes = options.readAttributes && options.path == RenderPath::Visbuf;
+  const bool readAttributes = options.readAttributes && gpuCulled;  // G-buffer: position and depth only
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
   if (readAttributes && attributes.size() < attributeBytes) {  // no frame is in flight: safe to rewrite the set
     resizeAttributes(attributeBytes);

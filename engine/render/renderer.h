@@ -47,8 +47,9 @@ struct FrameOptions {
                                 // the camera can move on and show what that frame culled
   bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
   bool countOverdraw = false;   // debug: count raster writes per pixel (FrameResult.overdraw)
-  bool readAttributes = false;
-  double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)  // visbuf: read the shading pass's reconstruction per pixel (FrameResult.attributes)
+  bool readAttributes = false;   // visbuf: the shading pass's reconstruction per pixel (FrameResult.attributes);
+                                // G-buffer: the position rebuilt from depth and the depth (slots 0..3, 7) only
+  double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };

@@ -2,10 +2,14 @@
 // the same frame. Coverage is the visibility buffer's by construction (same cull pass and draw lists, same
 // clipPosition(), same depth test), so colour is compared where visbuf and forward show the same triangle; the
 // background must be untouched. The difference allowed comes from the targets' formats, derived below.
+#include <algorithm>
 #include <cmath>
+
+#include <glm/glm.hpp>
 
 #include "gpu_test_util.h"
 #include "scene/generate.h"
+#include "shared/config.h"
 
 using namespace visbuf;
 
@@ -175,6 +179,54 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
               double(fragments) / pixels * g->stats.rasterBytesPerFragment + 8.0 * double(covered) / pixels, 1e-6);
   EXPECT_EQ(g->stats.targetBytesPerPixel, g->stats.rasterBytesPerFragment + 8u);
   EXPECT_GT(g->stats.bytesWrittenPerPixel, v->stats.bytesWrittenPerPixel);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// The lighting pass rebuilds the camera-relative position from the D32 depth alone (inverse projection). Reference:
+// the visibility buffer's reconstruction of the same pixel from the triangle (barycentrics, float), which the stress
+// suite checks against a double-precision ray cast. Bound: the depth is a float (2^-24 relative), the rebuild is a
+// handful of float operations, the raster's depth plane and the shading pass's barycentrics differ by rounding:
+// 5e-5 of the distance (lavapipe measured 1.2e-5; a wrong matrix, sign or pixel centre is off by whole pixels,
+// ~3e-3 of the distance per pixel at 320 px).
+TEST(GBuffer, PositionFromDepthMatchesVisbufReconstruction) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene scene = makeCityScene({.objects = 400, .seed = 3}).value();
+  auto r = Renderer::create(dev, scene, {.width = 320, .height = 200});
+  ASSERT_TRUE(r.ok());
+  Camera cam = scene.defaultCamera;
+  cam.position.y = 1.5;  // street level: distances from the near plane to the far end of the avenue
+  cam.target = cam.position + glm::dvec3(0.3, -0.05, -1.0);
+  FrameOptions fo;
+  fo.cull = CullMode::Frustum;
+  fo.lodErrorPixels = 0.0f;
+  fo.readColor = false;
+  fo.readAttributes = true;
+  fo.path = RenderPath::GBuffer;
+  auto g = (*r)->renderFrame(cam, fo);
+  fo.path = RenderPath::Visbuf;
+  auto v = (*r)->renderFrame(cam, fo);
+  ASSERT_TRUE(g.ok() && v.ok());
+  ASSERT_EQ(g->attributes.size(), v->attributes.size());
+  size_t compared = 0, coverageDiffers = 0, outside = 0;
+  double worst = 0.0, worstDepth = 0.0;
+  for (size_t p = 0; p < g->attributes.size() / ATTRIBUTE_FLOATS; ++p) {
+    const float* a = &g->attributes[p * ATTRIBUTE_FLOATS];
+    const float* b = &v->attributes[p * ATTRIBUTE_FLOATS];
+    if ((a[7] == 1.0f) != (b[7] == 1.0f)) ++coverageDiffers;
+    if (a[7] != 1.0f || b[7] != 1.0f) continue;
+    ++compared;
+    const glm::dvec3 pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]);
+    const double rel = glm::length(pa - pb) / glm::length(pb);
+    worst = std::max(worst, rel);
+    worstDepth = std::max(worstDepth, std::abs(double(a[3]) - b[3]) / b[3]);
+    outside += rel > 5e-5;
+  }
+  std::printf("gbuffer position from depth: %zu pixels, worst |dp|/distance %.2e, worst depth relative %.2e\n",
+              compared, worst, worstDepth);
+  EXPECT_GT(compared, size_t(320 * 200 / 2));
+  EXPECT_EQ(coverageDiffers, 0u);
+  EXPECT_EQ(outside, 0u);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
