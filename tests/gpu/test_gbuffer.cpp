@@ -94,11 +94,14 @@ void compareGBuffer(Renderer& r, const Camera& cam, CullMode cull, const std::st
               ev.meanAbs, ev.psnr, kMaxAbs, kMeanAbs, kMinPsnr);
   EXPECT_GT(covered, size_t(f.gbuffer.width) * f.gbuffer.height / 10) << "the frame must show geometry";
   EXPECT_EQ(backgroundWrong, 0u) << "uncovered pixels keep the background";
-  for (const ImageError& e : {ef, ev}) {
-    EXPECT_LE(e.maxAbs, kMaxAbs);
-    EXPECT_LE(e.meanAbs, kMeanAbs);
-    EXPECT_GE(e.psnr, kMinPsnr);
-  }
+  EXPECT_LE(ef.maxAbs, kMaxAbs);
+  EXPECT_LE(ef.meanAbs, kMeanAbs);
+  EXPECT_GE(ef.psnr, kMinPsnr);
+  // Against visbuf: the format budget plus whatever visbuf itself differs from the forward reference on this
+  // device (|g - v| <= |g - f| + |f - v|; lavapipe: < 1e-3, test_shading.cpp's bound).
+  const ImageError vf = compareColor(vb, fw);
+  EXPECT_LE(ev.maxAbs, kMaxAbs + vf.maxAbs);
+  EXPECT_LE(ev.meanAbs, kMeanAbs + vf.meanAbs);
   test::saveOnFailure(name, f.gbuffer, f.forward);
 }
 
@@ -139,7 +142,9 @@ TEST(GBuffer, MatchesForwardAndVisbufCityAfterResize) {
 
 // The bytes-per-pixel figures: the G-buffer raster writes exactly the fragments the visibility raster writes (same
 // draws in the same order, same depth test), each with its four targets + depth; checked against the
-// visibility path's own overdraw count and a sum over the read-back counts.
+// visibility path's own overdraw count and a sum over the read-back counts. The cull pass appends draws with
+// atomics, so their order (and with it which fragments pass the depth test when they run) changes from one cull to
+// the next: the G-buffer frame rasterises the visbuf frame's draw lists (freezeCulling).
 TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
@@ -151,25 +156,33 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
   fo.lodErrorPixels = 0.0f;
   fo.countOverdraw = true;
   fo.readColor = false;
-  fo.path = RenderPath::GBuffer;
-  auto g = (*r)->renderFrame(scene.defaultCamera, fo);
   fo.path = RenderPath::Visbuf;
   auto v = (*r)->renderFrame(scene.defaultCamera, fo);
+  fo.path = RenderPath::GBuffer;
+  fo.freezeCulling = true;
+  auto g = (*r)->renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(g.ok() && v.ok());
+  EXPECT_TRUE(g->stats.cullingFrozen);
   ASSERT_EQ(g->overdraw.size(), v->overdraw.size());
-  uint64_t fragments = 0, covered = 0, differ = 0;
+  uint64_t fragments = 0, covered = 0, differ = 0, coverageDiffers = 0;
   for (size_t p = 0; p < g->overdraw.size(); ++p) {
     fragments += g->overdraw[p];
     covered += g->overdraw[p] > 0;
     differ += g->overdraw[p] != v->overdraw[p];
+    coverageDiffers += (g->overdraw[p] > 0) != (v->overdraw[p] > 0);
   }
+  EXPECT_EQ(coverageDiffers, 0u) << "the same pixels are covered whatever the order";
   const double pixels = double(g->overdraw.size());
   std::printf("gbuffer bandwidth: %.3f raster writes/pixel, %u B/fragment, %.2f B written/pixel (visbuf %u B/fragment, "
               "%.2f B written/pixel)\n", g->stats.rasterWritesPerPixel, g->stats.rasterBytesPerFragment,
               g->stats.bytesWrittenPerPixel, v->stats.rasterBytesPerFragment, v->stats.bytesWrittenPerPixel);
   EXPECT_GT(double(fragments), 1.2 * double(covered)) << "a city view has overdraw";
-  // A CPU rasteriser runs both pipelines identically; a GPU may order ties differently at a few pixels.
-  EXPECT_LE(double(differ), (dev.isCpu() ? 0.0 : 1e-3) * pixels);
+  // A CPU rasteriser runs both pipelines identically. On a GPU, "passed the depth test when it ran" depends on the
+  // order in which fragments of one pixel run, which is not fixed between pipelines (H100: 0.24% of the pixels
+  // differ): allowed at 1% of the pixels, and the totals within 1%.
+  EXPECT_LE(double(differ), (dev.isCpu() ? 0.0 : 1e-2) * pixels);
+  EXPECT_NEAR(g->stats.rasterWritesPerPixel, v->stats.rasterWritesPerPixel,
+              (dev.isCpu() ? 1e-12 : 1e-2) * v->stats.rasterWritesPerPixel);
   EXPECT_NEAR(g->stats.rasterWritesPerPixel, double(fragments) / pixels, 1e-9);
   // Targets: base colour, normal, material, emissive, 4 bytes each at the compact formats (rg16f: also 4; rgba16f
   // emissive fallback: 8), plus the 4-byte depth.
@@ -184,15 +197,17 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
 
 // The lighting pass rebuilds the camera-relative position from the D32 depth alone (inverse projection). Reference:
 // the visibility buffer's reconstruction of the same pixel from the triangle (barycentrics, float), which the stress
-// suite checks against a double-precision ray cast. Bound: the depth is a float (2^-24 relative), the rebuild is a
-// handful of float operations, the raster's depth plane and the shading pass's barycentrics differ by rounding:
-// 5e-5 of the distance (lavapipe measured 1.2e-5; a wrong matrix, sign or pixel centre is off by whole pixels,
-// ~3e-3 of the distance per pixel at 320 px).
+// suite checks against a double-precision ray cast. Both lie on the pixel's ray, so they differ by the depth only.
+// Bound, relative to the distance: 5e-5 for float rounding (the depth is a float, 2^-24 relative; the rebuild is a
+// handful of float operations), plus the rasteriser's vertex snapping to 2^-subPixelPrecisionBits of a pixel, which
+// moves the depth plane by up to that fraction of the depth's change to the neighbouring pixels in x and y (grazing
+// surfaces: 1.4e-3 on the H100's 8 bits; lavapipe measured 1.2e-5 in all). A wrong matrix, sign or pixel centre is
+// off by whole pixels, far outside.
 TEST(GBuffer, PositionFromDepthMatchesVisbufReconstruction) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   Scene scene = makeCityScene({.objects = 400, .seed = 3}).value();
-  auto r = Renderer::create(dev, scene, {.width = 320, .height = 200});
+  auto r = Renderer::create(dev, scene, {.width = 320, .height = 200});  // w x h below
   ASSERT_TRUE(r.ok());
   Camera cam = scene.defaultCamera;
   cam.position.y = 1.5;  // street level: distances from the near plane to the far end of the avenue
@@ -208,23 +223,38 @@ TEST(GBuffer, PositionFromDepthMatchesVisbufReconstruction) {
   auto v = (*r)->renderFrame(cam, fo);
   ASSERT_TRUE(g.ok() && v.ok());
   ASSERT_EQ(g->attributes.size(), v->attributes.size());
+  const uint32_t w = 320, h = 200;
+  const double snap = std::ldexp(1.0, -int(dev.properties().limits.subPixelPrecisionBits));
+  auto distance = [&](int x, int y) -> double {  // visbuf's |position|, -1 where nothing was drawn
+    if (x < 0 || y < 0 || x >= int(w) || y >= int(h)) return -1.0;
+    const float* b = &v->attributes[(size_t(y) * w + size_t(x)) * ATTRIBUTE_FLOATS];
+    return b[7] == 1.0f ? glm::length(glm::dvec3(b[0], b[1], b[2])) : -1.0;
+  };
   size_t compared = 0, coverageDiffers = 0, outside = 0;
   double worst = 0.0, worstDepth = 0.0;
-  for (size_t p = 0; p < g->attributes.size() / ATTRIBUTE_FLOATS; ++p) {
-    const float* a = &g->attributes[p * ATTRIBUTE_FLOATS];
-    const float* b = &v->attributes[p * ATTRIBUTE_FLOATS];
-    if ((a[7] == 1.0f) != (b[7] == 1.0f)) ++coverageDiffers;
-    if (a[7] != 1.0f || b[7] != 1.0f) continue;
-    ++compared;
-    const glm::dvec3 pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]);
-    const double rel = glm::length(pa - pb) / glm::length(pb);
-    worst = std::max(worst, rel);
-    worstDepth = std::max(worstDepth, std::abs(double(a[3]) - b[3]) / b[3]);
-    outside += rel > 5e-5;
-  }
+  for (int y = 0; y < int(h); ++y)
+    for (int x = 0; x < int(w); ++x) {
+      const size_t p = size_t(y) * w + size_t(x);
+      const float* a = &g->attributes[p * ATTRIBUTE_FLOATS];
+      const float* b = &v->attributes[p * ATTRIBUTE_FLOATS];
+      if ((a[7] == 1.0f) != (b[7] == 1.0f)) ++coverageDiffers;
+      if (a[7] != 1.0f || b[7] != 1.0f) continue;
+      ++compared;
+      const glm::dvec3 pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]);
+      const double d = glm::length(pb);
+      const double rel = glm::length(pa - pb) / d;
+      double gx = 0.0, gy = 0.0;  // the largest change of the distance to a drawn neighbour, per axis
+      for (int s : {-1, 1}) {
+        if (double n = distance(x + s, y); n >= 0.0) gx = std::max(gx, std::abs(n - d));
+        if (double n = distance(x, y + s); n >= 0.0) gy = std::max(gy, std::abs(n - d));
+      }
+      worst = std::max(worst, rel);
+      worstDepth = std::max(worstDepth, std::abs(double(a[3]) - b[3]) / b[3]);
+      outside += rel > 5e-5 + snap * (gx + gy) / d;
+    }
   std::printf("gbuffer position from depth: %zu pixels, worst |dp|/distance %.2e, worst depth relative %.2e\n",
               compared, worst, worstDepth);
-  EXPECT_GT(compared, size_t(320 * 200 / 2));
+  EXPECT_GT(compared, size_t(w * h / 2));
   EXPECT_EQ(coverageDiffers, 0u);
   EXPECT_EQ(outside, 0u);
   EXPECT_NO_VALIDATION_MESSAGES(before);
