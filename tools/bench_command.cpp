@@ -60,9 +60,9 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
       ->check(CLI::Range(0u, 10000u))
       ->capture_default_str();
   sub->add_option("--device", c.device, "auto | cpu | gpu | N")->capture_default_str();
-  sub->add_option("--paths", c.paths, "render paths: visbuf,forward")
+  sub->add_option("--paths", c.paths, "render paths: visbuf,forward,gbuffer (G-buffer deferred baseline)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"visbuf", "forward"}));
+      ->check(CLI::IsMember({"visbuf", "forward", "gbuffer"}));
   sub->add_option("--cull", c.cull, "culling modes: none,frustum,occlusion (forward: no occlusion, skipped)")
       ->delimiter(',')
       ->check(CLI::IsMember({"none", "frustum", "occlusion"}));
@@ -176,6 +176,9 @@ struct Row {
   double frameMedian = 0, frameP95 = 0, gpuMedian = 0, gpuP95 = 0, cpuMedian = 0, wallMedian = 0;
   double trianglesMedian = 0, drawnMedian = 0;
   uint64_t sceneBytes = 0, targetBytesPerPixel = 0;
+  // One extra (untimed) frame at the last measured camera with countOverdraw: depth-passing raster writes per
+  // pixel and the bytes written per pixel (FrameStats::bytesWrittenPerPixel).
+  double rasterWritesPerPixel = 0, bytesWrittenPerPixel = 0;
   double psnrMean = INFINITY, psnrWorst = INFINITY, maxAbs = 0, meanAbs = 0, differingFraction = 0;
   std::optional<uint64_t> idMismatches;  // pixels over all measured frames; empty: not comparable
   uint64_t idPixels = 0;
@@ -238,7 +241,9 @@ int runBench(const BenchCommand& c) {
   nlohmann::json skipped = nlohmann::json::array();
   for (const std::string& p : c.paths)
     for (const std::string& cu : c.cull) {
-      const RenderPath path = p == "forward" ? RenderPath::Forward : RenderPath::Visbuf;
+      const RenderPath path = p == "forward"   ? RenderPath::Forward
+                              : p == "gbuffer" ? RenderPath::GBuffer
+                                               : RenderPath::Visbuf;
       const CullMode cull = cu == "none" ? CullMode::None : cu == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
       if (path == RenderPath::Forward && cull == CullMode::Occlusion) {
         skipped.push_back({{"path", p}, {"cull", cu},
@@ -248,7 +253,7 @@ int runBench(const BenchCommand& c) {
       for (float l : lods)
         for (const std::string& ids : c.ids)
           for (const std::string& v : c.vertices) {
-            if (path == RenderPath::Forward && ids != c.ids.front()) continue;  // no ID target to vary
+            if (path != RenderPath::Visbuf && ids != c.ids.front()) continue;  // no ID target to vary
             configs.push_back(
                 {path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide", v == "quantized"});
           }
@@ -390,6 +395,18 @@ int runBench(const BenchCommand& c) {
         if (idComparable) mismatches += countIdMismatches(frame->ids, fullIds[f]);
       }
       Row row;
+      {  // bandwidth: the raster's real writes at the last measured camera (not timed: the counting costs atomics)
+        FrameOptions bo;
+        bo.path = k.path;
+        bo.cull = k.cull;
+        bo.lodErrorPixels = k.lod;
+        bo.readColor = false;
+        bo.countOverdraw = true;
+        auto frame = rk.renderFrame(path.back(), bo);
+        if (!frame) return fail(frame.error());
+        row.rasterWritesPerPixel = frame->stats.rasterWritesPerPixel;
+        row.bytesWrittenPerPixel = frame->stats.bytesWrittenPerPixel;
+      }
       row.objects = objects;
       row.config = k;
       row.reference = info.reference;
@@ -529,6 +546,8 @@ int runBench(const BenchCommand& c) {
     x["objectsDrawn"] = row.drawnMedian;
     x["sceneBytes"] = row.sceneBytes;
     x["targetBytesPerPixel"] = row.targetBytesPerPixel;
+    x["rasterWritesPerPixel"] = row.rasterWritesPerPixel;
+    x["bytesWrittenPerPixel"] = row.bytesWrittenPerPixel;
     x["error"] = {{"psnrMean", dbJson(row.psnrMean)},
                   {"psnrWorst", dbJson(row.psnrWorst)},
                   {"maxAbs", row.maxAbs},
@@ -556,7 +575,7 @@ int runBench(const BenchCommand& c) {
     std::replace(n.begin(), n.end(), ' ', '_');
     csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
   }
-  csv += "\n";
+  csv += ",raster_writes_per_pixel,bytes_written_per_pixel\n";  // last: the columns before are fixed
   for (const Row& row : rows) {
     csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
@@ -571,7 +590,7 @@ int runBench(const BenchCommand& c) {
       const auto* p = passOf(row, n);
       csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
     }
-    csv += "\n";
+    csv += fmt::format(",{:.4f},{:.2f}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel);
   }
 
   // bench.md
@@ -580,7 +599,9 @@ int runBench(const BenchCommand& c) {
                     c.warmup, size->first, size->second, date);
   md += "frame ms = GPU passes + CPU cull/record (median, p95); PSNR vs the reference: over all measured frames / worst "
         "frame; ID mism. = pixels whose decoded (object, triangle) differ from visbuf with no culling and no LOD; "
-        "P = on the Pareto front (time vs PSNR; PSNRs within 0.1 dB count as equal).\n\n";
+        "P = on the Pareto front (time vs PSNR; PSNRs within 0.1 dB count as equal); B/px = bytes per pixel of the "
+        "path's targets / bytes written per pixel at the last camera (raster writes x bytes per fragment + resolve "
+        "colour; clears not counted).\n\n";
   for (const SceneInfo& s : scenes)
     md += fmt::format("- {} objects: {} objects, {} full-detail triangles; reference {} ({:.1f} ms a frame)\n",
                       objectsLabel(s.objects), s.sceneObjects, s.triangles, s.reference, s.referenceFrameMsMedian);
@@ -590,11 +611,11 @@ int runBench(const BenchCommand& c) {
   for (const Row& row : rows) {
     std::string passes;
     for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
-    md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} | {} | {} | "
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} / {:.1f} | {} | {} | "
                       "{:.4f} | {:.3f}% | {} | {} |\n",
                       objectsLabel(row.objects), renderPathName(row.config.path), cullModeName(row.config.cull),
                       row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
-                      row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, dbText(row.psnrMean),
+                      row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, row.bytesWrittenPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),
                       row.pareto ? "P" : "");

@@ -45,6 +45,9 @@ const char* cullColour(const std::string& cull) {
 }
 
 std::string marker(const std::string& path, double x, double y, const char* colour) {
+  if (path == "gbuffer")  // diamond
+    return fmt::format(R"~(<polygon points="{:.1f},{:.1f} {:.1f},{:.1f} {:.1f},{:.1f} {:.1f},{:.1f}" fill="{}" fill-opacity="0.85" stroke="#000" stroke-width="0.6"/>)~",
+                       x, y - 6, x + 6, y, x, y + 6, x - 6, y, colour);
   if (path == "forward")
     return fmt::format(R"~(<rect x="{:.1f}" y="{:.1f}" width="9" height="9" fill="{}" fill-opacity="0.85" stroke="#000" stroke-width="0.6"/>)~",
                        x - 4.5, y - 4.5, colour);
@@ -226,6 +229,9 @@ std::string renderBenchSvg(const std::vector<PlotPanel>& panels, const std::stri
   lx += 70;
   s += marker("forward", lx + 6, ly - 4, "#999") + "\n";
   s += fmt::format(R"~(<text x="{:.1f}" y="{:.1f}" font-size="12">forward</text>)~" "\n", lx + 16, ly);
+  lx += 70;
+  s += marker("gbuffer", lx + 6, ly - 4, "#999") + "\n";
+  s += fmt::format(R"~(<text x="{:.1f}" y="{:.1f}" font-size="12">gbuffer</text>)~" "\n", lx + 16, ly);
   s += fmt::format(R"~(<text x="16" y="{:.1f}" font-size="11" fill="#333">labels: LOD threshold in px (off = full detail). Ringed points on the dashed line: the Pareto front</text>)~" "\n",
                    ly + 22);
   s += fmt::format(R"~(<text x="16" y="{:.1f}" font-size="11" fill="#333">(no other configuration is both at least as fast and at least as accurate). PSNR "exact": identical to the reference.</text>)~" "\n",

@@ -21,8 +21,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   addSceneOptions(*sub, c.scene);
   addCameraOptions(*sub, c.camera);
   sub->add_option("--size", c.size, "image size WxH")->capture_default_str();
-  sub->add_option("--path", c.path, "visbuf | forward (CPU-culled, one draw per object reference)")
-      ->check(CLI::IsMember({"visbuf", "forward"}))
+  sub->add_option("--path", c.path,
+                  "visbuf | forward (CPU-culled, one draw per object reference) | gbuffer (visbuf's culling, deferred "
+                  "G-buffer raster + lighting baseline; no IDs)")
+      ->check(CLI::IsMember({"visbuf", "forward", "gbuffer"}))
       ->capture_default_str();
   sub->add_option("--device", c.device, "auto | cpu | gpu | N (auto prefers a GPU, else lavapipe)")->capture_default_str();
   sub->add_option("--cull", c.cull, "none | frustum | occlusion (two-phase, depth pyramid; forward path: frustum)")
@@ -88,7 +90,9 @@ int runRender(const RenderCommand& c) {
   if (!renderer) return fail(renderer.error());
 
   FrameOptions fo;
-  fo.path = c.path == "forward" ? RenderPath::Forward : RenderPath::Visbuf;
+  fo.path = c.path == "forward"   ? RenderPath::Forward
+            : c.path == "gbuffer" ? RenderPath::GBuffer
+                                  : RenderPath::Visbuf;
   fo.cull = c.cull == "none" ? CullMode::None : c.cull == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
@@ -130,11 +134,12 @@ int runRender(const RenderCommand& c) {
     }
     return stats;
   };
-  const bool compare = (c.reference || c.referenceFull) && fo.path == RenderPath::Visbuf;
+  const bool compare = (c.reference || c.referenceFull) && fo.path != RenderPath::Forward;
   if (c.reference && c.referenceFull)
     return fail({ErrorCode::InvalidArgument, "--reference and --reference-full are exclusive"});
   if (c.freezeCulling) {
-    if (fo.path != RenderPath::Visbuf) return fail({ErrorCode::InvalidArgument, "--freeze-culling needs --path visbuf"});
+    if (fo.path == RenderPath::Forward)
+      return fail({ErrorCode::InvalidArgument, "--freeze-culling needs --path visbuf or gbuffer"});
     FrameOptions cullFrame = fo;
     cullFrame.readColor = false;
     for (int i = 0; i < 3; ++i) {  // occlusion mode's history settles after two frames

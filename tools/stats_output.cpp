@@ -23,12 +23,12 @@ std::string formatStats(const FrameStats& s) {
   std::string lods;
   for (size_t i = 0; i < s.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.lodHistogram[i]);
   out += fmt::format("lod histogram [{}]\n", lods);
-  if (s.path == RenderPath::Visbuf) {
+  if (s.path != RenderPath::Forward) {
     if (s.cullingFrozen) out += "culling       FROZEN: draw lists of an earlier frame\n";
     out += fmt::format("pyramid       {}\n", s.pyramidLevels  ? fmt::format("{} levels", s.pyramidLevels)
                                             : s.pyramidSkipped ? std::string("skipped (the last one hid nothing)")
                                                                : std::string("not built"));
-    out += fmt::format("ids           {}\n", s.ids.describe());
+    if (s.path == RenderPath::Visbuf) out += fmt::format("ids           {}\n", s.ids.describe());
     out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
                        s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
   }
@@ -40,6 +40,9 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
   out += fmt::format("memory        scene {:.1f} MiB, targets {} B/pixel\n", s.sceneBytes / 1048576.0,
                      s.targetBytesPerPixel);
+  if (s.rasterWritesPerPixel > 0.0)
+    out += fmt::format("bandwidth     {:.2f} raster writes/pixel x {} B + resolve = {:.1f} B written/pixel\n",
+                       s.rasterWritesPerPixel, s.rasterBytesPerFragment, s.bytesWrittenPerPixel);
   return out;
 }
 
@@ -81,6 +84,11 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["animationCpuMs"] = s.animationCpuMs;
   j["sceneBytes"] = s.sceneBytes;
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
+  j["rasterBytesPerFragment"] = s.rasterBytesPerFragment;
+  if (s.rasterWritesPerPixel > 0.0) {
+    j["rasterWritesPerPixel"] = s.rasterWritesPerPixel;
+    j["bytesWrittenPerPixel"] = s.bytesWrittenPerPixel;
+  }
   return j;
 }
 

@@ -15,6 +15,16 @@
 #include "visibility_overdraw.frag.h"
 #include "visibility_wide_overdraw.frag.h"
 #include "forward.vert.h"
+#include "gbuffer.frag.h"
+#include "gbuffer_lighting.comp.h"
+#include "gbuffer_lighting_attributes.comp.h"
+#include "gbuffer_overdraw.frag.h"
+#include "gbuffer_masked_overdraw.frag.h"
+#include "gbuffer_masked_overdraw_textured.frag.h"
+#include "gbuffer_masked.frag.h"
+#include "gbuffer_masked_textured.frag.h"
+#include "gbuffer_textured.frag.h"
+#include "gbuffer_overdraw_textured.frag.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
 #include "skin.comp.h"
@@ -86,6 +96,16 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("forward_masked_ids_textured.frag", spv_forward_masked_ids_textured_frag)
   VB_SHADER("forward_masked_overdraw_textured.frag", spv_forward_masked_overdraw_textured_frag)
   VB_SHADER("transparent_textured.frag", spv_transparent_textured_frag)
+  VB_SHADER("gbuffer.frag", spv_gbuffer_frag)
+  VB_SHADER("gbuffer_textured.frag", spv_gbuffer_textured_frag)
+  VB_SHADER("gbuffer_overdraw.frag", spv_gbuffer_overdraw_frag)
+  VB_SHADER("gbuffer_masked_overdraw.frag", spv_gbuffer_masked_overdraw_frag)
+  VB_SHADER("gbuffer_masked_overdraw_textured.frag", spv_gbuffer_masked_overdraw_textured_frag)
+  VB_SHADER("gbuffer_masked.frag", spv_gbuffer_masked_frag)
+  VB_SHADER("gbuffer_masked_textured.frag", spv_gbuffer_masked_textured_frag)
+  VB_SHADER("gbuffer_overdraw_textured.frag", spv_gbuffer_overdraw_textured_frag)
+  VB_SHADER("gbuffer_lighting.comp", spv_gbuffer_lighting_comp)
+  VB_SHADER("gbuffer_lighting_attributes.comp", spv_gbuffer_lighting_attributes_comp)
 #undef VB_SHADER
   return {};
 }

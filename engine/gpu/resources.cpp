@@ -186,6 +186,10 @@ uint32_t formatBytes(VkFormat format) {
     case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
     case VK_FORMAT_D32_SFLOAT: return 4;
     case VK_FORMAT_R8G8B8A8_UNORM: return 4;
+    case VK_FORMAT_R8G8B8A8_SRGB: return 4;
+    case VK_FORMAT_R16G16_SNORM: return 4;
+    case VK_FORMAT_R16G16_SFLOAT: return 4;
+    case VK_FORMAT_B10G11R11_UFLOAT_PACK32: return 4;
     default: return 0;
   }
 }

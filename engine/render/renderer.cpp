@@ -3,6 +3,7 @@
 //   setup ─► cull.comp ─► visibility.{vert,frag} ─► shade.comp ─► readback      (visbuf path)
 //   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
 //   both: ─► transparent_pass before the readback, only for scenes with BLEND materials
+//   setup ─► cull.comp ─► gbuffer.{vert,frag} ─► gbuffer_lighting.comp ─► readback (G-buffer baseline)
 //
 // Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
 // crashed on a dispatch + barrier + timestamps in one command buffer).
@@ -24,6 +25,8 @@
 #include "passes/cull_pass.h"
 #include "passes/depth_pyramid_pass.h"
 #include "passes/forward_pass.h"
+#include "passes/gbuffer_lighting_pass.h"
+#include "passes/gbuffer_pass.h"
 #include "passes/shade_pass.h"
 #include "passes/skin_pass.h"
 #include "passes/transparent_pass.h"
@@ -34,7 +37,9 @@
 
 namespace visbuf {
 
-const char* renderPathName(RenderPath path) { return path == RenderPath::Visbuf ? "visbuf" : "forward"; }
+const char* renderPathName(RenderPath path) {
+  return path == RenderPath::Visbuf ? "visbuf" : path == RenderPath::GBuffer ? "gbuffer" : "forward";
+}
 const char* cullModeName(CullMode mode) {
   return mode == CullMode::None ? "none" : mode == CullMode::Frustum ? "frustum" : "occlusion";
 }
@@ -107,6 +112,10 @@ struct Renderer::Impl {
   passes::ForwardPass forward;
   passes::TransparentPass transparent;  // created only when blendObjects is not empty
   passes::DepthPyramidPass pyramid;
+  passes::GBufferPass gbuffer;                   // G-buffer baseline raster
+  passes::GBufferLightingPass gbufferLighting;  // and its lighting
+  std::array<gpu::Image, GBUFFER_TARGETS> gbufferTargets;  // created by the first G-buffer frame after a resize
+  gpu::Specialization textured;  // specialisation of every frame pipeline (windows, texture classes)
   std::unique_ptr<AnimationState> animation;  // skinned scenes only
   passes::SkinPass skin;
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
@@ -167,6 +176,8 @@ struct Renderer::Impl {
         {BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES, all, nullptr},
         {BINDING_VERTEX_EXTRAS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_DRAW_LISTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_GBUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GBUFFER_TARGETS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_GBUFFER_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -182,7 +193,7 @@ struct Renderer::Impl {
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15},
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
-                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
+                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
@@ -224,6 +235,7 @@ struct Renderer::Impl {
     const VkDeviceSize pixels = VkDeviceSize(width) * height;
     colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
     forwardIds.reset();
+    for (gpu::Image& t : gbufferTargets) t.reset();
     overdrawReadback.reset();
     resizeAttributes(ATTRIBUTE_FLOATS * sizeof(float));
     overdraw = gpu::Image(device, VK_FORMAT_R32_UINT, width, height,
@@ -320,7 +332,40 @@ struct Renderer::Impl {
     x.pImageInfo = nullptr;
     x.pBufferInfo = &extrasInfo;
     w.push_back(x);
+    x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    x.pBufferInfo = nullptr;
+    // G-buffer targets: until a G-buffer frame creates them, the depth stands in (lavapipe reads every descriptor
+    // of a bound set, so none may stay unwritten; only gbuffer_lighting.comp samples these).
+    VkDescriptorImageInfo gbufferDepthInfo{sampler, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    std::array<VkDescriptorImageInfo, GBUFFER_TARGETS> gbufferInfo{};
+    for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
+      gbufferInfo[i] = gbufferTargets[i] ? VkDescriptorImageInfo{sampler, gbufferTargets[i].view(),
+                                                                 VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+                                         : gbufferDepthInfo;
+    x.dstBinding = BINDING_GBUFFER;
+    x.descriptorCount = GBUFFER_TARGETS;
+    x.pImageInfo = gbufferInfo.data();
+    w.push_back(x);
+    x.dstBinding = BINDING_GBUFFER_DEPTH;
+    x.descriptorCount = 1;
+    x.pImageInfo = &gbufferDepthInfo;
+    w.push_back(x);
     vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
+  }
+
+  // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
+  // for them).
+  void ensureGBufferTargets() {
+    if (gbuffer.formats.color[0] == VK_FORMAT_UNDEFINED) {  // not created yet
+      gbuffer = passes::GBufferPass::create(device, pipelineLayout, textured, listMask);
+      gbufferLighting = passes::GBufferLightingPass::create(device, pipelineLayout, textured.windowed);
+    }
+    if (gbufferTargets[0]) return;
+    for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
+      gbufferTargets[i] = gpu::Image(device, gbuffer.formats.color[i], config.width, config.height,
+                                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                                     VK_IMAGE_ASPECT_COLOR_BIT);
+    writeDescriptors();
   }
 
   void beginCmd(VkCommandBuffer cmd) {
@@ -365,6 +410,7 @@ struct Renderer::Impl {
 
   Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
   void recordVisbuf(const FrameOptions& options, uint32_t& used);
+  void recordGBufferLighting(uint32_t& used, bool writeAttributes);
   std::vector<passes::ForwardDraw> forwardCull(const Camera& camera, const FrameMath& math,
                                                const FrameOptions& options, FrameStats& stats) const;
   bool cullObject(uint32_t i, const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
@@ -486,8 +532,11 @@ void Renderer::Impl::recordTransparent(const Camera& camera, const FrameMath& ma
   VK_CHECK(vkEndCommandBuffer(cmd));
 }
 
+// The GPU-culled frame of the visbuf path, and of the G-buffer baseline (same culling and draw lists; its raster
+// writes the attribute targets and its last pass is the deferred lighting instead of the ID resolve).
 void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   const uint32_t w = config.width, h = config.height;
+  const bool deferred = options.path == RenderPath::GBuffer;
   const bool frozen = options.freezeCulling && haveDraws;
   const bool occlusion = (frozen ? lastCull : options.cull) == CullMode::Occlusion;
   constexpr VkPipelineStageFlags2 kDepthStages =
@@ -510,6 +559,14 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
+  // The draw lists of a phase, in drawing order (draw buffer regions and counts: the cull pass's).
+  auto phaseLists = [&](uint32_t phase) {
+    std::vector<passes::VisibilityList> lists;
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+      if (listCapacity[l] > 0)
+        lists.push_back({l, phase * capacity + listFirst[l], STAT_LIST_DRAWS + phase * DRAW_LISTS + l, listCapacity[l]});
+    return lists;
+  };
   auto recordRaster = [&](uint32_t phase, bool clear, const char* name) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
@@ -517,9 +574,15 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
                        VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
     if (clear) {
-      gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
-                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+      if (deferred)
+        for (const gpu::Image& t : gbufferTargets)
+          gpu::imageBarrier(cmd, t, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                            VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+      else
+        gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
+                          VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                         kDepthStages | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
     } else {
@@ -534,15 +597,28 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
     }
     uint32_t t = timestamps->begin(cmd, name);
+    if (deferred) {
+      passes::GBufferInputs in;
+      for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) in.targets[i] = &gbufferTargets[i];
+      in.depth = &depth;
+      in.indexBuffer = gpuScene.indices.handle();
+      in.draws = draws.handle();
+      in.drawCount = stats.handle();
+      in.lists = phaseLists(phase);
+      in.clear = clear;
+      in.countOverdraw = options.countOverdraw;
+      gbuffer.record(cmd, pipelineLayout, set, in);
+      timestamps->end(cmd, t);
+      VK_CHECK(vkEndCommandBuffer(cmd));
+      return;
+    }
     passes::VisibilityInputs in;
     in.ids = &ids;
     in.depth = &depth;
     in.indexBuffer = gpuScene.indices.handle();
     in.draws = draws.handle();
     in.drawCount = stats.handle();
-    for (uint32_t l = 0; l < DRAW_LISTS; ++l)
-      if (listCapacity[l] > 0)
-        in.lists.push_back({l, phase * capacity + listFirst[l], STAT_LIST_DRAWS + phase * DRAW_LISTS + l, listCapacity[l]});
+    in.lists = phaseLists(phase);
     in.clear = clear;
     in.countOverdraw = options.countOverdraw;
     visibility.record(cmd, pipelineLayout, set, in);
@@ -550,18 +626,21 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
 
+  const char* rasterOnly = deferred ? "gbuffer" : "visibility";
+  const char* rasterEarly = deferred ? "gbuffer early" : "raster early";
+  const char* rasterLate = deferred ? "gbuffer late" : "raster late";
   if (frozen) {  // the draw lists and their counts are the frozen frame's: raster them as they are
-    recordRaster(CULL_PHASE_EARLY, true, occlusion ? "raster early" : "visibility");
-    if (occlusion) recordRaster(CULL_PHASE_LATE, false, "raster late");
+    recordRaster(CULL_PHASE_EARLY, true, occlusion ? rasterEarly : rasterOnly);
+    if (occlusion) recordRaster(CULL_PHASE_LATE, false, rasterLate);
   } else if (!occlusion) {
     recordCull(CULL_PHASE_EARLY, "cull");
-    recordRaster(CULL_PHASE_EARLY, true, "visibility");
+    recordRaster(CULL_PHASE_EARLY, true, rasterOnly);
   } else {
     recordCull(CULL_PHASE_EARLY, "cull early");
-    recordRaster(CULL_PHASE_EARLY, true, "raster early");
+    recordRaster(CULL_PHASE_EARLY, true, rasterEarly);
     if (!usePyramid) {  // the late phase runs frustum + sub-pixel tests only
       recordCull(CULL_PHASE_LATE, "cull late");
-      recordRaster(CULL_PHASE_LATE, false, "raster late");
+      recordRaster(CULL_PHASE_LATE, false, rasterLate);
     }
   }
   if (!frozen && occlusion && usePyramid) {
@@ -578,7 +657,11 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
     recordCull(CULL_PHASE_LATE, "cull late");
-    recordRaster(CULL_PHASE_LATE, false, "raster late");
+    recordRaster(CULL_PHASE_LATE, false, rasterLate);
+  }
+  if (deferred) {
+    recordGBufferLighting(used, options.readAttributes);
+    return;
   }
 
   // shade
@@ -606,6 +689,37 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   VK_CHECK(vkEndCommandBuffer(cmd));
 }
 
+// G-buffer baseline: after the last raster phase the targets and the depth become sampled images of the
+// lighting pass, which writes the covered pixels of the (background-cleared) colour image.
+void Renderer::Impl::recordGBufferLighting(uint32_t& used, bool writeAttributes) {
+  VkCommandBuffer cmd = cmds[used++];
+  beginCmd(cmd);
+  for (const gpu::Image& t : gbufferTargets)
+    gpu::imageBarrier(cmd, t, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                    VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  uint32_t t = timestamps->begin(cmd, "lighting");
+  VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
+  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  if (writeAttributes) {
+    vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height, writeAttributes);
+  timestamps->end(cmd, t);
+  VK_CHECK(vkEndCommandBuffer(cmd));
+}
+
 Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOptions& options) {
   using Clock = std::chrono::steady_clock;
   for (double v : {camera.position.x, camera.position.y, camera.position.z, camera.target.x, camera.target.y,
@@ -617,12 +731,17 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (glm::length(glm::cross(glm::normalize(camera.target - camera.position), glm::normalize(camera.up))) < 1e-9)
     return makeError(ErrorCode::InvalidArgument, "camera: view direction is parallel to the up vector");
 
+  if (options.readIds && options.path == RenderPath::GBuffer)
+    return makeError(ErrorCode::InvalidArgument, "the G-buffer path writes no IDs (readIds: visbuf or forward)");
+  if (options.path == RenderPath::GBuffer) ensureGBufferTargets();  // once: not part of the frame's CPU time
+
   const auto t0 = Clock::now();
   const uint32_t w = config.width, h = config.height;
-  const bool frozen = options.path == RenderPath::Visbuf && options.freezeCulling && haveDraws;
-  const bool occlusionFrame = options.path == RenderPath::Visbuf && !frozen && options.cull == CullMode::Occlusion;
+  const bool gpuCulled = options.path != RenderPath::Forward;  // visbuf and G-buffer: cull pass + draw lists
+  const bool frozen = gpuCulled && options.freezeCulling && haveDraws;
+  const bool occlusionFrame = gpuCulled && !frozen && options.cull == CullMode::Occlusion;
   usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
-  const bool readAttributes = options.readAttributes && options.path == RenderPath::Visbuf;
+  const bool readAttributes = options.readAttributes && gpuCulled;  // G-buffer: position and depth only
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
   if (readAttributes && attributes.size() < attributeBytes) {  // no frame is in flight: safe to rewrite the set
     resizeAttributes(attributeBytes);
@@ -686,13 +805,16 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.pyramidSkipped = occlusionFrame && !usePyramid;
   st.cullingFrozen = frozen;
   st.pyramidLevels = builtPyramid ? pyramid.levels() : 0;
-  if (options.path == RenderPath::Visbuf) {
+  if (gpuCulled) {
     FrameOptions visbufOptions = options;
     visbufOptions.readAttributes = readAttributes;
     recordVisbuf(visbufOptions, used);
     haveDraws = true;
     lastCull = effectiveCull;
-    st.targetBytesPerPixel = gpu::formatBytes(ids.format()) + 4 /*depth*/ + 8 /*colour*/;
+    st.rasterBytesPerFragment =
+        (options.path == RenderPath::GBuffer ? gbuffer.formats.bytesPerPixel() : gpu::formatBytes(ids.format())) +
+        4 /*depth*/;
+    st.targetBytesPerPixel = st.rasterBytesPerFragment + 8 /*colour*/;
   } else {
     std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
     if (options.readDraws)
@@ -727,6 +849,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
     st.targetBytesPerPixel = 4 /*depth*/ + 8 /*colour*/;
+    st.rasterBytesPerFragment = 4 /*depth*/ + 8 /*colour*/;
   }
   if (!blendObjects.empty()) recordTransparent(camera, math, options, st, used);
 
@@ -738,13 +861,13 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   VkBufferCopy statsCopy{0, 0, STAT_COUNT * sizeof(uint32_t)};
   vkCmdCopyBuffer(cmd, stats.handle(), statsReadback.handle(), 1, &statsCopy);
   if (options.readColor) {
-    VkImageLayout from = options.path == RenderPath::Visbuf ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    VkImageLayout from = gpuCulled ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
     gpu::imageBarrier(cmd, *colorSource, from, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                       VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
     copyImageToBuffer(cmd, *colorSource, colorReadback);
   }
   const bool readIds = options.readIds;
-  const bool readDraws = (readIds || options.readDraws) && options.path == RenderPath::Visbuf;
+  const bool readDraws = (readIds || options.readDraws) && gpuCulled;
   if (readDraws) {
     if (!drawsReadback)
       drawsReadback = gpu::Buffer(device, draws.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
@@ -822,7 +945,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
 
   st.passMs = timestamps->read();
   for (auto& p : st.passMs) st.gpuMs += p.second;
-  if (options.path == RenderPath::Visbuf) {
+  if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
     st.objectsTested = gpuScene.objectCount;
     st.frustumCulled = s[STAT_FRUSTUM_CULLED];
@@ -880,6 +1003,14 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (options.countOverdraw) {
     const uint32_t* o = static_cast<const uint32_t*>(overdrawReadback.mapped());
     result.overdraw.assign(o, o + pixels);
+    uint64_t fragments = 0, covered = 0;
+    for (uint32_t n : result.overdraw) {
+      fragments += n;
+      covered += n > 0;
+    }
+    st.rasterWritesPerPixel = double(fragments) / double(pixels);
+    const double resolveBytes = gpuCulled ? 8.0 * double(covered) / double(pixels) : 0.0;  // colour, covered only
+    st.bytesWrittenPerPixel = st.rasterWritesPerPixel * st.rasterBytesPerFragment + resolveBytes;
   }
   if (readAttributes) {
     const float* a = static_cast<const float*>(attributesReadback.mapped());
@@ -993,6 +1124,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
     lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l], 0u};
   impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
   std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
+  impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
   impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                   gpu::MemoryUse::HostVisible);
   impl->draws = gpu::Buffer(device, drawBytes,

@@ -20,7 +20,9 @@
 
 namespace visbuf {
 
-enum class RenderPath { Visbuf, Forward };
+// GBuffer: the visbuf path's culling (both occlusion phases) feeding a deferred G-buffer raster + lighting pass
+// (the baseline of the benchmark; no IDs).
+enum class RenderPath { Visbuf, Forward, GBuffer };
 enum class CullMode { None, Frustum, Occlusion };
 
 const char* renderPathName(RenderPath path);
@@ -45,8 +47,9 @@ struct FrameOptions {
                                 // the camera can move on and show what that frame culled
   bool readPyramid = false;     // read every depth pyramid level back (occlusion mode)
   bool countOverdraw = false;   // debug: count raster writes per pixel (FrameResult.overdraw)
-  bool readAttributes = false;
-  double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)  // visbuf: read the shading pass's reconstruction per pixel (FrameResult.attributes)
+  bool readAttributes = false;   // visbuf: the shading pass's reconstruction per pixel (FrameResult.attributes);
+                                // G-buffer: the position rebuilt from depth and the depth (slots 0..3, 7) only
+  double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };
@@ -91,7 +94,15 @@ struct FrameStats {
   bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
   double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
-  uint64_t targetBytesPerPixel = 0;
+  uint64_t targetBytesPerPixel = 0;  // bytes per pixel of the path's screen targets (raster targets, depth, colour)
+  // Bytes one depth-passing raster fragment writes: visbuf ID + depth, G-buffer targets + depth, forward colour +
+  // depth.
+  uint32_t rasterBytesPerFragment = 0;
+  // With countOverdraw: depth-passing raster fragments per pixel (all pixels), and the bytes written per pixel =
+  // fragments x rasterBytesPerFragment + the resolve's colour write (visbuf/G-buffer: 8 per covered pixel).
+  // Clears are not counted. 0 without countOverdraw.
+  double rasterWritesPerPixel = 0.0;
+  double bytesWrittenPerPixel = 0.0;
 };
 
 struct FrameResult {

@@ -119,6 +119,11 @@
 // Bindings 20..27 are reserved for lights and the G-buffer baseline, 28..31 for alpha-masked and blended
 // geometry.
 #define BINDING_DRAW_LISTS 28  // uvec4[DRAW_LISTS]: x first slot (early phase), y first slot (late), z capacity
+// G-buffer baseline (gbuffer_pass, gbuffer_lighting_pass): the raster's attribute targets, read back by the
+// lighting pass with texelFetch (constant indices only: lavapipe has no dynamic sampled-image indexing).
+#define GBUFFER_TARGETS 4       // base colour + alpha, octahedral normal, metallic/roughness/occlusion, emissive
+#define BINDING_GBUFFER 24      // sampler2D[GBUFFER_TARGETS]
+#define BINDING_GBUFFER_DEPTH 25  // sampler2D: the frame's D32 depth (reverse-Z), after both raster phases
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
 //  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),

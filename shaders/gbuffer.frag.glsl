@@ -1,0 +1,65 @@
+#version 460
+// G-buffer baseline, fragment stage (vertex stage: forward.vert): evaluates the material once per depth-passing
+// fragment (the cost the visibility buffer avoids under overdraw), with the hardware's derivatives as the forward
+// path, and stores the surface in the usual attribute targets:
+//   RT0 rgba8 sRGB   base colour (linear in the shader, sRGB-encoded by the target), alpha
+//   RT1 rg16 snorm   unit world normal (after normal mapping), octahedral (octahedral.glsl), or rg16f where snorm
+//                    cannot be rendered to
+//   RT2 rgba8 unorm  metallic, roughness, occlusion, unused
+//   RT3 b10g11r11    emissive radiance (rgba16f where that format cannot be rendered to)
+// plus the D32 reverse-Z depth, from which gbuffer_lighting.comp rebuilds the position.
+// ALPHA_MASK variant (masked draw lists): the same cut-out as the masked visibility raster.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_samplerless_texture_functions : require
+#include "material.glsl"
+#if ALPHA_MASK
+#include "alpha_mask.glsl"
+#endif
+
+layout(location = 0) in vec3 inNormal;
+layout(location = 1) in vec4 inColor;
+layout(location = 2) flat in uint inMaterial;
+layout(location = 3) flat in uint inObject;
+layout(location = 4) in vec3 inPosition;  // camera-relative world
+layout(location = 5) in vec4 inUv;        // TEXCOORD_0, TEXCOORD_1
+layout(location = 6) in vec4 inTangent;   // world xyz, w: bitangent sign (0: none)
+layout(location = 0) out vec4 outBaseColor;
+layout(location = 1) out vec2 outNormal;
+layout(location = 2) out vec4 outMaterial;
+layout(location = 3) out vec4 outEmissive;
+#if COUNT_OVERDRAW
+#if !ALPHA_MASK
+layout(early_fragment_tests) in;  // (not with discard: a cut-out fragment must not write depth)
+#endif
+// Debug/bandwidth variant: count the raster writes per pixel (fragments that pass the depth test when they run).
+layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+#endif
+
+void main() {
+  SurfaceInputs si;
+  si.position = inPosition;
+  si.normal = inNormal;
+  si.tangent = inTangent;
+  si.dpdx = dFdx(inPosition);
+  si.dpdy = dFdy(inPosition);
+  si.uv0 = inUv.xy;
+  si.uv1 = inUv.zw;
+  si.duv0dx = dFdx(inUv.xy);
+  si.duv0dy = dFdy(inUv.xy);
+  si.duv1dx = dFdx(inUv.zw);
+  si.duv1dy = dFdy(inUv.zw);
+  si.color = inColor;
+  si.frontFacing = gl_FrontFacing != ((objectAt(inObject).flags & OBJECT_FLAG_FLIP_WINDING) != 0u);
+#if ALPHA_MASK
+  float alpha = maskAlpha(inMaterial, si.uv0, si.uv1, si.duv0dx, si.duv0dy, si.duv1dx, si.duv1dy, inColor);
+  if (maskCutsOut(inMaterial, alpha)) discard;
+#endif
+#if COUNT_OVERDRAW
+  imageAtomicAdd(overdraw, ivec2(gl_FragCoord.xy), 1u);
+#endif
+  Surface s = evaluateMaterial(inMaterial, si);
+  outBaseColor = vec4(s.baseColor, s.alpha);
+  outNormal = unpackSnorm2x16(octEncode(s.normal));  // exactly representable in snorm16
+  outMaterial = vec4(s.metallic, s.roughness, s.occlusion, 0.0);
+  outEmissive = vec4(s.emissive, 0.0);
+}
