@@ -22,8 +22,7 @@ void main() {
 #if COUNT_OVERDRAW
   imageAtomicAdd(overdraw, ivec2(gl_FragCoord.xy), 1u);
 #endif
-  vec4 baseColor = materials[inMaterial].baseColor * inColor;
-  outColor = vec4(shadeSurface(plainSurface(inPosition, normalize(inNormal), baseColor.rgb), uvec2(gl_FragCoord.xy)), 1.0);
+  outColor = vec4(shadeSurface(factorSurface(inMaterial, inPosition, normalize(inNormal), inColor), uvec2(gl_FragCoord.xy)), 1.0);
 #if WRITE_IDS
   outId = uvec2(inObject + 1u, uint(gl_PrimitiveID));
 #endif

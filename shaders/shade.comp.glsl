@@ -59,10 +59,9 @@ void main() {
   vec3 n = l.x * octDecode(v0.normal) + l.y * octDecode(v1.normal) + l.z * octDecode(v2.normal);
   vec3 normal = normalize(normalToWorld(o, n));
   vec4 vc = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
-  vec4 baseColor = materials[o.materialIndex].baseColor * vc;
   vec3 position = l.x * objectToCamera(o, vertexPosition(v0)) + l.y * objectToCamera(o, vertexPosition(v1)) +
                   l.z * objectToCamera(o, vertexPosition(v2));
-  imageStore(colorOut, p, vec4(shadeSurface(plainSurface(position, normal, baseColor.rgb), uvec2(p)), 1.0));
+  imageStore(colorOut, p, vec4(shadeSurface(factorSurface(o.materialIndex, position, normal, vc), uvec2(p)), 1.0));
 #if WRITE_ATTRIBUTES
   writeAttributes(p, o, v0, v1, v2, b, normal);
 #endif

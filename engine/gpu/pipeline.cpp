@@ -15,6 +15,7 @@
 #include "visibility_overdraw.frag.h"
 #include "visibility_wide_overdraw.frag.h"
 #include "forward.vert.h"
+#include "light_cull.comp.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
 #include "skin.comp.h"
@@ -34,6 +35,7 @@ std::span<const uint32_t> shaderCode(const std::string& name) {
   VB_SHADER("shade.comp", spv_shade_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
   VB_SHADER("skin.comp", spv_skin_comp)
+  VB_SHADER("light_cull.comp", spv_light_cull_comp)
   VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)

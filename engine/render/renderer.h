@@ -47,6 +47,8 @@ struct FrameOptions {
   bool countOverdraw = false;   // debug: count raster writes per pixel (FrameResult.overdraw)
   bool readAttributes = false;
   double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)  // visbuf: read the shading pass's reconstruction per pixel (FrameResult.attributes)
+  bool tiledLights = true;       // visbuf: shade each pixel with its 16x16 tile's light list (light cull pass);
+                                // false: every pixel loops over every point light (the reference, no culling)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };
@@ -88,6 +90,13 @@ struct FrameStats {
   uint64_t skinnedVertices = 0;   // their vertices (all rewritten when the pose changes)
   bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
   double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
+  uint32_t pointLights = 0;       // in the scene (0: no light cull pass, no light buffers)
+  bool lightsCulled = false;      // this frame ran the light cull pass (visbuf path, tiledLights, point lights)
+  uint32_t lightTileOverflow = 0; // tiles whose light list overflowed LIGHTS_PER_TILE (reported, never silent)
+  uint32_t lightsDropped = 0;     // (tile, light) pairs dropped by that overflow
+  uint32_t maxLightsPerTile = 0;  // longest tile list before clamping
+  double meanLightsPerTile = 0.0; // kept (tile, light) pairs / tiles
+  uint64_t lightBytes = 0;        // GPU memory of the point lights and the tile lists
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
   uint64_t targetBytesPerPixel = 0;
 };
