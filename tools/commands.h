@@ -60,6 +60,7 @@ int runBake(const BakeCommand& cmd);
 struct BenchCommand {
   std::string scene = "field";
   std::string mesh;                                    // field: instanced mesh file; empty = torus knot
+  uint32_t lights = 0;                                 // point lights scattered over each scene
   uint64_t seed = 1;
   std::vector<uint32_t> objects;                       // empty: 100,1000 (field, city) or the file's own
   std::string size = "640x360";

@@ -27,7 +27,7 @@ void LightCullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescr
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
-  vkCmdDispatch(cmd, tilesX_, tilesY_, 1);
+  vkCmdDispatch(cmd, (tilesX_ + 7) / 8, (tilesY_ + 7) / 8, 1);  // one thread per tile, 8x8 per workgroup
 }
 
 void LightCullPass::recordReadback(VkCommandBuffer cmd) const {

@@ -1,4 +1,4 @@
-// Tiled light culling (shaders/light_cull.comp.glsl): one workgroup per 16x16 screen tile builds the list of the
+// Tiled light culling (shaders/light_cull.comp.glsl): one thread per 16x16 screen tile builds the list of the
 // point lights that can reach a covered pixel of the tile, from the tile's depth bounds in the visibility depth.
 // Reads: frame, point lights (BINDING_LIGHTS), depth (BINDING_LIGHT_DEPTH, shader-read layout).
 // Writes: the tile lists and their counters (BINDING_LIGHT_TILES, layout in shaders/shared/config.h).
