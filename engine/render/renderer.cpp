@@ -1,6 +1,7 @@
 // The frame script: the only place that knows the pass order and inserts the barriers between them.
 //
-//   setup ─► cull.comp ─► visibility.{vert,frag} ─► shade.comp ─► readback      (visbuf path)
+//   setup ─► cull.comp ─► visibility.{vert,frag} ─► [light_cull.comp] ─► shade.comp ─► readback   (visbuf path;
+//                                                      light culling only with point lights)
 //   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
 //
 // Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
