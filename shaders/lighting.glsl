@@ -1,10 +1,23 @@
 // The one lighting function of every path (visibility-buffer shading, forward reference, G-buffer
 // baseline): what a surface point is (Surface, filled from the material and its textures by each path in
 // the same way) and the light it returns towards the camera.
+//
+// BRDF: glTF 2.0 metallic-roughness (glTF 2.0 specification, appendix B): Trowbridge-Reitz/GGX D, Smith
+// height-correlated visibility V, Schlick Fresnel F, Lambertian diffuse (1 - F) c_diff / pi, alpha =
+// roughness^2. Lights: the scene's directional light (FrameData.lightDir: direction towards the light,
+// intensity in w) and KHR_lights_punctual point lights (inverse-square falloff windowed to zero at the
+// range). Plus a uniform ambient environment AMBIENT_RADIANCE x (c_diff + f0), scaled by occlusion, and the
+// emissive radiance. engine/render/brdf_reference.cpp is the double-precision CPU twin the tests compare with.
 #ifndef VISBUF_LIGHTING_GLSL
 #define VISBUF_LIGHTING_GLSL
 
 #include "common.glsl"
+
+// Point lights; none bound are read when FrameData.pointLightCount is 0 (a scene with no point lights binds
+// a placeholder: renderer.cpp).
+layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer PointLightBlock { PointLightData pointLights[]; };
+// Per 16x16 tile: the point lights that can reach a covered pixel of the tile (light_cull.comp.glsl).
+layout(std430, set = 0, binding = BINDING_LIGHT_TILES) readonly buffer LightTileBlock { uint lightTiles[]; };
 
 struct Surface {
   vec3 position;   // camera-relative world position (the camera is at the origin)
@@ -23,11 +36,67 @@ Surface plainSurface(vec3 position, vec3 normal, vec3 baseColor) {
   return Surface(position, normal, baseColor, 1.0, 0.0, 1.0, 1.0, vec3(0.0));
 }
 
-// Ambient + Lambert from the scene's directional light. `pixel` is the pixel being shaded (for
-// screen-tiled light lists).
+const float kPi = 3.14159265358979;
+
+// The BRDF of glTF 2.0 appendix B times n.l: radiance reflected towards v per unit irradiance arriving along l
+// (normal incidence). n, v, l unit vectors.
+vec3 brdfCosine(Surface s, vec3 v, vec3 l) {
+  float ndotl = dot(s.normal, l);
+  if (ndotl <= 0.0) return vec3(0.0);
+  vec3 h = normalize(l + v);
+  // |n.v| (as Filament's shading does): an interpolated normal may face away from the camera at a visible pixel;
+  // clamping n.v to ~0 there would make the height-correlated V a ratio of two tiny numbers (n.l / n.v).
+  float ndotv = max(abs(dot(s.normal, v)), 1e-4);
+  float ndoth = max(dot(s.normal, h), 0.0);
+  float vdoth = max(dot(v, h), 0.0);
+  vec3 cDiff = mix(s.baseColor, vec3(0.0), s.metallic);
+  vec3 f0 = mix(vec3(0.04), s.baseColor, s.metallic);
+  float alpha = s.roughness * s.roughness;
+  float a2 = alpha * alpha;
+  vec3 f = f0 + (vec3(1.0) - f0) * pow(1.0 - vdoth, 5.0);
+  float dDenom = ndoth * ndoth * (a2 - 1.0) + 1.0;
+  float d = a2 / (kPi * dDenom * dDenom);
+  float vis = 0.5 / (ndotl * sqrt(ndotv * ndotv * (1.0 - a2) + a2) + ndotv * sqrt(ndotl * ndotl * (1.0 - a2) + a2));
+  return ((vec3(1.0) - f) * cDiff / kPi + f * (d * vis)) * ndotl;
+}
+
+// One point light's reflected radiance (exactly zero beyond the light's range: the tiled lists rely on it).
+vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
+  vec3 toLight = light.positionRange.xyz + frame.cameraOffset.xyz - s.position;
+  float d2 = max(dot(toLight, toLight), 1e-12);
+  float range = light.positionRange.w;
+  float window = 1.0;
+  if (range > 0.0) {
+    float r = d2 / (range * range);  // (d / range)^2
+    window = clamp(1.0 - r * r, 0.0, 1.0);
+    window *= window;
+    if (window <= 0.0) return vec3(0.0);
+  }
+  vec3 l = toLight * inversesqrt(d2);
+  return brdfCosine(s, v, l) * light.colorIntensity.rgb * (light.colorIntensity.w * window / d2);
+}
+
+// Ambient + directional + point lights + emissive. `pixel` is the pixel being shaded: when this frame built
+// tile lists (FrameData.lightTilesX > 0, the visibility-buffer path) it loops over its tile's list, else over
+// every light (the forward reference, and the all-lights comparison). Both loops visit lights in ascending
+// index order, and a light missing from a tile contributes exactly zero there, so the sums are the same.
 vec3 shadeSurface(Surface s, uvec2 pixel) {
-  float ndotl = max(dot(s.normal, frame.lightDir.xyz), 0.0);
-  return s.baseColor * (0.15 + frame.lightDir.w * ndotl) * s.occlusion + s.emissive;
+  vec3 v = -normalize(s.position);
+  vec3 cDiff = mix(s.baseColor, vec3(0.0), s.metallic);
+  vec3 f0 = mix(vec3(0.04), s.baseColor, s.metallic);
+  vec3 color = AMBIENT_RADIANCE * (cDiff + f0) * s.occlusion;
+  color += brdfCosine(s, v, frame.lightDir.xyz) * frame.lightDir.w;
+  if (frame.pointLightCount > 0u) {
+    if (frame.lightTilesX > 0u) {
+      uint tile = (pixel.y / LIGHT_TILE_SIZE) * frame.lightTilesX + pixel.x / LIGHT_TILE_SIZE;
+      uint base = LIGHT_TILE_HEADER + tile * LIGHT_TILE_STRIDE;
+      uint n = lightTiles[base];
+      for (uint i = 0u; i < n; ++i) color += pointLightRadiance(s, v, pointLights[lightTiles[base + 1u + i]]);
+    } else {
+      for (uint i = 0u; i < frame.pointLightCount; ++i) color += pointLightRadiance(s, v, pointLights[i]);
+    }
+  }
+  return color + s.emissive;
 }
 
 #endif

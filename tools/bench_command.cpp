@@ -52,6 +52,7 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
       ->delimiter(',');
   sub->add_option("--seed", c.seed, "scene generator seed")->capture_default_str();
   sub->add_option("--mesh", c.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
+  sub->add_option("--lights", c.lights, "scatter N point lights over each scene (tiled light culling)");
   sub->add_option("--size", c.size, "image size WxH")->capture_default_str();
   sub->add_option("--frames", c.frames, "measured frames per configuration (one camera of the path each)")
       ->check(CLI::Range(1u, 10000u))
@@ -290,6 +291,7 @@ int runBench(const BenchCommand& c) {
     so.objects = objects;
     so.seed = c.seed;
     so.mesh = c.mesh;
+    so.lights = c.lights;
     auto scene = loadScene(so);
     if (!scene) return fail(scene.error());
     RendererConfig rc;
@@ -352,6 +354,7 @@ int runBench(const BenchCommand& c) {
       ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
       ro.cull = CullMode::None;
       ro.lodErrorPixels = 0.0f;
+      ro.tiledLights = false;  // every point light at every pixel
       ro.readColor = true;
       ro.readIds = !forwardRef && needFullIds;
       auto frame = r.renderFrame(cam, ro);

@@ -29,6 +29,8 @@ struct RenderCommand {
   std::string json;
   bool reference = false;  // also render the forward path and report the error against it
   bool referenceFull = false;  // also render visbuf with no culling and no LOD and report the error against it
+  bool referenceLights = false;  // also render the same frame with every point light at every pixel (no tiles)
+  bool allLights = false;        // shade every pixel with every point light (no light cull pass)
   std::string view = "shaded";  // debug view written to -o instead of the shaded image
   int pyramidLevel = -1;        // --view pyramid: the level to show
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
@@ -58,6 +60,7 @@ int runBake(const BakeCommand& cmd);
 struct BenchCommand {
   std::string scene = "field";
   std::string mesh;                                    // field: instanced mesh file; empty = torus knot
+  uint32_t lights = 0;                                 // point lights scattered over each scene
   uint64_t seed = 1;
   std::vector<uint32_t> objects;                       // empty: 100,1000 (field, city) or the file's own
   std::string size = "640x360";

@@ -55,6 +55,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::IsMember(debugViewNames()))
       ->capture_default_str();
   sub->add_option("--pyramid-level", c.pyramidLevel, "--view pyramid: depth pyramid level (0 = full resolution)");
+  sub->add_flag("--reference-lights", c.referenceLights,
+                "also render the same frame shading every pixel with every point light (no tile lists) and report "
+                "the error against it");
+  sub->add_flag("--all-lights", c.allLights, "shade every pixel with every point light (no light cull pass)");
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
                 "frame's draw lists (shows what the first camera culled)");
@@ -95,6 +99,7 @@ int runRender(const RenderCommand& c) {
                                   : RenderPath::Visbuf;
   fo.cull = c.cull == "none" ? CullMode::None : c.cull == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
+  fo.tiledLights = !c.allLights;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
     std::vector<FrameStats> runs;
@@ -134,9 +139,9 @@ int runRender(const RenderCommand& c) {
     }
     return stats;
   };
-  const bool compare = (c.reference || c.referenceFull) && fo.path != RenderPath::Forward;
-  if (c.reference && c.referenceFull)
-    return fail({ErrorCode::InvalidArgument, "--reference and --reference-full are exclusive"});
+  const bool compare = (c.reference || c.referenceFull || c.referenceLights) && fo.path != RenderPath::Forward;
+  if (int(c.reference) + int(c.referenceFull) + int(c.referenceLights) > 1)
+    return fail({ErrorCode::InvalidArgument, "--reference, --reference-full and --reference-lights are exclusive"});
   if (c.freezeCulling) {
     if (fo.path == RenderPath::Forward)
       return fail({ErrorCode::InvalidArgument, "--freeze-culling needs --path visbuf or gbuffer"});
@@ -175,10 +180,15 @@ int runRender(const RenderCommand& c) {
     if (c.referenceFull) {
       ref.cull = CullMode::None;
       ref.lodErrorPixels = 0.0f;
+      ref.tiledLights = false;
+    } else if (c.referenceLights) {
+      ref.tiledLights = false;
     } else {
       ref.path = RenderPath::Forward;
     }
-    const char* refName = c.referenceFull ? "full (no culling, no LOD)" : "forward";
+    const char* refName = c.referenceFull     ? "full (no culling, no LOD, every light)"
+                          : c.referenceLights ? "all lights (no tiles)"
+                                              : "forward";
     Result<FrameResult> refFrame = makeError(ErrorCode::InvalidArgument, "no frame");
     FrameStats refStats = run(ref, true, refFrame);
     if (!refFrame) return fail(refFrame.error());
@@ -189,7 +199,7 @@ int runRender(const RenderCommand& c) {
     std::printf("error         vs %s: max %.5f, mean %.6f, PSNR %.1f dB, %.4f%% pixels > 1/255\n", refName, e.maxAbs,
                 e.meanAbs, e.psnr, 100.0 * e.differingFraction);
     referenceJson = statsToJson(refStats);
-    referenceJson["kind"] = c.referenceFull ? "full" : "forward";
+    referenceJson["kind"] = c.referenceFull ? "full" : c.referenceLights ? "lights" : "forward";
     referenceJson["error"] = {{"maxAbs", e.maxAbs},
                               {"meanAbs", e.meanAbs},
                               {"psnr", std::isfinite(e.psnr) ? e.psnr : 999.0},

@@ -20,6 +20,8 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--objects,--instances", o.objects, "number of objects (field: instances; city: approx. total)");
   app.add_option("--seed", o.seed, "scene generator seed")->capture_default_str();
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
+  app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)");
+  app.add_flag("--no-sun", o.noSun, "no directional light (ambient, emissive and point lights only)");
 }
 
 namespace {
@@ -31,7 +33,20 @@ Result<MeshSource> importMesh(const std::string& path) {
 }
 }  // namespace
 
+namespace {
+Result<Scene> loadSceneWithoutLights(const SceneOptions& o);
+}  // namespace
+
 Result<Scene> loadScene(const SceneOptions& o) {
+  Result<Scene> scene = loadSceneWithoutLights(o);
+  if (!scene) return scene;
+  scatterPointLights(*scene, o.lights, o.seed);
+  if (o.noSun) scene->lightIntensity = 0.0f;
+  return scene;
+}
+
+namespace {
+Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   if (o.scene == "field") {
     FieldParams p;
     if (o.objects) p.objects = o.objects;
@@ -102,6 +117,7 @@ Result<Scene> loadScene(const SceneOptions& o) {
   scene->name = o.scene;
   return scene;
 }
+}  // namespace
 
 void addCameraOptions(CLI::App& app, CameraOptions& o) {
   app.add_option("--camera-pos", o.position, "camera position x y z (default: the scene's)")->expected(3)->delimiter(',');

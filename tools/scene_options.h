@@ -16,6 +16,8 @@ struct SceneOptions {
   uint32_t objects = 0;         // 0: the layout's default
   uint64_t seed = 1;
   std::string mesh;             // field: instanced mesh file (.gltf/.glb); empty = procedural knot
+  uint32_t lights = 0;          // point lights scattered over the scene (scatterPointLights)
+  bool noSun = false;           // switch the directional light off
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);

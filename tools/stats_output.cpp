@@ -35,6 +35,12 @@ std::string formatStats(const FrameStats& s) {
   if (s.skinnedInstances)
     out += fmt::format("skinning      {} instances, {} vertices, {} (poses {:.3f} ms CPU)\n", s.skinnedInstances,
                        s.skinnedVertices, s.skinned ? "re-skinned" : "pose unchanged: skipped", s.animationCpuMs);
+  out += s.pointLights == 0 ? std::string("lights        directional only (no point lights: no light cull pass)\n")
+         : s.lightsCulled
+             ? fmt::format("lights        {} point lights, tiles: {:.1f} mean / {} max per tile, overflow {} tiles{}\n",
+                           s.pointLights, s.meanLightsPerTile, s.maxLightsPerTile, s.lightTileOverflow,
+                           s.lightTileOverflow ? fmt::format("  (WARNING: {} tile lights dropped)", s.lightsDropped) : "")
+             : fmt::format("lights        {} point lights, every light at every pixel (no tiles)\n", s.pointLights);
   for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
   out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
@@ -82,6 +88,9 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["skinnedVertices"] = s.skinnedVertices;
   j["skinned"] = s.skinned;
   j["animationCpuMs"] = s.animationCpuMs;
+  j["lights"] = {{"pointLights", s.pointLights}, {"culled", s.lightsCulled}, {"tileOverflow", s.lightTileOverflow},
+                 {"dropped", s.lightsDropped}, {"maxPerTile", s.maxLightsPerTile},
+                 {"meanPerTile", s.meanLightsPerTile}, {"bytes", s.lightBytes}};
   j["sceneBytes"] = s.sceneBytes;
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
   j["rasterBytesPerFragment"] = s.rasterBytesPerFragment;

@@ -344,6 +344,7 @@ class Importer {
   template <typename Visit>
   Status walkScene(Visit&& visit, std::string* sceneLabel);
   Status emitSceneNode(int node, const glm::dmat4& world, ImportedScene* scene);
+  Status emitNodeLight(int node, const glm::dmat4& world, ImportedScene* scene);
 
   // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights).
   using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>>;
@@ -1215,7 +1216,35 @@ void appendSkinStreams(const DecodedPrimitive& prim, size_t base, MeshSource* ou
 }
 
 // Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
+// KHR_lights_punctual: a node's {"extensions": {"KHR_lights_punctual": {"light": i}}} places model.lights[i].
+Status Importer::emitNodeLight(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
+  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+  auto ext = node.extensions.find("KHR_lights_punctual");
+  if (ext == node.extensions.end() || !ext->second.Has("light")) return {};
+  const int index = ext->second.Get("light").GetNumberAsInt();
+  if (index < 0 || static_cast<size_t>(index) >= model_.lights.size())
+    return makeError(ErrorCode::MalformedInput,
+                     "node " + std::to_string(nodeIndex) + ": KHR_lights_punctual light " + std::to_string(index) +
+                         " out of range");
+  const tinygltf::Light& l = model_.lights[static_cast<size_t>(index)];
+  if (l.type != "point") {
+    warn("node " + std::to_string(nodeIndex) + ": KHR_lights_punctual '" + l.type +
+         "' light skipped (only point lights are supported)");
+    return {};
+  }
+  PointLight p;
+  p.position = glm::dvec3(world[3]);
+  if (l.color.size() == 3) p.color = glm::vec3(float(l.color[0]), float(l.color[1]), float(l.color[2]));
+  p.intensity = float(l.intensity);
+  p.range = float(l.range);
+  if (Status s = validatePointLights({p}); !s)
+    return makeError(ErrorCode::MalformedInput, "node " + std::to_string(nodeIndex) + ": " + s.error().message);
+  scene->pointLights.push_back(p);
+  return {};
+}
+
 Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
+  if (Status s = emitNodeLight(nodeIndex, world, scene); !s) return s;
   auto resolved = nodeMesh(nodeIndex);
   if (!resolved) return resolved.error();
   if (!resolved->mesh) return {};

@@ -182,6 +182,10 @@ struct ImportedScene {
   std::vector<SceneNode> nodes;  // every glTF node, in file order
   std::vector<Skin> skins;
   std::vector<AnimationClip> animations;
+  // KHR_lights_punctual point lights of the default scene's nodes, at their node's world position (range and
+  // intensity are not scaled by the node, as the extension says). Spot and directional lights are skipped
+  // with a warning.
+  std::vector<PointLight> pointLights;
 };
 
 // Imports the default scene of the glTF file at `path` as meshes + materials + instances (see above).

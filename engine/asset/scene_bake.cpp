@@ -11,6 +11,7 @@ Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildO
                                  const BakeProgress& progress) {
   Scene scene;
   scene.name = imported.name;
+  scene.pointLights = imported.pointLights;
   scene.meshes.reserve(imported.meshes.size());
   for (size_t i = 0; i < imported.meshes.size(); ++i) {
     Result<Mesh> mesh = buildMesh(imported.meshes[i].source, options);

@@ -25,6 +25,7 @@
 #include "gbuffer_masked_textured.frag.h"
 #include "gbuffer_textured.frag.h"
 #include "gbuffer_overdraw_textured.frag.h"
+#include "light_cull.comp.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
 #include "skin.comp.h"
@@ -67,6 +68,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("shade.comp", spv_shade_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
   VB_SHADER("skin.comp", spv_skin_comp)
+  VB_SHADER("light_cull.comp", spv_light_cull_comp)
   VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)

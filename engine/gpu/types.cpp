@@ -24,6 +24,8 @@ static_assert(offsetof(FrameData, frustum) == 144);
 static_assert(offsetof(FrameData, lightDir) == 224);
 static_assert(offsetof(FrameData, lodScale) == 256);
 static_assert(offsetof(FrameData, projX) == 288);
+static_assert(sizeof(PointLightData) == 32);
+static_assert(offsetof(FrameData, pointLightCount) == 308);
 static_assert(sizeof(PassConstants) == 16);
 static_assert(sizeof(PyramidConstants) == 32);
 static_assert(offsetof(ObjectData, meshIndex) == 48);

@@ -1,6 +1,7 @@
 // The frame script: the only place that knows the pass order and inserts the barriers between them.
 //
-//   setup ─► cull.comp ─► visibility.{vert,frag} ─► shade.comp ─► readback      (visbuf path)
+//   setup ─► cull.comp ─► visibility.{vert,frag} ─► [light_cull.comp] ─► shade.comp ─► readback   (visbuf path;
+//                                                      light culling only with point lights)
 //   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
 //   both: ─► transparent_pass before the readback, only for scenes with BLEND materials
 //   setup ─► cull.comp ─► gbuffer.{vert,frag} ─► gbuffer_lighting.comp ─► readback (G-buffer baseline)
@@ -27,6 +28,7 @@
 #include "passes/forward_pass.h"
 #include "passes/gbuffer_lighting_pass.h"
 #include "passes/gbuffer_pass.h"
+#include "passes/light_cull_pass.h"
 #include "passes/shade_pass.h"
 #include "passes/skin_pass.h"
 #include "passes/transparent_pass.h"
@@ -63,7 +65,8 @@ IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw,
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 11;  // setup, skin, 2 x (cull, raster), pyramid, shade, transparent, readback
+constexpr uint32_t kCommandBuffers = 12;  // at most 11: setup, skin, 2 x (cull, raster), pyramid, light cull,
+                                          // shade (or G-buffer lighting), transparent, readback
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
 
@@ -118,6 +121,10 @@ struct Renderer::Impl {
   gpu::Specialization textured;  // specialisation of every frame pipeline (windows, texture classes)
   std::unique_ptr<AnimationState> animation;  // skinned scenes only
   passes::SkinPass skin;
+  // Point lights (scenes with any): anchor-relative records and the tile lists. Empty otherwise.
+  gpu::Buffer pointLights;
+  passes::LightCullPass lightCull;
+  bool hasPointLights() const { return !scene.pointLights.empty(); }
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
   bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
@@ -178,6 +185,9 @@ struct Renderer::Impl {
         {BINDING_DRAW_LISTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_GBUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GBUFFER_TARGETS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_GBUFFER_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_LIGHT_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {BINDING_LIGHT_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -191,9 +201,9 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15 + 2 /*lights*/},
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
-                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1},
+                                    {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
@@ -249,6 +259,7 @@ struct Renderer::Impl {
     }
     idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::HostVisible);
+    if (hasPointLights()) lightCull.resize(device, width, height);
     config.width = width;
     config.height = height;
     writeDescriptors();
@@ -350,6 +361,26 @@ struct Renderer::Impl {
     x.descriptorCount = 1;
     x.pImageInfo = &gbufferDepthInfo;
     w.push_back(x);
+    // Lights: with no point lights nothing is allocated; the shaders never read these bindings then
+    // (FrameData.pointLightCount = 0), which alias the stats buffer only to keep the set complete.
+    VkDescriptorBufferInfo lightInfo = hasPointLights() ? VkDescriptorBufferInfo{pointLights.handle(), 0, VK_WHOLE_SIZE}
+                                                        : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
+    VkDescriptorBufferInfo tileInfo = hasPointLights() ? VkDescriptorBufferInfo{lightCull.tiles().handle(), 0, VK_WHOLE_SIZE}
+                                                       : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
+    VkDescriptorImageInfo lightDepthInfo{sampler, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    x.pImageInfo = nullptr;
+    x.dstBinding = BINDING_LIGHTS;
+    x.pBufferInfo = &lightInfo;
+    w.push_back(x);
+    x.dstBinding = BINDING_LIGHT_TILES;
+    x.pBufferInfo = &tileInfo;
+    w.push_back(x);
+    x.dstBinding = BINDING_LIGHT_DEPTH;
+    x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    x.pBufferInfo = nullptr;
+    x.pImageInfo = &lightDepthInfo;
+    w.push_back(x);
     vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
   }
 
@@ -391,7 +422,9 @@ struct Renderer::Impl {
     f.pyramidLevels = usePyramid ? pyramid.levels() : 0;
     f.cameraOffset = glm::vec4(glm::vec3(scene.anchor - camera.position), 0.0f);
     for (int i = 0; i < 5; ++i) f.frustum[i] = glm::vec4(math.planes[size_t(i)]);
-    f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), 0.85f);
+    f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), scene.lightIntensity);
+    f.pointLightCount = uint32_t(scene.pointLights.size());
+    f.lightTilesX = cullLights(options) ? lightCull.tilesX() : 0u;
     f.viewport = glm::vec4(float(config.width), float(config.height), 1.0f / config.width, 1.0f / config.height);
     f.lodScale = float(math.lodScale);
     f.lodErrorPixels = options.lodErrorPixels;
@@ -408,6 +441,10 @@ struct Renderer::Impl {
     return f;
   }
 
+  // This frame builds tile light lists: visbuf path, tiled shading asked for, and point lights to cull.
+  bool cullLights(const FrameOptions& options) const {
+    return options.path == RenderPath::Visbuf && options.tiledLights && hasPointLights();
+  }
   Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
   void recordVisbuf(const FrameOptions& options, uint32_t& used);
   void recordGBufferLighting(uint32_t& used, bool writeAttributes);
@@ -664,6 +701,25 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     return;
   }
 
+  if (cullLights(options)) {  // tile light lists from the final depth
+    VkCommandBuffer cmd = cmds[used++];
+    beginCmd(cmd);
+    gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                      VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    // The previous frame's shading read the lists this pass rewrites.
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
+                       VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    uint32_t t = timestamps->begin(cmd, "light cull");
+    lightCull.record(cmd, pipelineLayout, set);
+    timestamps->end(cmd, t);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_TRANSFER_READ_BIT);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+  }
+
   // shade
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
@@ -761,6 +817,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.drawCapacity = capacity;
   st.ids = encoding;
   st.sceneBytes = gpuScene.bytes + (animation ? animation->bytes() : 0);
+  st.pointLights = uint32_t(scene.pointLights.size());
+  st.lightBytes = hasPointLights() ? pointLights.size() + lightCull.tiles().size() : 0;
+  st.lightsCulled = cullLights(options);
 
   uint32_t used = 0;
   // setup: queries, counters
@@ -860,6 +919,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                 VK_ACCESS_2_TRANSFER_READ_BIT);
   VkBufferCopy statsCopy{0, 0, STAT_COUNT * sizeof(uint32_t)};
   vkCmdCopyBuffer(cmd, stats.handle(), statsReadback.handle(), 1, &statsCopy);
+  if (st.lightsCulled) lightCull.recordReadback(cmd);
   if (options.readColor) {
     VkImageLayout from = gpuCulled ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
     gpu::imageBarrier(cmd, *colorSource, from, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
@@ -944,6 +1004,13 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   const auto t2 = Clock::now();
 
   st.passMs = timestamps->read();
+  if (st.lightsCulled) {
+    const passes::LightCullStats ls = lightCull.stats();
+    st.lightTileOverflow = ls.overflowTiles;
+    st.lightsDropped = ls.droppedLights;
+    st.maxLightsPerTile = ls.maxPerTile;
+    st.meanLightsPerTile = double(ls.pairs) / (double(lightCull.tilesX()) * lightCull.tilesY());
+  }
   for (auto& p : st.passMs) st.gpuMs += p.second;
   if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
@@ -1142,6 +1209,13 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                               gpu::MemoryUse::DeviceLocal);
   impl->pyramid.create(device);
   impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 12);
+  if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
+    std::vector<gpu::PointLightData> lights;
+    for (const PointLight& l : scene.pointLights)
+      lights.push_back({glm::vec4(glm::vec3(l.position - scene.anchor), l.range), glm::vec4(l.color, l.intensity)});
+    impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    impl->lightCull.create(device, impl->pipelineLayout, w);
+  }
   impl->createTargets(config.width, config.height);
   impl->animation = AnimationState::create(device, scene, impl->gpuScene);
   if (impl->animation)

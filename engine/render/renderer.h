@@ -50,6 +50,8 @@ struct FrameOptions {
   bool readAttributes = false;   // visbuf: the shading pass's reconstruction per pixel (FrameResult.attributes);
                                 // G-buffer: the position rebuilt from depth and the depth (slots 0..3, 7) only
   double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)
+  bool tiledLights = true;       // visbuf: shade each pixel with its 16x16 tile's light list (light cull pass);
+                                // false: every pixel loops over every point light (the reference, no culling)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
 };
@@ -93,6 +95,13 @@ struct FrameStats {
   uint64_t skinnedVertices = 0;   // their vertices (all rewritten when the pose changes)
   bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
   double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
+  uint32_t pointLights = 0;       // in the scene (0: no light cull pass, no light buffers)
+  bool lightsCulled = false;      // this frame ran the light cull pass (visbuf path, tiledLights, point lights)
+  uint32_t lightTileOverflow = 0; // tiles whose light list overflowed LIGHTS_PER_TILE (reported, never silent)
+  uint32_t lightsDropped = 0;     // (tile, light) pairs dropped by that overflow
+  uint32_t maxLightsPerTile = 0;  // longest tile list before clamping
+  double meanLightsPerTile = 0.0; // kept (tile, light) pairs / tiles
+  uint64_t lightBytes = 0;        // GPU memory of the point lights and the tile lists
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
   uint64_t targetBytesPerPixel = 0;  // bytes per pixel of the path's screen targets (raster targets, depth, colour)
   // Bytes one depth-passing raster fragment writes: visbuf ID + depth, G-buffer targets + depth, forward colour +

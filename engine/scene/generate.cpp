@@ -87,9 +87,16 @@ MeshSource makeGround(uint32_t n) {
 
 namespace {
 std::vector<Material> palette() {
-  return {{"clay", {0.80f, 0.45f, 0.30f, 1.0f}}, {"sage", {0.45f, 0.65f, 0.40f, 1.0f}},
-          {"slate", {0.35f, 0.45f, 0.70f, 1.0f}}, {"sand", {0.85f, 0.78f, 0.55f, 1.0f}},
-          {"plum", {0.60f, 0.35f, 0.60f, 1.0f}}, {"ash", {0.70f, 0.70f, 0.72f, 1.0f}}};
+  std::vector<Material> p = {{"clay", {0.80f, 0.45f, 0.30f, 1.0f}}, {"sage", {0.45f, 0.65f, 0.40f, 1.0f}},
+                             {"slate", {0.35f, 0.45f, 0.70f, 1.0f}}, {"sand", {0.85f, 0.78f, 0.55f, 1.0f}},
+                             {"plum", {0.60f, 0.35f, 0.60f, 1.0f}}, {"ash", {0.70f, 0.70f, 0.72f, 1.0f}}};
+  // Dielectrics of varied roughness (glTF's default metallic factor, 1, would make them metals).
+  const float roughness[] = {0.9f, 0.6f, 0.5f, 0.8f, 0.55f, 0.7f};
+  for (size_t i = 0; i < p.size(); ++i) {
+    p[i].metallic = 0.0f;
+    p[i].roughness = roughness[i];
+  }
+  return p;
 }
 }  // namespace
 
@@ -135,6 +142,7 @@ Result<Scene> makeCityScene(const CityParams& params) {
   }
   scene.materials = palette();
   scene.materials.push_back({"asphalt", {0.25f, 0.25f, 0.27f, 1.0f}});
+  scene.materials.back().metallic = 0.0f;
   const uint32_t asphalt = uint32_t(scene.materials.size() - 1);
   // Each block: one building and ~8 clutter objects along its kerb.
   const uint32_t perBlock = 9;

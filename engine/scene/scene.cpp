@@ -65,6 +65,9 @@ Status validateScene(const Scene& scene) {
       return makeError(ErrorCode::MalformedInput,
                        fmt::format("object {}: degenerate (zero-scale) transform", i));
   }
+  if (Status s = validatePointLights(scene.pointLights); !s) return s;
+  if (!(scene.lightIntensity >= 0.0f) || !std::isfinite(scene.lightIntensity))
+    return makeError(ErrorCode::MalformedInput, "directional light: intensity must be finite and >= 0");
   return validateSceneAnimation(scene);
 }
 

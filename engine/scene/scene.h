@@ -11,6 +11,7 @@
 
 #include "core/result.h"
 #include "scene/animation.h"
+#include "scene/light.h"
 #include "scene/mesh.h"
 #include "scene/texture.h"
 #include "scene/skin_vertex.h"
@@ -127,6 +128,9 @@ struct Scene {
   glm::dvec3 anchor{0.0};  // GPU positions are relative to this point
   Camera defaultCamera;
   glm::vec3 lightDirection = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));  // towards the light
+  // Its illuminance (0: none). 0.85 pi: a white Lambertian surface facing it reflects 0.85 (lighting.glsl).
+  float lightIntensity = 2.6703538f;
+  std::vector<PointLight> pointLights;  // none: no light culling pass, no light buffers (renderer.cpp)
 
   uint64_t totalTriangles() const;  // full-detail triangles over all objects
 };

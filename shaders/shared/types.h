@@ -139,7 +139,17 @@ struct FrameData {
   uint pyramidLevels;   // valid levels of the depth pyramid (0 when occlusion is off)
   uint objectSplit;     // objects [0, objectSplit) are in BINDING_OBJECTS, the rest in BINDING_OBJECTS_HIGH
   uint vertexWindowShift;  // vertex i is in window i >> shift (BINDING_VERTICES, BINDING_VERTICES_1..3)
-  uint pad1, pad2, pad3;
+  uint pointLightCount;    // PointLightData records in BINDING_LIGHTS (0: none bound, none read)
+  uint lightTilesX;        // tiles per row of BINDING_LIGHT_TILES when this frame built them; 0: every light
+  uint pad3;
+};
+
+// A KHR_lights_punctual point light (32 bytes): position relative to the scene anchor (like object
+// translations; + cameraOffset gives camera-relative), range (<= 0: infinite), linear RGB colour, intensity
+// (candela).
+struct PointLightData {
+  vec4 positionRange;
+  vec4 colorIntensity;
 };
 
 // One animated instance of the skinning pass (48 bytes), written by the CPU every pose.

@@ -1,0 +1,44 @@
+// Tiled light culling (shaders/light_cull.comp.glsl): one thread per 16x16 screen tile builds the list of the
+// point lights that can reach a covered pixel of the tile, from the tile's depth bounds in the visibility depth.
+// Reads: frame, point lights (BINDING_LIGHTS), depth (BINDING_LIGHT_DEPTH, shader-read layout).
+// Writes: the tile lists and their counters (BINDING_LIGHT_TILES, layout in shaders/shared/config.h).
+// Created only for scenes with point lights; a scene without any records no light culling and owns no light
+// buffers.
+#pragma once
+
+#include <cstdint>
+
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+
+namespace visbuf::passes {
+
+struct LightCullStats {
+  uint32_t overflowTiles = 0;  // tiles whose list hit LIGHTS_PER_TILE (their extra lights were dropped)
+  uint32_t droppedLights = 0;  // (tile, light) pairs dropped for lack of capacity
+  uint32_t maxPerTile = 0;     // the longest list before clamping
+  uint32_t pairs = 0;          // (tile, light) pairs kept
+};
+
+class LightCullPass {
+ public:
+  void create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
+  // (Re)allocates the tile lists for a width x height frame.
+  void resize(gpu::Device& device, uint32_t width, uint32_t height);
+  // Resets the counters, then one dispatch over every tile. The depth must be in SHADER_READ_ONLY_OPTIMAL.
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  // After record: copies the counters to a host-visible buffer (transfer stage), read by stats().
+  void recordReadback(VkCommandBuffer cmd) const;
+  LightCullStats stats() const;
+  const gpu::Buffer& tiles() const { return tiles_; }
+  uint32_t tilesX() const { return tilesX_; }
+  uint32_t tilesY() const { return tilesY_; }
+
+ private:
+  gpu::Pipeline pipeline_;
+  gpu::Buffer tiles_;     // uint[LIGHT_TILE_HEADER + tiles * LIGHT_TILE_STRIDE]
+  gpu::Buffer readback_;  // the header
+  uint32_t tilesX_ = 0, tilesY_ = 0;
+};
+
+}  // namespace visbuf::passes

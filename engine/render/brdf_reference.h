@@ -1,0 +1,31 @@
+// Double-precision CPU twin of shaders/lighting.glsl's shadeSurface(): the glTF 2.0 metallic-roughness BRDF
+// (specification appendix B: GGX D, Smith height-correlated V, Schlick F, Lambert diffuse of (1 - F) c_diff),
+// the scene's directional light, KHR_lights_punctual point lights with the range window, the ambient term
+// AMBIENT_RADIANCE x (c_diff + f0) x occlusion, and emissive. Independent code (written from the
+// specification, not generated from the shader), for the GPU tests' per-pixel comparison.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "scene/scene.h"
+
+namespace visbuf {
+
+struct SurfaceReference {
+  glm::dvec3 position{0.0};  // camera-relative world position (camera at the origin)
+  glm::dvec3 normal{0.0, 1.0, 0.0};  // unit
+  glm::dvec3 baseColor{1.0};
+  double metallic = 0.0, roughness = 1.0, occlusion = 1.0;
+  glm::dvec3 emissive{0.0};
+};
+
+// glTF BRDF x n.l for unit normal n, view v and light l directions (0 when n.l <= 0).
+glm::dvec3 brdfCosineReference(const SurfaceReference& s, const glm::dvec3& v, const glm::dvec3& l);
+
+// Outgoing radiance towards the camera: every light of `scene` (directional: scene.lightDirection and
+// lightIntensity; every point light, positions made camera-relative with `cameraPosition`).
+glm::dvec3 shadeReference(const SurfaceReference& s, const Scene& scene, const glm::dvec3& cameraPosition);
+
+}  // namespace visbuf
