@@ -156,20 +156,24 @@ Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
   vec3 n = normalize(si.normal);
   // Back faces of double-sided materials: the whole tangent frame flips (as the glTF sample viewer does).
   float side = !si.frontFacing && (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u ? -1.0 : 1.0;
-  vec4 base = m.baseColor * si.color * sampleSlot(m.textures[TEXTURE_SLOT_BASE_COLOR], si);
-  vec4 mr = sampleSlot(m.textures[TEXTURE_SLOT_METALLIC_ROUGHNESS], si);
+  // Every slot's texel in one loop whose bound is read from the material: the sampling code (a switch over the
+  // texture classes) is then compiled once, not once per slot (lavapipe's compile time).
+  vec4 texel[TEXTURE_SLOTS] = vec4[](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
+#if VB_TEXTURED
+  for (uint slot = 0u; slot < m.slotCount; ++slot) texel[slot] = sampleSlot(m.textures[slot], si);
+#endif
+  vec4 base = m.baseColor * si.color * texel[TEXTURE_SLOT_BASE_COLOR];
+  vec4 mr = texel[TEXTURE_SLOT_METALLIC_ROUGHNESS];
   float occlusion = 1.0;
-  if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
-    occlusion = 1.0 + m.params.z * (sampleSlot(m.textures[TEXTURE_SLOT_OCCLUSION], si).r - 1.0);
-  vec3 emissive = m.emissive.rgb;
-  if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && m.textures[TEXTURE_SLOT_EMISSIVE].image != TEXTURE_NONE)
-    emissive *= sampleSlot(m.textures[TEXTURE_SLOT_EMISSIVE], si).rgb;
+  if (m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
+    occlusion = 1.0 + m.params.z * (texel[TEXTURE_SLOT_OCCLUSION].r - 1.0);
+  vec3 emissive = m.emissive.rgb * texel[TEXTURE_SLOT_EMISSIVE].rgb;
   TextureSlotData ns = m.textures[TEXTURE_SLOT_NORMAL];
   if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && ns.image != TEXTURE_NONE) {
     vec3 t, b;
     bool second = ((ns.samplerBits >> TEXTURE_SAMPLER_TEXCOORD_SHIFT) & 0xffu) == 1u;
     if (tangentFrame(si, n, second, t, b)) {
-      vec3 tn = sampleSlot(ns, si).xyz * 2.0 - 1.0;
+      vec3 tn = texel[TEXTURE_SLOT_NORMAL].xyz * 2.0 - 1.0;
       tn.xy *= m.emissive.w;  // normal scale
       vec3 mapped = side * (t * tn.x + b * tn.y + n * tn.z);
       n = dot(mapped, mapped) > 0.0 ? normalize(mapped) : side * n;

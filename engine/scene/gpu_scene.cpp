@@ -53,6 +53,7 @@ gpu::MaterialData packMaterial(const Material& m, const Scene& scene) {
     if (t.baked >= 0 && size_t(t.baked) < scene.textures.size()) {
       const Texture& tex = scene.textures[size_t(t.baked)];
       x.image = tex.sizeClass << 16 | tex.layer;
+      d.slotCount = uint32_t(i + 1);
     }
   }
   return d;

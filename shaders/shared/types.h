@@ -101,7 +101,7 @@ struct MaterialData {
   vec4 emissive;   // rgb: emissive factor x emissive strength; w: normal texture scale
   vec4 params;     // x: metallic, y: roughness, z: occlusion strength, w: alpha cutoff (MASK)
   uint flags;      // MATERIAL_FLAG_*
-  uint pad0;
+  uint slotCount;  // 1 + the last texture slot holding a texture (0: untextured); bounds the shaders' slot loop
   uint pad1;
   uint pad2;
   TextureSlotData textures[TEXTURE_SLOTS];

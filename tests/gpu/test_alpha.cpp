@@ -17,6 +17,7 @@
 #include "asset/gltf_import.h"
 #include "asset/scene_bake.h"
 #include "gpu_test_util.h"
+#include "render/brdf_reference.h"
 #include "render/frame_math.h"
 #include "scene/generate.h"
 
@@ -310,10 +311,15 @@ glm::dmat4 placeCard(glm::dvec3 centre, double size) {
   return glm::scale(glm::translate(glm::dmat4(1.0), centre), glm::dvec3(size));
 }
 
-// The lit colour of a card facing +Z (lighting.glsl: ambient 0.15 + 0.85 x Lambert), in double.
-glm::dvec3 litFacingZ(const Scene& s, glm::dvec3 baseColor) {
-  const glm::dvec3 l = glm::normalize(glm::dvec3(s.lightDirection));
-  return baseColor * (0.15 + 0.85 * std::max(l.z, 0.0));
+// The lit colour of a card facing +z at `world` (camera at `camera`), by the double-precision BRDF reference.
+glm::dvec3 litFacingZ(const Scene& s, glm::dvec3 baseColor, glm::dvec3 world, glm::dvec3 camera) {
+  SurfaceReference r;
+  r.position = world - camera;
+  r.normal = {0.0, 0.0, 1.0};
+  r.baseColor = baseColor;
+  r.metallic = s.materials[0].metallic;
+  r.roughness = s.materials[0].roughness;
+  return shadeReference(r, s, camera);
 }
 
 glm::dvec3 over(glm::dvec4 src, glm::dvec3 lit, glm::dvec3 dst) { return src.a * lit + (1.0 - src.a) * dst; }
@@ -348,20 +354,38 @@ TEST(Transparency, BackToFrontMatchesCpuComposite) {
   auto r = Renderer::create(dev, s, {.width = w, .height = h});
   ASSERT_TRUE(r.ok()) << r.error().message;
 
-  const glm::dvec3 back = litFacingZ(s, glm::dvec3(backdrop));
-  const glm::dvec3 nearLit = litFacingZ(s, glm::dvec3(nearColor)), farLit = litFacingZ(s, glm::dvec3(farColor));
+  // Lit colours at each probe (the BRDF depends on the view direction, so per probe point).
+  auto lit = [&](glm::dvec4 c, glm::dvec3 world) { return litFacingZ(s, glm::dvec3(c), world, cam.position); };
+  auto probeAt = [&](const char* what, glm::dvec3 world, glm::dvec3 onFar, glm::dvec3 onBack, int layers) {
+    const glm::dvec3 back = lit(backdrop, onBack);
+    glm::dvec3 e = back;
+    if (layers & 2) e = over(farColor, lit(farColor, onFar), e);
+    if (layers & 1) e = over(nearColor, lit(nearColor, world), e);
+    return std::make_pair(what, std::make_pair(world, e));
+  };
+  // A probe's ray (from the camera through `world` on the near card's plane z = 0) meets the far card (z = -2)
+  // and the backdrop (z = -4) at these points.
+  auto along = [&](glm::dvec3 world, double z) {
+    const glm::dvec3 d = world - cam.position;
+    return cam.position + d * ((z - cam.position.z) / d.z);
+  };
   struct Probe {
     const char* what;
     glm::dvec3 world;
     glm::dvec3 expected;
   };
-  const Probe probes[] = {
-      {"overlap", {0.05, 0.4, 0.0}, over(nearColor, nearLit, over(farColor, farLit, back))},
-      {"far only", {1.2, 0.0, -2.0}, over(farColor, farLit, back)},
-      {"near only", {-1.2, 0.0, 0.0}, over(nearColor, nearLit, back)},
-      {"occluded", {0.0, -0.4, 1.0}, litFacingZ(s, glm::dvec3(occluder))},
-      {"backdrop", {-4.0, 3.0, -4.0}, back},
-  };
+  std::vector<Probe> probes;
+  for (auto [what, pt, layers] : {std::tuple{"overlap", glm::dvec3(0.05, 0.4, 0.0), 3},
+                                 std::tuple{"far only", along(glm::dvec3(1.2, 0.0, -2.0), 0.0), 2},
+                                 std::tuple{"near only", glm::dvec3(-1.2, 0.0, 0.0), 1},
+                                 std::tuple{"backdrop", along(glm::dvec3(-4.0, 3.0, -4.0), 0.0), 0}}) {
+    auto pr = probeAt(what, pt, along(pt, -2.0), along(pt, -4.0), layers);
+    probes.push_back({pr.first, layers == 0 ? along(pt, -4.0) : layers == 2 ? along(pt, -2.0) : pt, pr.second.second});
+  }
+  probes.push_back({"occluded", {0.0, -0.4, 1.0}, lit(occluder, {0.0, -0.4, 1.0})});
+  const glm::dvec3 wOverlap(0.05, 0.4, 0.0);
+  const glm::dvec3 nearLit = lit(nearColor, wOverlap), farLit = lit(farColor, along(wOverlap, -2.0)),
+                   back = lit(backdrop, along(wOverlap, -4.0));
   const glm::dvec3 wrongOrder = over(farColor, farLit, over(nearColor, nearLit, back));
   EXPECT_GT(glm::length(wrongOrder - probes[0].expected), 0.05) << "the probe must tell the orders apart";
   const FrameMath math = computeFrameMath(cam, w, h);

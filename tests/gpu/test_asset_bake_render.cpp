@@ -46,6 +46,15 @@ constexpr double kPackMaxAbs = 1e-6;  // pack-loaded vs in-memory colour, per ch
 constexpr double kMaxAbs = 2e-3;
 constexpr double kMeanAbs = 5e-5;
 constexpr double kMinPsnr = 80.0;
+// Textured scenes: the shading pass picks mip levels from analytic derivatives, the forward reference from the
+// rasteriser's 2x2-quad differences (Materials.MipSelectionMatchesExactLevelOfDetail: visbuf within 0.014 levels of
+// the exact level of detail, forward within 0.19); where the two straddle a level the trilinear blend differs, and
+// with nearest filtering a pixel near a texel edge may take the neighbouring texel. So the bound is on the mean,
+// PSNR and the share of pixels that differ visibly, not on the largest difference (measured: AlphaBlendModeTest
+// 78 dB, BoxTexturedNonPowerOfTwo 55.9 dB with 1.4e-4 mean). A wrong texel, level or slot everywhere fails them.
+constexpr double kTexturedMeanAbs = 5e-4;
+constexpr double kTexturedMinPsnr = 50.0;
+constexpr double kTexturedMaxDiffering = 0.01;  // of all pixels, differing by more than 1/255
 // Texture cap for the test's bake: texture pixels are not compared here (the shading does not sample them
 // yet), but they are decoded, resized, mip-mapped, written and checksum-verified like any bake's.
 constexpr uint32_t kTextureCap = 256;
@@ -122,8 +131,9 @@ Frames renderBoth(Renderer& r, const Camera& cam, double time) {
   return f;
 }
 
-// visbuf vs forward on one frame, with the Shading.* bounds. Returns the covered pixel count.
-size_t expectVisbufMatchesForward(const Frames& f, const std::string& name) {
+// visbuf vs forward on one frame, with the Shading.* bounds (looser for textured scenes, see above). Returns the
+// covered pixel count.
+size_t expectVisbufMatchesForward(const Frames& f, const std::string& name, bool textured) {
   size_t covered = 0, mismatch = 0;
   std::vector<float> visSame = f.visbuf.color, fwdSame = f.forward.color;
   for (size_t p = 0; p < f.visbuf.ids.size() / 2; ++p) {
@@ -142,9 +152,13 @@ size_t expectVisbufMatchesForward(const Frames& f, const std::string& name) {
   } else {
     EXPECT_LE(double(mismatch), 1e-3 * double(covered)) << name;
   }
-  EXPECT_LE(e.maxAbs, kMaxAbs) << name;
-  EXPECT_LE(e.meanAbs, kMeanAbs) << name;
-  EXPECT_GE(e.psnr, kMinPsnr) << name;
+  if (textured) {
+    EXPECT_LE(e.differingFraction, kTexturedMaxDiffering) << name;
+  } else {
+    EXPECT_LE(e.maxAbs, kMaxAbs) << name;
+  }
+  EXPECT_LE(e.meanAbs, textured ? kTexturedMeanAbs : kMeanAbs) << name;
+  EXPECT_GE(e.psnr, textured ? kTexturedMinPsnr : kMinPsnr) << name;
   EXPECT_GT(covered, 0u) << name << ": the default camera must see the scene";
   return covered;
 }
@@ -274,7 +288,7 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
       const Frames m = renderBoth(**rMemory, memory->defaultCamera, t);
       const Frames p = renderBoth(**rPack, pack->defaultCamera, t);
       if (HasFailure()) break;
-      expectVisbufMatchesForward(m, frameName);
+      expectVisbufMatchesForward(m, frameName, !memory->textures.empty());
       if (t == 0.0 && file.filename().string().rfind("Mesh_PrimitiveMode_", 0) == 0)
         primitiveModes[file.filename().string()] = m.visbuf;
       expectSameFrame(p.visbuf, m.visbuf, frameName + " visbuf");
