@@ -11,18 +11,11 @@
 // ALPHA_MASK variant (masked draw lists): the same cut-out as the masked visibility raster.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_samplerless_texture_functions : require
-#include "material.glsl"
+#include "raster_surface.glsl"
 #if ALPHA_MASK
 #include "alpha_mask.glsl"
 #endif
 
-layout(location = 0) in vec3 inNormal;
-layout(location = 1) in vec4 inColor;
-layout(location = 2) flat in uint inMaterial;
-layout(location = 3) flat in uint inObject;
-layout(location = 4) in vec3 inPosition;  // camera-relative world
-layout(location = 5) in vec4 inUv;        // TEXCOORD_0, TEXCOORD_1
-layout(location = 6) in vec4 inTangent;   // world xyz, w: bitangent sign (0: none)
 layout(location = 0) out vec4 outBaseColor;
 layout(location = 1) out vec2 outNormal;
 layout(location = 2) out vec4 outMaterial;
@@ -36,20 +29,7 @@ layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D ove
 #endif
 
 void main() {
-  SurfaceInputs si;
-  si.position = inPosition;
-  si.normal = inNormal;
-  si.tangent = inTangent;
-  si.dpdx = dFdx(inPosition);
-  si.dpdy = dFdy(inPosition);
-  si.uv0 = inUv.xy;
-  si.uv1 = inUv.zw;
-  si.duv0dx = dFdx(inUv.xy);
-  si.duv0dy = dFdy(inUv.xy);
-  si.duv1dx = dFdx(inUv.zw);
-  si.duv1dy = dFdy(inUv.zw);
-  si.color = inColor;
-  si.frontFacing = gl_FrontFacing != ((objectAt(inObject).flags & OBJECT_FLAG_FLIP_WINDING) != 0u);
+  SurfaceInputs si = rasterSurfaceInputs();
 #if ALPHA_MASK
   float alpha = maskAlpha(inMaterial, si.uv0, si.uv1, si.duv0dx, si.duv0dy, si.duv1dx, si.duv1dy, inColor);
   if (maskCutsOut(inMaterial, alpha)) discard;
