@@ -634,9 +634,8 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
     }
     uint32_t t = timestamps->begin(cmd, name);
-    if (deferred) {
-      passes::GBufferInputs in;
-      for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) in.targets[i] = &gbufferTargets[i];
+    // The same draw lists for either raster; only the targets differ.
+    auto common = [&](auto& in) {
       in.depth = &depth;
       in.indexBuffer = gpuScene.indices.handle();
       in.draws = draws.handle();
@@ -644,21 +643,18 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       in.lists = phaseLists(phase);
       in.clear = clear;
       in.countOverdraw = options.countOverdraw;
+    };
+    if (deferred) {
+      passes::GBufferInputs in;
+      for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) in.targets[i] = &gbufferTargets[i];
+      common(in);
       gbuffer.record(cmd, pipelineLayout, set, in);
-      timestamps->end(cmd, t);
-      VK_CHECK(vkEndCommandBuffer(cmd));
-      return;
+    } else {
+      passes::VisibilityInputs in;
+      in.ids = &ids;
+      common(in);
+      visibility.record(cmd, pipelineLayout, set, in);
     }
-    passes::VisibilityInputs in;
-    in.ids = &ids;
-    in.depth = &depth;
-    in.indexBuffer = gpuScene.indices.handle();
-    in.draws = draws.handle();
-    in.drawCount = stats.handle();
-    in.lists = phaseLists(phase);
-    in.clear = clear;
-    in.countOverdraw = options.countOverdraw;
-    visibility.record(cmd, pipelineLayout, set, in);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
