@@ -220,6 +220,16 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
                                       unique, sizeof(float) * 3, stride);
     positionShadow.resize(unique);
   }
+  std::vector<glm::vec3> positions(unique);
+  for (size_t v = 0; v < unique; ++v) positions[v] = mesh.position(uint32_t(v));
+  // The recorded error is the measured two-sided deviation from the full surface (meshoptimizer's estimate,
+  // in particular simplifySloppy's, can be far below what the silhouette really loses), never less than the
+  // simplifier's own figure; object-space units.
+  auto measure = [&](const std::vector<uint32_t>& level, size_t count, float estimate) {
+    double measured = measureSimplificationError(positions, lod0, std::span(level.data(), count));
+    return std::max(float(measured), estimate * scale);
+  };
+  std::vector<uint32_t> sloppy(indexCount);
   size_t previous = indexCount;
   float previousError = 0.0f;
   while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
@@ -230,21 +240,35 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     if (count > previous * options.minReduction) {
       count = meshopt_simplify(scratch.data(), shadow.data(), indexCount, pos, unique, stride, target, 1.0f, 0, &err);
     }
-    if (count > previous * options.minReduction) {
-      // Topology-preserving simplification stalled (small islands): fall back to sloppy.
-      count = meshopt_simplifySloppy(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f,
-                                     &err);
+    const bool stalled = count == 0 || count > previous * options.minReduction;
+    float error = stalled ? INFINITY : measure(scratch, count, err);
+    // Topology-preserving simplification either stalled (small islands, a handle it may not close) or paid
+    // for its reduction with a jump in error (the Kitten at 904 triangles: 8x the previous level's error,
+    // where the sloppy simplifier loses half as much with fewer triangles): try meshopt_simplifySloppy too
+    // and keep whichever candidate deviates less from the full surface.
+    if (stalled || error > 2.5f * std::max(previousError, 1e-12f)) {
+      float sloppyEstimate = 0.0f;
+      size_t sloppyCount = meshopt_simplifySloppy(sloppy.data(), lod0.data(), indexCount, pos, unique, stride,
+                                                  target, 1.0f, &sloppyEstimate);
+      if (sloppyCount > 0 && sloppyCount <= previous * options.minReduction) {
+        float sloppyError = measure(sloppy, sloppyCount, sloppyEstimate);
+        if (sloppyError < error) {
+          std::swap(scratch, sloppy);
+          count = sloppyCount;
+          error = sloppyError;
+        }
+      }
     }
-    if (count == 0 || count > previous * options.minReduction) break;  // no real reduction: chain ends
+    if (!std::isfinite(error)) break;  // no candidate reduces the mesh: the chain ends
     repairCornerAttributes(mesh.vertices, positionShadow, scratch.data(), count);
     meshopt_optimizeVertexCache(scratch.data(), scratch.data(), count, unique);
-    // Record the measured two-sided deviation from the full surface (meshoptimizer's estimate, in
-    // particular simplifySloppy's, can be far below what the silhouette really loses), never less than
-    // the simplifier's own figure; non-decreasing along the chain; object-space units.
-    std::vector<glm::vec3> positions(unique);
-    for (size_t v = 0; v < unique; ++v) positions[v] = mesh.position(uint32_t(v));
-    const double measured = measureSimplificationError(positions, lod0, std::span(scratch.data(), count));
-    float error = std::max({float(measured), err * scale, previousError});
+    if (error <= previousError && mesh.lods.size() > 1) {
+      // Fewer triangles for no more error than the previous level: that level would never be chosen (the
+      // cull pass takes the coarsest level under the threshold), so this one replaces it.
+      mesh.indices.resize(mesh.lods.back().firstIndex);
+      mesh.lods.pop_back();
+    }
+    error = std::max(error, previousError);  // non-decreasing along the chain
     mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
     mesh.indices.insert(mesh.indices.end(), scratch.begin(), scratch.begin() + std::ptrdiff_t(count));
     previous = count;
