@@ -1255,11 +1255,11 @@ Result<SkinnedInstanceReadback> Renderer::readSkinnedInstance(uint32_t instance)
   out.object = r.object;
   gpu::Device& dev = impl_->device;
   std::vector<uint8_t> bytes =
-      gpu::downloadBuffer(dev, g.skinnedVertices, r.vertexBytes, uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex));
+      gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.vertexBytes, uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex));
   out.vertices.resize(r.vertexCount);
   std::memcpy(out.vertices.data(), bytes.data(), bytes.size());
   if (r.tangentBytes) {
-    bytes = gpu::downloadBuffer(dev, g.skinnedVertices, r.tangentBytes, uint64_t(r.vertexCount) * sizeof(uint32_t));
+    bytes = gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.tangentBytes, uint64_t(r.vertexCount) * sizeof(uint32_t));
     out.tangents.resize(r.vertexCount);
     std::memcpy(out.tangents.data(), bytes.data(), bytes.size());
   }

@@ -125,7 +125,6 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   // each source mesh once.
   std::vector<SkinVertex> skinVertices;
   std::vector<int64_t> skinVertexStart(scene.meshes.size(), -1);
-  uint64_t skinnedBytes = 0;
   for (const SkinnedObject& so : scene.skinnedObjects) {
     const Object& o = scene.objects[so.object];
     const Mesh& mesh = scene.meshes[o.mesh];
@@ -141,13 +140,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     r.skinVertex = uint32_t(skinVertexStart[o.mesh]);
     r.sourceExtra = g.meshTable[o.mesh].extraOffset;
     r.vertexCount = uint32_t(mesh.vertices.size());
-    r.vertexBytes = skinnedBytes;
-    skinnedBytes += uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex);
-    if (!mesh.tangents.empty()) {
-      r.tangentBytes = skinnedBytes;
-      skinnedBytes += (uint64_t(r.vertexCount) * sizeof(uint32_t) + 15) / 16 * 16;
-    }
-    g.meshTable.push_back(g.meshTable[o.mesh]);  // addresses once the buffer exists
+    r.hasTangents = !mesh.tangents.empty();
+    g.meshTable.push_back(g.meshTable[o.mesh]);  // addresses once the buffers exist
     objects[so.object] = packSkinnedObject(o, so.placement, scene);
     objects[so.object].meshIndex = r.meshSlot;
     g.objectMesh[so.object] = r.meshSlot;
@@ -181,12 +175,24 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
                                  "of maxStorageBufferRange, or maxBufferSize)",
                                  vertices.size() * sizeof(gpu::Vertex) / 1048576.0, poolLimit / 1048576.0,
                                  VERTEX_WINDOWS));
-  const uint64_t skinnedLimit = std::min<uint64_t>(p13.maxBufferSize, p11.maxMemoryAllocationSize);
-  if (skinnedBytes > skinnedLimit)
-    return makeError(ErrorCode::CapacityExceeded,
-                     fmt::format("{} skinned instances need {:.1f} MiB of skinned vertices, over this device's "
-                                 "{:.1f} MiB for one buffer (maxBufferSize, maxMemoryAllocationSize)",
-                                 g.skinned.size(), skinnedBytes / 1048576.0, skinnedLimit / 1048576.0));
+  // Skinned regions: packed in order into blocks of at most one buffer (maxBufferSize, maxMemoryAllocationSize:
+  // 2 GiB on lavapipe); each mesh slot holds its region's full address, so the blocks need not be contiguous.
+  const uint64_t blockLimit = std::min<uint64_t>(p13.maxBufferSize, p11.maxMemoryAllocationSize);
+  std::vector<uint64_t> blockBytes;
+  for (GpuScene::SkinnedRegion& r : g.skinned) {
+    const uint64_t v = uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex);
+    const uint64_t t = r.hasTangents ? (uint64_t(r.vertexCount) * sizeof(uint32_t) + 15) / 16 * 16 : 0;
+    if (v + t > blockLimit)
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("skinned mesh {} needs {:.1f} MiB per instance, over this device's {:.1f} MiB "
+                                   "for one buffer (maxBufferSize, maxMemoryAllocationSize)",
+                                   r.sourceMesh, (v + t) / 1048576.0, blockLimit / 1048576.0));
+    if (blockBytes.empty() || blockBytes.back() + v + t > blockLimit) blockBytes.push_back(0);
+    r.block = uint32_t(blockBytes.size() - 1);
+    r.vertexBytes = blockBytes.back();
+    r.tangentBytes = t ? r.vertexBytes + v : 0;
+    blockBytes.back() += v + t;
+  }
   for (auto [what, bytes] : {
                              std::pair{"index", indices.size() * sizeof(uint32_t)},
                              std::pair{"vertex extras (tangents, TEXCOORD_1)", extras.size() * sizeof(gpu::VertexExtra)},
@@ -199,19 +205,20 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   g.vertices = gpu::uploadVector(device, vertices, ssbo);
   g.indices = gpu::uploadVector(device, indices, ssbo | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
-  if (!g.skinned.empty()) {  // contents written by the skinning pass before any frame reads them
-    g.skinnedVertices = gpu::Buffer(device, skinnedBytes,
-                                    ssbo | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                    gpu::MemoryUse::DeviceLocal);
-    const VkDeviceAddress base = g.skinnedVertices.address();
-    for (const GpuScene::SkinnedRegion& r : g.skinned) {
-      gpu::MeshData& md = g.meshTable[r.meshSlot];
-      const VkDeviceAddress v = base + r.vertexBytes, t = r.tangentBytes ? base + r.tangentBytes : 0;
-      md.skinnedVertexLow = uint32_t(v);
-      md.skinnedVertexHigh = uint32_t(v >> 32);
-      md.skinnedTangentLow = uint32_t(t);
-      md.skinnedTangentHigh = uint32_t(t >> 32);
-    }
+  for (uint64_t bytes : blockBytes)  // contents written by the skinning pass before any frame reads them
+    g.skinnedVertices.emplace_back(device, bytes,
+                                   ssbo | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                   gpu::MemoryUse::DeviceLocal);
+  uint64_t skinnedBytes = 0;
+  for (const gpu::Buffer& b : g.skinnedVertices) skinnedBytes += b.size();
+  for (const GpuScene::SkinnedRegion& r : g.skinned) {
+    gpu::MeshData& md = g.meshTable[r.meshSlot];
+    const VkDeviceAddress base = g.skinnedVertices[r.block].address();
+    const VkDeviceAddress v = base + r.vertexBytes, t = r.tangentBytes ? base + r.tangentBytes : 0;
+    md.skinnedVertexLow = uint32_t(v);
+    md.skinnedVertexHigh = uint32_t(v >> 32);
+    md.skinnedTangentLow = uint32_t(t);
+    md.skinnedTangentHigh = uint32_t(t >> 32);
   }
   g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   g.objects = gpu::uploadVector(device, objects, ssbo);
@@ -231,7 +238,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.placeholderTexture = uploadTextureClass(device, white);
   g.objectCount = uint32_t(objects.size());
   g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
-            (g.skinVertices ? g.skinVertices.size() : 0) + g.skinnedVertices.size() + g.vertexExtras.size() +
+            (g.skinVertices ? g.skinVertices.size() : 0) + skinnedBytes + g.vertexExtras.size() +
             textureBytes;
   return g;
 }
