@@ -64,16 +64,27 @@ Scene cpuSkinned(const Scene& animated, double time) {
 
 }  // namespace
 
-// CesiumMan, Fox (no normals, no indices) and RiggedFigure at several times: visbuf with GPU skinning vs the
-// forward path drawing the CPU-skinned meshes, same camera. Bound: the Shading tests' (max 2e-3 per channel,
-// PSNR >= 80 dB), with at most 0.1 % of the pixels allowed a different triangle at silhouettes (float GPU vs
-// double CPU skinning can move an edge across a pixel centre).
+// CesiumMan, Fox (no normals, no indices) and RiggedFigure at several times: visbuf with GPU skinning against
+// the CPU-skinned meshes (double precision, drawn as static meshes), same camera, twice:
+//  - against the forward path (the accuracy reference): PSNR >= 60 dB, at most 0.1 % of the pixels with a
+//    different triangle at silhouettes (float GPU vs double CPU skinning can move an edge across a pixel
+//    centre), and without such pixels a max error at most 2e-3 (the Shading tests' bound) above the static
+//    scene's own visbuf-vs-forward difference, so that skinning adds no more than the bound to it. (On the H100
+//    that difference alone is 0.0028-0.0100 on CesiumMan, skinning or not -- the same visbuf/forward divergence
+//    that fails three Shading tests there -- while GPU-skinned visbuf is within 0.0005 of CPU-skinned visbuf.)
+//  - against visbuf drawing the CPU-skinned meshes: the same path, so only the skinning differs: the same
+//    triangle bound, and max 2e-3.
 TEST(Skinning, MatchesCpuSkinnedForwardReference) {
   const std::vector<std::string> assets = {"CesiumMan/glTF/CesiumMan.gltf", "Fox/glTF-Binary/Fox.glb",
                                            "RiggedFigure/glTF/RiggedFigure.gltf"};
   if (!std::filesystem::exists(assetPath(assets[0]))) GTEST_SKIP() << "shared assets not present";
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
+  auto differentTriangles = [](const FrameResult& x, const FrameResult& y) {
+    size_t n = 0;
+    for (size_t i = 0; i < x.ids.size(); i += 2) n += x.ids[i] != y.ids[i] || x.ids[i + 1] != y.ids[i + 1];
+    return n;
+  };
   for (const std::string& a : assets) {
     auto scene = loadAsset(a);
     ASSERT_TRUE(scene.ok()) << a << ": " << scene.error().message;
@@ -91,24 +102,32 @@ TEST(Skinning, MatchesCpuSkinnedForwardReference) {
       const Scene reference = cpuSkinned(*scene, t);
       auto rr = Renderer::create(dev, reference, {.width = 256, .height = 256});
       ASSERT_TRUE(rr.ok()) << rr.error().message;
+      auto refVisbuf = (*rr)->renderFrame(scene->defaultCamera, fo);
       FrameOptions ro = fo;
       ro.path = RenderPath::Forward;
       ro.cull = CullMode::None;
       auto refFrame = (*rr)->renderFrame(scene->defaultCamera, ro);
-      ASSERT_TRUE(refFrame.ok());
-      size_t covered = 0, differentTriangle = 0;
-      for (size_t i = 0; i < gpuFrame->ids.size(); i += 2) {
-        covered += refFrame->ids[i] != 0;
-        differentTriangle += gpuFrame->ids[i] != refFrame->ids[i] || gpuFrame->ids[i + 1] != refFrame->ids[i + 1];
-      }
+      ASSERT_TRUE(refFrame.ok() && refVisbuf.ok());
+      size_t covered = 0;
+      for (size_t i = 0; i < refFrame->ids.size(); i += 2) covered += refFrame->ids[i] != 0;
+      const size_t differentTriangle = differentTriangles(*gpuFrame, *refFrame);
+      const size_t differentSamePath = differentTriangles(*gpuFrame, *refVisbuf);
       const test::ImageError e = test::compareColor(gpuFrame->color, refFrame->color);
-      std::printf("%s t=%.2f: %zu px covered, %zu with another triangle, max %.5f, PSNR %.1f dB\n", a.c_str(), t,
-                  covered, differentTriangle, e.maxAbs, e.psnr);
+      const test::ImageError samePath = test::compareColor(gpuFrame->color, refVisbuf->color);
+      const test::ImageError staticPaths = test::compareColor(refVisbuf->color, refFrame->color);
+      std::printf("%s t=%.2f: %zu px covered; vs forward: %zu with another triangle, max %.5f, PSNR %.1f dB (static "
+                  "scene visbuf vs forward: max %.5f); vs visbuf of the CPU-skinned meshes: %zu, max %.5f, PSNR %.1f dB\n",
+                  a.c_str(), t, covered, differentTriangle, e.maxAbs, e.psnr, staticPaths.maxAbs, differentSamePath,
+                  samePath.maxAbs, samePath.psnr);
       EXPECT_GT(covered, 500u) << a;
       EXPECT_LE(double(differentTriangle), 0.001 * 256 * 256) << a << " t " << t;
+      EXPECT_LE(double(differentSamePath), 0.001 * 256 * 256) << a << " t " << t;
       EXPECT_GE(e.psnr, 60.0) << a << " t " << t;
       if (differentTriangle == 0) {
-        EXPECT_LE(e.maxAbs, 2e-3) << a << " t " << t;
+        EXPECT_LE(e.maxAbs, staticPaths.maxAbs + 2e-3) << a << " t " << t;
+      }
+      if (differentSamePath == 0) {
+        EXPECT_LE(samePath.maxAbs, 2e-3) << a << " t " << t;
       }
     }
   }
