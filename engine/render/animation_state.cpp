@@ -41,9 +41,10 @@ Result<std::unique_ptr<AnimationState>> AnimationState::create(gpu::Device& devi
   a->worldBounds_.resize(a->regions_.size());
   a->lodScale_.resize(a->regions_.size());
   const uint64_t limit = device.properties().limits.maxStorageBufferRange;
+  const uint64_t boundsBytes = gpuBounds ? a->regions_.size() * SKIN_BOUNDS_UINTS * sizeof(uint32_t) : 16;
   for (auto [what, bytes] : {std::pair{"joint matrix", uint64_t(joints) * 3 * sizeof(glm::vec4)},
                              std::pair{"skinned instance", a->regions_.size() * sizeof(gpu::SkinInstance)},
-                             std::pair{"skinned bounds", gpuBounds ? a->regions_.size() * SKIN_BOUNDS_UINTS * 4 : 0}})
+                             std::pair{"skinned bounds", boundsBytes}})
     if (bytes > limit)
       return makeError(ErrorCode::CapacityExceeded,
                        fmt::format("{} skinned instances: the {} buffer needs {:.1f} MiB, over this device's "
@@ -54,8 +55,7 @@ Result<std::unique_ptr<AnimationState>> AnimationState::create(gpu::Device& devi
                            gpu::MemoryUse::HostVisible);
   a->instances_ = gpu::Buffer(device, a->regions_.size() * sizeof(gpu::SkinInstance), ssbo,
                               gpu::MemoryUse::HostVisible);
-  a->bounds_ = gpu::Buffer(device, gpuBounds ? a->regions_.size() * SKIN_BOUNDS_UINTS * sizeof(uint32_t) : 16,
-                           ssbo | VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::DeviceLocal);
+  a->bounds_ = gpu::Buffer(device, boundsBytes, ssbo | VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::DeviceLocal);
   return a;
 }
 

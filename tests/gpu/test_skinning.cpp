@@ -7,6 +7,7 @@
 
 #include "asset/gltf_import.h"
 #include "asset/scene_bake.h"
+#include "asset/texture_bake.h"
 #include "gpu_test_util.h"
 #include "scene/animation.h"
 #include "scene/generate.h"
@@ -384,6 +385,66 @@ TEST(Skinning, BoundsContainEverySkinnedVertex) {
                   skinBoundsName(kind), name.c_str(), vertices, spheres, outside, worst, ratio / double(spheres));
       EXPECT_EQ(outside, 0u) << skinBoundsName(kind) << " " << name;
       EXPECT_GT(vertices, 1000u);
+    }
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// Skinned tangents where they are used: a normal-mapped skinned mesh. CesiumMan with its textures baked, a tangent
+// on every vertex (addTangents) and its base colour texture also bound as the normal map (any texture is a valid
+// perturbation; this one has sharp, high-contrast edges). GPU skinning is compared with the CPU-skinned meshes
+// (double precision, tangents included) drawn by the same path, for the visbuf path (shade.comp reads the skinned
+// tangents) and the forward path (forward.vert): at most 0.1 % of the pixels on another triangle and, without
+// such pixels, max 2e-3. The normal map must matter: without it the image differs by more than 0.05.
+TEST(Skinning, NormalMappedSkinnedMeshMatchesCpuSkinning) {
+  const std::string file = assetPath("CesiumMan/glTF/CesiumMan.gltf");
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared assets not present";
+  auto imported = importGltfScene(file);
+  ASSERT_TRUE(imported.ok());
+  auto man = buildImportedScene(*imported);
+  ASSERT_TRUE(man.ok());
+  TextureBakeOptions small;
+  small.maxTextureSize = 256;  // the texture's edges are what matters, not its size (and baking time)
+  Status baked = bakeTextures(*imported, small, &man.value());
+  if (!baked && baked.error().code == ErrorCode::Unsupported) GTEST_SKIP() << baked.error().message;
+  ASSERT_TRUE(baked.ok()) << baked.error().message;
+  Scene plain = *man;
+  addTangents(*man);
+  for (Material& m : man->materials) {
+    ASSERT_GE(m.baseColorTexture.baked, 0);
+    m.normalTexture = m.baseColorTexture;
+  }
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  const RendererConfig rc{.width = 256, .height = 256};
+  auto r = Renderer::create(dev, *man, rc);
+  auto rPlain = Renderer::create(dev, plain, rc);
+  ASSERT_TRUE(r.ok() && rPlain.ok()) << (r.ok() ? rPlain.error().message : r.error().message);
+  for (double t : {0.8}) {  // one pose: every textured renderer costs seconds of shader compilation on lavapipe
+    const Scene reference = cpuSkinned(*man, t);
+    auto rr = Renderer::create(dev, reference, rc);
+    ASSERT_TRUE(rr.ok()) << rr.error().message;
+    for (RenderPath path : {RenderPath::Visbuf, RenderPath::Forward}) {
+      FrameOptions fo;
+      fo.path = path;
+      fo.lodErrorPixels = 0.0f;
+      fo.readIds = true;
+      fo.animationTime = t;
+      auto f = (*r)->renderFrame(man->defaultCamera, fo);
+      auto g = (*rr)->renderFrame(man->defaultCamera, fo);
+      auto h = (*rPlain)->renderFrame(man->defaultCamera, fo);
+      ASSERT_TRUE(f.ok() && g.ok() && h.ok());
+      size_t different = 0;
+      for (size_t i = 0; i < f->ids.size(); i += 2) different += f->ids[i] != g->ids[i] || f->ids[i + 1] != g->ids[i + 1];
+      const test::ImageError e = test::compareColor(f->color, g->color);
+      const test::ImageError mapped = test::compareColor(f->color, h->color);
+      std::printf("%s t=%.2f: %zu px on another triangle, max %.5f, PSNR %.1f dB; without the normal map: max %.3f\n",
+                  renderPathName(path), t, different, e.maxAbs, e.psnr, mapped.maxAbs);
+      EXPECT_LE(double(different), 0.001 * 256 * 256) << renderPathName(path) << " t " << t;
+      if (different == 0) {
+        EXPECT_LE(e.maxAbs, 2e-3) << renderPathName(path) << " t " << t;
+      }
+      EXPECT_GT(mapped.maxAbs, 0.05) << renderPathName(path) << " t " << t;
     }
   }
   EXPECT_NO_VALIDATION_MESSAGES(before);
