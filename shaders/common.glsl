@@ -2,6 +2,8 @@
 // math, used by the visibility, shading and forward shaders alike) and normal decode. Lighting: lighting.glsl.
 #ifndef VISBUF_COMMON_GLSL
 #define VISBUF_COMMON_GLSL
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
 
 #include "shared/types.h"
 #include "octahedral.glsl"
@@ -53,6 +55,40 @@ Vertex vertexAt(uint i) {
   return v;
 }
 layout(std430, set = 0, binding = BINDING_VERTEX_EXTRAS) readonly buffer VertexExtraBlock { VertexExtra vertexExtras[]; };
+
+// Skinned instances (gpu::Specialization::skinned; 0 for static scenes removes all of this): a skinned mesh slot
+// keeps its rest mesh's vertexOffset (draws index the rest vertices, whose uv and colour stay) and addresses the
+// instance's skinned positions, normals (and tangents) by buffer device address (skin.comp.glsl writes them).
+layout(constant_id = 2) const uint VB_SKINNED = 0u;
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SkinnedVertexRef { SkinnedVertex items[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SkinnedTangentRef { uint items[]; };
+
+// Vertex i of the pool (a draw's vertexOffset + index) as mesh slot `mesh` has it: the rest vertex, with the
+// skinned position and normal where the slot is a skinned instance's.
+Vertex meshVertex(uint mesh, uint i) {
+  Vertex v = vertexAt(i);
+  if (VB_SKINNED != 0u) {
+    uvec2 a = uvec2(meshes[mesh].skinnedVertexLow, meshes[mesh].skinnedVertexHigh);
+    if (a != uvec2(0u)) {
+      SkinnedVertex s = SkinnedVertexRef(a).items[i - meshes[mesh].vertexOffset];
+      v.px = s.px;
+      v.py = s.py;
+      v.pz = s.pz;
+      v.normal = s.normal;
+    }
+  }
+  return v;
+}
+
+// The object-space tangent (octahedral) of mesh-local vertex `local` whose VertexExtra is `e`: the skinned one
+// for a skinned instance's slot, else the rest one. Its w is always e.tangentW.
+uint meshTangent(uint mesh, uint local, VertexExtra e) {
+  if (VB_SKINNED != 0u) {
+    uvec2 a = uvec2(meshes[mesh].skinnedTangentLow, meshes[mesh].skinnedTangentHigh);
+    if (a != uvec2(0u)) return SkinnedTangentRef(a).items[local];
+  }
+  return e.tangent;
+}
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
 
 // Object space -> camera-relative world space. The translation is made camera-relative first

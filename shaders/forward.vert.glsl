@@ -14,7 +14,7 @@ layout(location = 6) out vec4 outTangent;   // world xyz, w: bitangent sign (0: 
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
-  Vertex v = vertexAt(gl_VertexIndex);
+  Vertex v = meshVertex(o.meshIndex, gl_VertexIndex);
   gl_Position = clipPosition(o, vertexPosition(v));
   outPosition = objectToCamera(o, vertexPosition(v));
   outNormal = normalToWorld(o, octDecode(v.normal));
@@ -23,10 +23,12 @@ void main() {
   outObject = gl_InstanceIndex;
   outUv = vec4(v.u, v.v, 0.0, 0.0);
   outTangent = vec4(0.0);
-  MeshData m = meshes[o.meshIndex];
-  if (m.extraOffset != EXTRA_NONE) {
-    VertexExtra e = vertexExtras[m.extraOffset + uint(gl_VertexIndex) - m.vertexOffset];
+  uint extra = meshes[o.meshIndex].extraOffset;
+  if (extra != EXTRA_NONE) {
+    uint local = uint(gl_VertexIndex) - meshes[o.meshIndex].vertexOffset;
+    VertexExtra e = vertexExtras[extra + local];
     outUv.zw = vec2(e.u1, e.v1);
-    if (e.tangentW != 0.0) outTangent = vec4(objectToCameraVector(o, octDecode(e.tangent)), e.tangentW);
+    if (e.tangentW != 0.0)
+      outTangent = vec4(objectToCameraVector(o, octDecode(meshTangent(o.meshIndex, local, e))), e.tangentW);
   }
 }

@@ -55,9 +55,9 @@ void main() {
   DrawCommand d = draws[slot];
   ObjectData o = objectAt(d.firstInstance);
   uint base = d.firstIndex + 3u * tri;
-  Vertex v0 = vertexAt(indices[base + 0u] + uint(d.vertexOffset));
-  Vertex v1 = vertexAt(indices[base + 1u] + uint(d.vertexOffset));
-  Vertex v2 = vertexAt(indices[base + 2u] + uint(d.vertexOffset));
+  Vertex v0 = meshVertex(o.meshIndex, indices[base + 0u] + uint(d.vertexOffset));
+  Vertex v1 = meshVertex(o.meshIndex, indices[base + 1u] + uint(d.vertexOffset));
+  Vertex v2 = meshVertex(o.meshIndex, indices[base + 2u] + uint(d.vertexOffset));
   vec4 c0 = clipPosition(o, vertexPosition(v0));
   vec4 c1 = clipPosition(o, vertexPosition(v1));
   vec4 c2 = clipPosition(o, vertexPosition(v2));
@@ -91,7 +91,9 @@ void main() {
     si.duv1dx = uv1 * b.ddx;
     si.duv1dy = uv1 * b.ddy;
     if (e0.tangentW != 0.0) {
-      vec3 t = l.x * octDecode(e0.tangent) + l.y * octDecode(e1.tangent) + l.z * octDecode(e2.tangent);
+      vec3 t = l.x * octDecode(meshTangent(o.meshIndex, indices[base + 0u], e0)) +
+               l.y * octDecode(meshTangent(o.meshIndex, indices[base + 1u], e1)) +
+               l.z * octDecode(meshTangent(o.meshIndex, indices[base + 2u], e2));
       si.tangent = vec4(objectToCameraVector(o, t), e0.tangentW);  // mirrored instances: w flipped at import
     }
   }

@@ -1,14 +1,80 @@
 #version 460
 // Skinning pass: one thread per (animated instance, vertex). Linear blend skinning of the rest vertex's
-// position and normal with the instance's joint matrices (skin space, 3 rows each), written into the
-// instance's own region of the unified vertex pool, which its draws (and the shading pass) read like any
-// static mesh. Thread 0 of each instance also writes the instance's mesh slot: the pose's conservative
-// bounding sphere and the LOD errors scaled by the pose (the CPU computed both, animation.h).
+// position, normal and tangent with the instance's joint matrices (skin space, 3 rows each), written as a
+// 16-byte SkinnedVertex (and a 4-byte tangent where the mesh has tangents) to the instance's region, which
+// its mesh slot addresses by buffer device address (MeshData.skinnedVertex*, skinnedTangent*): the raster, the
+// shading pass and the forward path read it through meshVertex() in common.glsl. Uv, colour and the tangent's
+// handedness stay the rest vertex's, so they are not copied per instance.
+// Thread 0 of each instance writes the instance's LOD errors scaled by the pose, and with joint-reach bounds
+// the CPU's sphere (animation.h). With GPU bounds (pc.pad0 & SKIN_MODE_GPU_BOUNDS) every subgroup reduces its
+// skinned positions to an AABB and merges it into the instance's bounds record with 6 atomicMin; the
+// RESOLVE_BOUNDS variant (skin_bounds.comp, after this pass) turns that AABB into the slot's sphere.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
 #include "shared/types.h"
 #include "octahedral.glsl"
 
+#ifndef RESOLVE_BOUNDS
+#define RESOLVE_BOUNDS 0
+#endif
+
 layout(local_size_x = SKIN_WORKGROUP_SIZE) in;
+
+layout(std430, set = 0, binding = SKIN_BINDING_MESHES) buffer MeshBlock { MeshData meshes[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_INSTANCES) readonly buffer InstanceBlock { SkinInstance instances[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_BOUNDS) buffer BoundsBlock { uint bounds[]; };
+layout(push_constant) uniform Push { PassConstants pc; };  // phase: instance count, drawBase: window shift
+
+// Floats ordered as uints: a < b (not NaN) exactly when orderedFloat(a) < orderedFloat(b).
+uint orderedFloat(float f) {
+  uint u = floatBitsToUint(f);
+  return (u & 0x80000000u) != 0u ? ~u : u | 0x80000000u;
+}
+float orderedFloatInverse(uint u) { return uintBitsToFloat((u & 0x80000000u) != 0u ? u & 0x7fffffffu : ~u); }
+
+#if RESOLVE_BOUNDS
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SkinnedVertexRef { SkinnedVertex items[]; };
+
+// The sphere of GPU bounds, after the skinning pass reduced each instance's AABB, in three steps (pc.pad1):
+//  SKIN_BOUNDS_CENTRE (one thread per instance): the AABB centre c -> the mesh slot's boundsSphere.xyz;
+//  SKIN_BOUNDS_DISTANCE (one thread per instance vertex, dispatched like the skinning): the largest |p - c| of
+//    the instance's skinned vertices, reduced per subgroup, then atomicMin of orderedFloat(-distance);
+//  SKIN_BOUNDS_RADIUS (one thread per instance): that distance, widened by 1e-5 relative and 1e-6 of the
+//    centre's magnitude (far above the few ulps of rounding in p - c and length()) -> boundsSphere.w.
+// So the radius is the tightest about the AABB centre, not the AABB's half diagonal (up to sqrt(3) larger).
+void main() {
+  uint b;
+  if (pc.pad1 == SKIN_BOUNDS_DISTANCE) {
+    uint inst = gl_WorkGroupID.y + gl_WorkGroupID.z * 65535u;
+    if (inst >= pc.phase) return;
+    uint slot = instances[inst].meshSlot;
+    uint v = gl_GlobalInvocationID.x;
+    if (v >= instances[inst].vertexCount) return;
+    SkinnedVertex s = SkinnedVertexRef(uvec2(meshes[slot].skinnedVertexLow, meshes[slot].skinnedVertexHigh)).items[v];
+    float d = length(vec3(s.px, s.py, s.pz) - meshes[slot].boundsSphere.xyz);
+    uint m = subgroupMin(orderedFloat(-d));
+    if (subgroupElect()) atomicMin(bounds[SKIN_BOUNDS_UINTS * inst + 6u], m);
+    return;
+  }
+  uint inst = gl_GlobalInvocationID.x;
+  if (inst >= pc.phase) return;
+  b = SKIN_BOUNDS_UINTS * inst;
+  uint slot = instances[inst].meshSlot;
+  if (pc.pad1 == SKIN_BOUNDS_CENTRE) {
+    vec3 lo = vec3(orderedFloatInverse(bounds[b]), orderedFloatInverse(bounds[b + 1u]), orderedFloatInverse(bounds[b + 2u]));
+    vec3 hi = -vec3(orderedFloatInverse(bounds[b + 3u]), orderedFloatInverse(bounds[b + 4u]),
+                    orderedFloatInverse(bounds[b + 5u]));
+    meshes[slot].boundsSphere = vec4(0.5 * lo + 0.5 * hi, 0.0);
+  } else {
+    vec3 c = meshes[slot].boundsSphere.xyz;
+    float r = -orderedFloatInverse(bounds[b + 6u]);
+    meshes[slot].boundsSphere.w = r * (1.0 + 1e-5) + 1e-6 * max(max(abs(c.x), abs(c.y)), abs(c.z));
+  }
+}
+#else
 
 struct SkinVertexData {  // scene/skin_vertex.h: 4 x uint16 joints, 4 x float weights (24 bytes)
   uint joints01;
@@ -16,17 +82,18 @@ struct SkinVertexData {  // scene/skin_vertex.h: 4 x uint16 joints, 4 x float we
   float w0, w1, w2, w3;
 };
 
-layout(std430, set = 0, binding = SKIN_BINDING_VERTICES) buffer VertexBlock0 { Vertex vertices0[]; };
-layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_1) buffer VertexBlock1 { Vertex vertices1[]; };
-layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_2) buffer VertexBlock2 { Vertex vertices2[]; };
-layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_3) buffer VertexBlock3 { Vertex vertices3[]; };
-layout(std430, set = 0, binding = SKIN_BINDING_MESHES) buffer MeshBlock { MeshData meshes[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES) readonly buffer VertexBlock0 { Vertex vertices0[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_1) readonly buffer VertexBlock1 { Vertex vertices1[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_2) readonly buffer VertexBlock2 { Vertex vertices2[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_3) readonly buffer VertexBlock3 { Vertex vertices3[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_SKIN_VERTICES) readonly buffer SkinBlock { SkinVertexData skin[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_JOINTS) readonly buffer JointBlock { vec4 jointRows[]; };
-layout(std430, set = 0, binding = SKIN_BINDING_INSTANCES) readonly buffer InstanceBlock { SkinInstance instances[]; };
-layout(push_constant) uniform Push { PassConstants pc; };  // phase: instance count, drawBase: window shift
+layout(std430, set = 0, binding = SKIN_BINDING_EXTRAS) readonly buffer ExtraBlock { VertexExtra vertexExtras[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer SkinnedVertexRef { SkinnedVertex items[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer SkinnedTangentRef { uint items[]; };
 
-// The vertex pool's windows, as vertexAt() in common.glsl (the shift comes as a push constant here).
+// The rest vertices through the pool's windows, as vertexAt() in common.glsl (the shift comes as a push
+// constant here).
 Vertex loadVertex(uint i) {
   uint w = i >> pc.drawBase, j = i - (w << pc.drawBase);
   if (w == 0u) {
@@ -45,21 +112,14 @@ Vertex loadVertex(uint i) {
   return v;
 }
 
-void storeVertex(uint i, Vertex v) {
-  uint w = i >> pc.drawBase, j = i - (w << pc.drawBase);
-  if (w == 0u) vertices0[j] = v;
-  else if (w == 1u) vertices1[j] = v;
-  else if (w == 2u) vertices2[j] = v;
-  else vertices3[j] = v;
-}
-
 void main() {
   uint inst = gl_WorkGroupID.y + gl_WorkGroupID.z * 65535u;
   if (inst >= pc.phase) return;
   SkinInstance si = instances[inst];
+  const bool gpuBounds = (pc.pad0 & SKIN_MODE_GPU_BOUNDS) != 0u;
   uint v = gl_GlobalInvocationID.x;
   if (v == 0u) {
-    meshes[si.meshSlot].boundsSphere = si.bounds;
+    if (!gpuBounds) meshes[si.meshSlot].boundsSphere = si.bounds;
     for (uint k = 0u; k < meshes[si.meshSlot].lodCount; ++k)
       meshes[si.meshSlot].lods[k].error = meshes[si.sourceMesh].lods[k].error * si.lodScale;
   }
@@ -82,10 +142,38 @@ void main() {
   vec3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
   vec3 n = octDecode(rest.normal);
   vec3 sn = (dot(a, bc) < 0.0 ? -1.0 : 1.0) * vec3(dot(bc, n), dot(ca, n), dot(ab, n));
-  Vertex o = rest;
+  SkinnedVertex o;
   o.px = dot(r0, p);
   o.py = dot(r1, p);
   o.pz = dot(r2, p);
   o.normal = octEncode(normalize(sn));
-  storeVertex(si.outVertex + v, o);
+  SkinnedVertexRef(uvec2(meshes[si.meshSlot].skinnedVertexLow, meshes[si.meshSlot].skinnedVertexHigh)).items[v] = o;
+  // Tangent: a direction on the surface, so the blended 3x3 itself (like a position difference); w (the
+  // bitangent's handedness) is the rest vertex's, read from its VertexExtra by every reader. (A blend with a
+  // negative determinant -- a mirroring joint scale, in none of our assets -- would need w * sign(det).)
+  uvec2 tangents = uvec2(meshes[si.meshSlot].skinnedTangentLow, meshes[si.meshSlot].skinnedTangentHigh);
+  if (tangents != uvec2(0u)) {
+    VertexExtra e = vertexExtras[si.sourceExtra + v];
+    uint t = 0u;
+    if (e.tangentW != 0.0) {
+      vec3 rt = octDecode(e.tangent);
+      t = octEncode(normalize(vec3(dot(a, rt), dot(b, rt), dot(c, rt))));
+    }
+    SkinnedTangentRef(tangents).items[v] = t;
+  }
+  if (gpuBounds) {  // this subgroup's AABB, one atomic per component (uniform branch: a push constant)
+    uint x = subgroupMin(orderedFloat(o.px)), y = subgroupMin(orderedFloat(o.py)), z = subgroupMin(orderedFloat(o.pz));
+    uint nx = subgroupMin(orderedFloat(-o.px)), ny = subgroupMin(orderedFloat(-o.py)),
+         nz = subgroupMin(orderedFloat(-o.pz));
+    if (subgroupElect()) {
+      uint bb = SKIN_BOUNDS_UINTS * inst;
+      atomicMin(bounds[bb], x);
+      atomicMin(bounds[bb + 1u], y);
+      atomicMin(bounds[bb + 2u], z);
+      atomicMin(bounds[bb + 3u], nx);
+      atomicMin(bounds[bb + 4u], ny);
+      atomicMin(bounds[bb + 5u], nz);
+    }
+  }
 }
+#endif

@@ -17,16 +17,16 @@ layout(push_constant) uniform Push { PassConstants pc; };
 
 void main() {
   ObjectData o = objectAt(gl_InstanceIndex);
-  Vertex v = vertexAt(gl_VertexIndex);
+  Vertex v = meshVertex(o.meshIndex, gl_VertexIndex);
   gl_Position = clipPosition(o, vertexPosition(v));
   outDrawSlot = pc.drawBase + gl_DrawIDARB;  // late-phase draws follow the early ones
 #if ALPHA_MASK
   outMaterial = o.materialIndex;
   outUv0 = vec2(v.u, v.v);
   outUv1 = vec2(0.0);
-  MeshData m = meshes[o.meshIndex];
-  if (m.extraOffset != EXTRA_NONE) {
-    VertexExtra e = vertexExtras[m.extraOffset + uint(gl_VertexIndex) - m.vertexOffset];
+  uint extra = meshes[o.meshIndex].extraOffset;
+  if (extra != EXTRA_NONE) {
+    VertexExtra e = vertexExtras[extra + uint(gl_VertexIndex) - meshes[o.meshIndex].vertexOffset];
     outUv1 = vec2(e.u1, e.v1);
   }
   outColor = unpackColor(v.color);

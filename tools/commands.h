@@ -24,6 +24,8 @@ struct RenderCommand {
   uint32_t frames = 1;
   double time = 0.0;     // animation time (s)
   bool animate = false;  // advance the animation by 1/30 s per frame
+  std::string skinBounds = "joints";  // culling bounds of skinned instances: joints | gpu
+  uint32_t skinCheck = 0;             // skinned instances to check against the CPU reference after the frames
   std::string output = "visbuf.png";
   std::string idsOut;
   std::string json;

@@ -12,6 +12,7 @@
 #include "core/image_io.h"
 #include "gpu/device.h"
 #include "render/renderer.h"
+#include "skin_check.h"
 #include "stats_output.h"
 
 namespace visbuf::tools {
@@ -39,6 +40,14 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::Range(-1e9, 1e9))
       ->capture_default_str();
   sub->add_flag("--animate", c.animate, "with --frames N: advance the animation by 1/30 s per frame (else paused)");
+  sub->add_option("--skin-bounds", c.skinBounds,
+                  "culling bounds of skinned instances: joints (the joints' reach, CPU) | gpu (AABB of the skinned "
+                  "vertices, reduced by the skinning pass)")
+      ->check(CLI::IsMember({"joints", "gpu"}))
+      ->capture_default_str();
+  sub->add_option("--skin-check", c.skinCheck,
+                  "after the frames, read N skinned instances back and report their error against the CPU's "
+                  "double-precision skinning and whether their culling bounds contain them");
   sub->add_option("--frames", c.frames, "frames to render; timings are the median over frames after the first")
       ->check(CLI::Range(1u, 10000u))
       ->capture_default_str();
@@ -90,6 +99,7 @@ int runRender(const RenderCommand& c) {
   rc.height = size->second;
   rc.drawCapacity = c.drawCapacity;
   rc.forceWideIds = c.wideIds;
+  rc.skinBounds = c.skinBounds == "gpu" ? SkinBounds::Gpu : SkinBounds::Joints;
   auto renderer = Renderer::create(**device, *scene, rc);
   if (!renderer) return fail(renderer.error());
 
@@ -205,9 +215,20 @@ int runRender(const RenderCommand& c) {
                               {"psnr", std::isfinite(e.psnr) ? e.psnr : 999.0},
                               {"differingFraction", e.differingFraction}};
   }
+  nlohmann::json skinJson;
+  if (c.skinCheck > 0 && !scene->skinnedObjects.empty()) {
+    const double lastTime = c.time + (c.animate ? double(c.frames - 1) / 30.0 : 0.0);  // run()'s last frame
+    const SkinCheck k = checkSkinning(**renderer, *scene, lastTime, c.skinCheck);
+    std::printf("skin check    %u instances, %llu vertices vs CPU double: position %.2e of the radius, normal %.2e, "
+                "tangent %.2e; %llu outside their bounds; radius / tightest %.3f\n",
+                k.instances, (unsigned long long)k.vertices, k.maxPositionError, k.maxNormalError, k.maxTangentError,
+                (unsigned long long)k.outside, k.meanRadiusRatio);
+    skinJson = skinCheckToJson(k);
+  }
   if (!c.json.empty()) {
     nlohmann::json j = statsToJson(stats);
     if (compare) j["reference"] = referenceJson;
+    if (!skinJson.is_null()) j["skinCheck"] = skinJson;
     j["scene"] = c.scene.scene;
     j["frames"] = c.frames;
     j["lodErrorPixels"] = fo.lodErrorPixels;

@@ -33,8 +33,9 @@ std::string formatStats(const FrameStats& s) {
                        s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
   }
   if (s.skinnedInstances)
-    out += fmt::format("skinning      {} instances, {} vertices, {} (poses {:.3f} ms CPU)\n", s.skinnedInstances,
-                       s.skinnedVertices, s.skinned ? "re-skinned" : "pose unchanged: skipped", s.animationCpuMs);
+    out += fmt::format("skinning      {} instances, {} vertices, {} (poses {:.3f} ms CPU), {} bounds\n",
+                       s.skinnedInstances, s.skinnedVertices, s.skinned ? "re-skinned" : "pose unchanged: skipped",
+                       s.animationCpuMs, s.skinBounds);
   out += s.pointLights == 0 ? std::string("lights        directional only (no point lights: no light cull pass)\n")
          : s.lightsCulled
              ? fmt::format("lights        {} point lights, tiles: {:.1f} mean / {} max per tile, overflow {} tiles{}\n",
@@ -88,6 +89,7 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["skinnedVertices"] = s.skinnedVertices;
   j["skinned"] = s.skinned;
   j["animationCpuMs"] = s.animationCpuMs;
+  j["skinBounds"] = s.skinBounds;
   j["lights"] = {{"pointLights", s.pointLights}, {"culled", s.lightsCulled}, {"tileOverflow", s.lightTileOverflow},
                  {"dropped", s.lightsDropped}, {"maxPerTile", s.maxLightsPerTile},
                  {"meanPerTile", s.meanLightsPerTile}, {"bytes", s.lightBytes}};

@@ -55,6 +55,7 @@ std::vector<std::string> missingRequirements(VkPhysicalDevice pd, uint32_t* queu
   need(fc.f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
   need(fc.f11.shaderDrawParameters, "shaderDrawParameters");
   need(fc.f12.drawIndirectCount, "drawIndirectCount");
+  need(fc.f12.bufferDeviceAddress, "bufferDeviceAddress");
   need(fc.f13.dynamicRendering, "dynamicRendering");
   need(fc.f13.synchronization2, "synchronization2");
   if (props.limits.timestampPeriod <= 0.0f) missing.push_back("no timestamps");
@@ -109,7 +110,7 @@ Result<DeviceOptions> parseDeviceOption(const std::string& text, DeviceOptions b
 
 const char* Device::requiredFeaturesText() {
   return "Vulkan 1.3 with multiDrawIndirect, drawIndirectFirstInstance, geometryShader, "
-         "fragmentStoresAndAtomics, shaderDrawParameters, drawIndirectCount, dynamicRendering, "
+         "fragmentStoresAndAtomics, shaderDrawParameters, drawIndirectCount, bufferDeviceAddress, dynamicRendering, "
          "synchronization2";
 }
 
@@ -234,6 +235,7 @@ Result<std::unique_ptr<Device>> Device::create(const DeviceOptions& options) {
   fc.f2.features.fragmentStoresAndAtomics = VK_TRUE;
   fc.f11.shaderDrawParameters = VK_TRUE;
   fc.f12.drawIndirectCount = VK_TRUE;
+  fc.f12.bufferDeviceAddress = VK_TRUE;  // skinned vertices (MeshData.skinnedVertex*): one buffer past 4 windows
   fc.f13.dynamicRendering = VK_TRUE;
   fc.f13.synchronization2 = VK_TRUE;
   float priority = 1.0f;

@@ -29,6 +29,7 @@
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
 #include "skin.comp.h"
+#include "skin_bounds.comp.h"
 #include "visibility.frag.h"
 #include "visibility.vert.h"
 #include "visibility_wide.frag.h"
@@ -68,6 +69,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("shade.comp", spv_shade_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
   VB_SHADER("skin.comp", spv_skin_comp)
+  VB_SHADER("skin_bounds.comp", spv_skin_bounds_comp)
   VB_SHADER("light_cull.comp", spv_light_cull_comp)
   VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
@@ -152,14 +154,15 @@ void Pipeline::reset() {
 }
 
 namespace {
-const VkSpecializationMapEntry kEntries[2] = {{0, 0, sizeof(uint32_t)}, {1, sizeof(uint32_t), sizeof(uint32_t)}};
-VkSpecializationInfo specializationInfo(const uint32_t (&values)[2]) { return {2, kEntries, sizeof(values), values}; }
+const VkSpecializationMapEntry kEntries[3] = {
+    {0, 0, sizeof(uint32_t)}, {1, sizeof(uint32_t), sizeof(uint32_t)}, {2, 2 * sizeof(uint32_t), sizeof(uint32_t)}};
+VkSpecializationInfo specializationInfo(const uint32_t (&values)[3]) { return {3, kEntries, sizeof(values), values}; }
 }  // namespace
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization specialization) {
   VkShaderModule module = createModule(device, shader, specialization.textureClasses > 0);
-  const uint32_t values[2] = {specialization.windowed, specialization.textureClasses};
+  const uint32_t values[3] = {specialization.windowed, specialization.textureClasses, specialization.skinned};
   const VkSpecializationInfo spec = specializationInfo(values);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -185,7 +188,7 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
-  const uint32_t values[2] = {desc.windowed, desc.textureClasses};
+  const uint32_t values[3] = {desc.windowed, desc.textureClasses, desc.skinned};
   const VkSpecializationInfo spec = specializationInfo(values);
   stages[0].pSpecializationInfo = stages[1].pSpecializationInfo = &spec;
 

@@ -45,11 +45,16 @@ class Pipeline {
 // Specialisation constant 1 (material.glsl VB_TEXTURE_CLASSES): how many baked texture classes the scene has;
 // texture sampling code for classes beyond it (all of it for an untextured scene) is removed when the pipeline is
 // compiled, which keeps lavapipe's shader compile time and the shaders' size down.
+// Specialisation constant 2 (common.glsl VB_SKINNED): 1 when the scene has skinned instances, whose mesh slots
+// address skinned vertices (meshVertex()); 0 removes that per-vertex test, so static scenes run the code they
+// ran before skinning existed.
 struct Specialization {
-  Specialization(uint32_t windowedValue = 1, uint32_t textureClassCount = 0)  // NOLINT: implicit from `windowed`
-      : windowed(windowedValue), textureClasses(textureClassCount) {}
+  Specialization(uint32_t windowedValue = 1, uint32_t textureClassCount = 0,  // NOLINT: implicit from `windowed`
+                 uint32_t skinnedValue = 0)
+      : windowed(windowedValue), textureClasses(textureClassCount), skinned(skinnedValue) {}
   uint32_t windowed;
   uint32_t textureClasses;
+  uint32_t skinned;
 };
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization spec = {});
@@ -65,6 +70,7 @@ struct GraphicsPipelineDesc {
   bool premultipliedBlend = false;  // colour = src + (1 - src.a) * dst on every attachment (transparency)
   uint32_t windowed = 1;  // specialisation constant 0 of both stages (see createComputePipeline)
   uint32_t textureClasses = 0;  // specialisation constant 1 of both stages (see Specialization)
+  uint32_t skinned = 0;         // specialisation constant 2 of both stages (see Specialization)
 };
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
 

@@ -11,7 +11,7 @@ namespace visbuf::gpu {
 namespace {
 // One allocation for one resource; device-local memory falls back to any type (lavapipe has no
 // separate device memory). Failure to find a type is fatal like any Vulkan allocation failure.
-VkDeviceMemory allocate(Device& device, const VkMemoryRequirements& req, MemoryUse use) {
+VkDeviceMemory allocate(Device& device, const VkMemoryRequirements& req, MemoryUse use, bool deviceAddress) {
   VkMemoryPropertyFlags flags = use == MemoryUse::HostVisible
                                     ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
                                     : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
@@ -21,6 +21,9 @@ VkDeviceMemory allocate(Device& device, const VkMemoryRequirements& req, MemoryU
   VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   ai.allocationSize = req.size;
   ai.memoryTypeIndex = type;
+  VkMemoryAllocateFlagsInfo flagsInfo{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+  flagsInfo.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+  if (deviceAddress) ai.pNext = &flagsInfo;
   VkDeviceMemory memory;
   VK_CHECK(vkAllocateMemory(device.device(), &ai, nullptr, &memory));
   return memory;
@@ -36,8 +39,14 @@ Buffer::Buffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, Memo
   VK_CHECK(vkCreateBuffer(device_, &bci, nullptr, &buffer_));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(device_, buffer_, &req);
-  memory_ = allocate(device, req, use);
+  const bool deviceAddress = (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) != 0;
+  memory_ = allocate(device, req, use, deviceAddress);
   VK_CHECK(vkBindBufferMemory(device_, buffer_, memory_, 0));
+  if (deviceAddress) {
+    VkBufferDeviceAddressInfo info{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
+    info.buffer = buffer_;
+    address_ = vkGetBufferDeviceAddress(device_, &info);
+  }
   if (use == MemoryUse::HostVisible) VK_CHECK(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
 }
 
@@ -49,6 +58,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
     memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
     size_ = std::exchange(o.size_, 0);
     mapped_ = std::exchange(o.mapped_, nullptr);
+    address_ = std::exchange(o.address_, 0);
   }
   return *this;
 }
@@ -59,6 +69,7 @@ void Buffer::reset() {
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;
+  address_ = 0;
   size_ = 0;
 }
 
@@ -84,7 +95,7 @@ Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, V
   VK_CHECK(vkCreateImage(device_, &ici, nullptr, &image_));
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(device_, image_, &req);
-  memory_ = allocate(device, req, MemoryUse::DeviceLocal);
+  memory_ = allocate(device, req, MemoryUse::DeviceLocal, false);
   VK_CHECK(vkBindImageMemory(device_, image_, memory_, 0));
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   vci.image = image_;
@@ -143,6 +154,18 @@ Buffer uploadBuffer(Device& device, const void* data, size_t bytes, VkBufferUsag
   vkCmdCopyBuffer(cmd, staging.handle(), buffer.handle(), 1, &region);
   device.submitOneShot(cmd);
   return buffer;
+}
+
+std::vector<uint8_t> downloadBuffer(Device& device, const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes) {
+  std::vector<uint8_t> out(bytes);
+  if (bytes == 0) return out;
+  Buffer staging(device, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::HostVisible);
+  VkCommandBuffer cmd = device.beginOneShot();
+  VkBufferCopy region{offset, 0, bytes};
+  vkCmdCopyBuffer(cmd, buffer.handle(), staging.handle(), 1, &region);
+  device.submitOneShot(cmd);
+  std::memcpy(out.data(), staging.mapped(), bytes);
+  return out;
 }
 
 void imageBarrier(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,

@@ -28,6 +28,8 @@ class Buffer {
   VkBuffer handle() const { return buffer_; }
   VkDeviceSize size() const { return size_; }
   void* mapped() const { return mapped_; }  // non-null for MemoryUse::HostVisible
+  // Buffer device address (created with VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT), else 0.
+  VkDeviceAddress address() const { return address_; }
   explicit operator bool() const { return buffer_ != VK_NULL_HANDLE; }
 
  private:
@@ -36,6 +38,7 @@ class Buffer {
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   VkDeviceSize size_ = 0;
   void* mapped_ = nullptr;
+  VkDeviceAddress address_ = 0;
 };
 
 class Image {
@@ -81,6 +84,10 @@ template <typename T>
 Buffer uploadVector(Device& device, const std::vector<T>& v, VkBufferUsageFlags usage) {
   return uploadBuffer(device, v.data(), v.size() * sizeof(T), usage);
 }
+
+// Copies `bytes` from `offset` of a buffer (created with VK_BUFFER_USAGE_TRANSFER_SRC_BIT) back to the host,
+// waiting for the copy (one-shot submission: for tests and tools, never inside a frame).
+std::vector<uint8_t> downloadBuffer(Device& device, const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes);
 
 // Image layout transition (synchronization2), whole image, all previous work to all later work of the
 // given stages. Used by the frame script only.

@@ -10,7 +10,8 @@ namespace visbuf::gpu {
 static_assert(sizeof(Vertex) == 32);
 static_assert(sizeof(LodData) == 16);
 static_assert(sizeof(VertexExtra) == 16);
-static_assert(sizeof(MeshData) == 32 + 16 * MAX_LODS);
+static_assert(sizeof(MeshData) == 48 + 16 * MAX_LODS);
+static_assert(sizeof(SkinnedVertex) == 16);
 static_assert(sizeof(SkinInstance) == 48);
 static_assert(sizeof(ObjectData) == 64, "per-object GPU data stays at 64 bytes");
 static_assert(sizeof(TextureSlotData) == 48);
@@ -29,6 +30,6 @@ static_assert(offsetof(FrameData, pointLightCount) == 308);
 static_assert(sizeof(PassConstants) == 16);
 static_assert(sizeof(PyramidConstants) == 32);
 static_assert(offsetof(ObjectData, meshIndex) == 48);
-static_assert(offsetof(MeshData, lods) == 32);
+static_assert(offsetof(MeshData, lods) == 48);
 
 }  // namespace visbuf::gpu

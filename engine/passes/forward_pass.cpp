@@ -14,6 +14,7 @@ ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gp
     gpu::GraphicsPipelineDesc d;
     d.windowed = spec.windowed;
     d.textureClasses = spec.textureClasses;
+    d.skinned = spec.skinned;
     d.cullMode = drawListCullMode(list);
     d.vertexShader = "forward.vert";
     d.fragmentShader = prefix + ".frag";

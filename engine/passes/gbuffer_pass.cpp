@@ -41,6 +41,7 @@ GBufferPass GBufferPass::create(gpu::Device& device, VkPipelineLayout layout, gp
     gpu::GraphicsPipelineDesc d;
     d.windowed = spec.windowed;
     d.textureClasses = spec.textureClasses;
+    d.skinned = spec.skinned;
     d.cullMode = drawListCullMode(list);
     d.vertexShader = "forward.vert";  // the same pulled vertex and interpolated attributes as the forward path
     d.fragmentShader = prefix + ".frag";

@@ -1,6 +1,10 @@
 // Skinning pass (shaders/skin.comp.glsl): linear blend skinning of every animated instance into its own
-// region of the unified vertex pool, plus the instance's per-pose bounds and LOD errors in its mesh slot.
-// Reads: rest vertices, skin vertices, joint rows, instance records. Writes: vertex regions, mesh slots.
+// region of the skinned-vertex buffer (addressed by its mesh slot), plus the instance's per-pose bounds and LOD
+// errors in its mesh slot. Bounds: the CPU's joint-reach sphere, or (gpuBounds) an AABB reduced from the skinned
+// vertices with atomics, whose centre and the largest distance of the vertices from it make the sphere (three
+// more dispatches of the skin_bounds variant).
+// Reads: rest vertices and tangents, skin vertices, joint rows, instance records. Writes: skinned regions,
+// mesh slots, the bounds records.
 // It has its own descriptor set (the frame's set never sees the skinning inputs); created only for scenes
 // with skinned objects.
 #pragma once
@@ -14,11 +18,14 @@
 namespace visbuf::passes {
 
 struct SkinInputs {
-  std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows{};  // the unified pool (read and written)
+  std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows{};  // the unified pool (rest vertices)
   VkBuffer meshes = VK_NULL_HANDLE;        // the mesh table (instance slots written)
   VkBuffer skinVertices = VK_NULL_HANDLE;  // SkinVertex[]
   VkBuffer joints = VK_NULL_HANDLE;        // vec4 rows, 3 per joint matrix
   VkBuffer instances = VK_NULL_HANDLE;     // gpu::SkinInstance[]
+  VkBuffer vertexExtras = VK_NULL_HANDLE;  // gpu::VertexExtra[] (rest tangents)
+  VkBuffer bounds = VK_NULL_HANDLE;        // SKIN_BOUNDS_UINTS per instance (gpuBounds), else any 16 bytes
+  bool gpuBounds = false;                  // bounds from the skinned vertices instead of the joints' reach
 };
 
 class SkinPass {
@@ -29,7 +36,8 @@ class SkinPass {
   SkinPass& operator=(const SkinPass&) = delete;
   // vertexWindowShift: vertices per pool window, as FrameData::vertexWindowShift.
   void create(gpu::Device& device, const SkinInputs& inputs, uint32_t vertexWindowShift);
-  // One dispatch over `instances` instances of at most `maxVertices` vertices each.
+  // One dispatch over `instances` instances of at most `maxVertices` vertices each; with GPU bounds, a fill of
+  // the bounds records before it and the three resolve dispatches (centre, distance, radius) after it.
   void record(VkCommandBuffer cmd, uint32_t instances, uint32_t maxVertices) const;
 
  private:
@@ -39,7 +47,10 @@ class SkinPass {
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
   gpu::Pipeline pipeline_;
+  gpu::Pipeline resolve_;  // skin_bounds.comp (gpuBounds only)
   uint32_t vertexWindowShift_ = 0;
+  VkBuffer bounds_ = VK_NULL_HANDLE;
+  bool gpuBounds_ = false;
 };
 
 }  // namespace visbuf::passes

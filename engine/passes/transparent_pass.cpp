@@ -17,6 +17,7 @@ TransparentPass TransparentPass::create(gpu::Device& device, VkPipelineLayout la
     gpu::GraphicsPipelineDesc d;
     d.windowed = spec.windowed;
     d.textureClasses = spec.textureClasses;
+    d.skinned = spec.skinned;
     d.cullMode = drawListCullMode(list);
     d.vertexShader = "forward.vert";
     d.fragmentShader = "transparent.frag";

@@ -28,6 +28,7 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
     gpu::GraphicsPipelineDesc d;
     d.windowed = spec.windowed;
     d.textureClasses = spec.textureClasses;
+    d.skinned = spec.skinned;
     d.cullMode = drawListCullMode(list);
     d.vertexShader = prefix + ".vert";
     const char* suffix[VariantCount] = {".frag", "_wide.frag", "_overdraw.frag", "_wide_overdraw.frag"};

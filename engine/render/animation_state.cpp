@@ -4,13 +4,15 @@
 #include <chrono>
 #include <thread>
 
+#include <fmt/format.h>
+
 #include "scene/animation.h"
 
 namespace visbuf {
 
-std::unique_ptr<AnimationState> AnimationState::create(gpu::Device& device, const Scene& scene,
-                                                       const GpuScene& gpuScene) {
-  if (gpuScene.skinned.empty()) return nullptr;
+Result<std::unique_ptr<AnimationState>> AnimationState::create(gpu::Device& device, const Scene& scene,
+                                                               const GpuScene& gpuScene, bool gpuBounds) {
+  if (gpuScene.skinned.empty()) return std::unique_ptr<AnimationState>();
   std::unique_ptr<AnimationState> a(new AnimationState(scene, gpuScene));
   a->regions_ = gpuScene.skinned;
   a->rest_ = restPose(scene.nodes);
@@ -38,11 +40,22 @@ std::unique_ptr<AnimationState> AnimationState::create(gpu::Device& device, cons
     a->regionSpheres_.push_back(&a->spheres_[{a->regions_[i].sourceMesh, scene.skinnedObjects[i].skin}]);
   a->worldBounds_.resize(a->regions_.size());
   a->lodScale_.resize(a->regions_.size());
+  const uint64_t limit = device.properties().limits.maxStorageBufferRange;
+  const uint64_t boundsBytes = gpuBounds ? a->regions_.size() * SKIN_BOUNDS_UINTS * sizeof(uint32_t) : 16;
+  for (auto [what, bytes] : {std::pair{"joint matrix", uint64_t(joints) * 3 * sizeof(glm::vec4)},
+                             std::pair{"skinned instance", a->regions_.size() * sizeof(gpu::SkinInstance)},
+                             std::pair{"skinned bounds", boundsBytes}})
+    if (bytes > limit)
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("{} skinned instances: the {} buffer needs {:.1f} MiB, over this device's "
+                                   "maxStorageBufferRange of {:.1f} MiB",
+                                   a->regions_.size(), what, bytes / 1048576.0, limit / 1048576.0));
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   a->joints_ = gpu::Buffer(device, std::max<uint64_t>(1, joints) * 3 * sizeof(glm::vec4), ssbo,
                            gpu::MemoryUse::HostVisible);
   a->instances_ = gpu::Buffer(device, a->regions_.size() * sizeof(gpu::SkinInstance), ssbo,
                               gpu::MemoryUse::HostVisible);
+  a->bounds_ = gpu::Buffer(device, boundsBytes, ssbo | VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::DeviceLocal);
   return a;
 }
 
@@ -71,7 +84,7 @@ void AnimationState::evaluate(size_t first, size_t last, double time) {
     rec.sourceVertex = r.sourceVertex;
     rec.skinVertex = r.skinVertex;
     rec.vertexCount = r.vertexCount;
-    rec.outVertex = r.outVertex;
+    rec.sourceExtra = r.sourceExtra;
     rec.firstJoint = firstJoint_[i];
     rec.meshSlot = r.meshSlot;
     rec.sourceMesh = r.sourceMesh;

@@ -21,8 +21,12 @@ namespace visbuf {
 
 class AnimationState {
  public:
-  // nullptr when the scene has no skinned objects.
-  static std::unique_ptr<AnimationState> create(gpu::Device& device, const Scene& scene, const GpuScene& gpuScene);
+  // nullptr when the scene has no skinned objects. gpuBounds: also allocate the skinning pass's bounds records
+  // (SKIN_BOUNDS_UINTS per instance); the joint-reach spheres are computed either way (the forward path's CPU
+  // culling uses them). CapacityExceeded when the joint rows (48 bytes per joint per instance) or the instance
+  // records pass maxStorageBufferRange (lavapipe, 128 MiB: about 116,000 Foxes of 24 joints).
+  static Result<std::unique_ptr<AnimationState>> create(gpu::Device& device, const Scene& scene,
+                                                        const GpuScene& gpuScene, bool gpuBounds);
 
   // Evaluates every instance at `time` seconds and writes the buffers. Returns false, doing nothing, when
   // the poses are already those of `time`.
@@ -34,7 +38,8 @@ class AnimationState {
   double lastUpdateMs() const { return lastUpdateMs_; }
   const gpu::Buffer& joints() const { return joints_; }
   const gpu::Buffer& instances() const { return instances_; }
-  uint64_t bytes() const { return joints_.size() + instances_.size(); }
+  const gpu::Buffer& bounds() const { return bounds_; }
+  uint64_t bytes() const { return joints_.size() + instances_.size() + bounds_.size(); }
 
   // For the forward path's CPU culling and LOD: the world-space sphere of a skinned object's current pose
   // and the scale its LOD errors take; false for objects that are not skinned.
@@ -54,7 +59,7 @@ class AnimationState {
   std::vector<int32_t> regionOfObject_;
   std::vector<glm::dvec4> worldBounds_;
   std::vector<double> lodScale_;
-  gpu::Buffer joints_, instances_;
+  gpu::Buffer joints_, instances_, bounds_;
   uint32_t maxVertices_ = 0;
   uint64_t vertexCount_ = 0;
   bool evaluated_ = false;

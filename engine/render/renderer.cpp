@@ -46,6 +46,8 @@ const char* cullModeName(CullMode mode) {
   return mode == CullMode::None ? "none" : mode == CullMode::Frustum ? "frustum" : "occlusion";
 }
 
+const char* skinBoundsName(SkinBounds bounds) { return bounds == SkinBounds::Gpu ? "gpu" : "joints"; }
+
 std::string IdEncoding::describe() const {
   if (wide) return fmt::format("64-bit rg32ui (x: draw slot + 1, {} bits used; y: triangle, {} bits used)", slotBits, triangleBits);
   return fmt::format("32-bit r32ui (draw slot {} bits | triangle {} bits, +1; 0 = nothing)", slotBits, triangleBits);
@@ -840,6 +842,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (animation) {  // skinning: only when the pose changed (a static scene has no AnimationState at all)
     st.skinnedInstances = animation->instanceCount();
     st.skinnedVertices = animation->vertexCount();
+    st.skinBounds = skinBoundsName(config.skinBounds);
     if (animation->update(options.animationTime)) {
       st.skinned = true;
       st.animationCpuMs = animation->lastUpdateMs();
@@ -1176,7 +1179,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                         impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
   const uint32_t w = windowed ? 1u : 0u;
   impl->cull = passes::CullPass::create(device, impl->pipelineLayout, w);
-  const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()));
+  const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
+                                     impl->gpuScene.skinned.empty() ? 0u : 1u);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
   impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
@@ -1213,11 +1217,16 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
     impl->lightCull.create(device, impl->pipelineLayout, w);
   }
   impl->createTargets(config.width, config.height);
-  impl->animation = AnimationState::create(device, scene, impl->gpuScene);
+  const bool gpuBounds = config.skinBounds == SkinBounds::Gpu;
+  auto animation = AnimationState::create(device, scene, impl->gpuScene, gpuBounds);
+  if (!animation) return animation.error();
+  impl->animation = std::move(animation.value());
   if (impl->animation)
-    impl->skin.create(device, {vertexWindows(impl->gpuScene.vertices, impl->vertexShift),
-                               impl->gpuScene.meshes.handle(), impl->gpuScene.skinVertices.handle(),
-                               impl->animation->joints().handle(), impl->animation->instances().handle()},
+    impl->skin.create(device,
+                      {vertexWindows(impl->gpuScene.vertices, impl->vertexShift), impl->gpuScene.meshes.handle(),
+                       impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
+                       impl->animation->instances().handle(), impl->gpuScene.vertexExtras.handle(),
+                       impl->animation->bounds().handle(), gpuBounds},
                       impl->vertexShift);
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
@@ -1235,6 +1244,31 @@ Result<FrameResult> Renderer::renderFrame(const Camera& camera, const FrameOptio
 }
 
 const IdEncoding& Renderer::idEncoding() const { return impl_->encoding; }
+
+Result<SkinnedInstanceReadback> Renderer::readSkinnedInstance(uint32_t instance) const {
+  const GpuScene& g = impl_->gpuScene;
+  if (instance >= g.skinned.size())
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("skinned instance {}: the scene has {}", instance, g.skinned.size()));
+  const GpuScene::SkinnedRegion& r = g.skinned[instance];
+  SkinnedInstanceReadback out;
+  out.object = r.object;
+  gpu::Device& dev = impl_->device;
+  std::vector<uint8_t> bytes =
+      gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.vertexBytes, uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex));
+  out.vertices.resize(r.vertexCount);
+  std::memcpy(out.vertices.data(), bytes.data(), bytes.size());
+  if (r.tangentBytes) {
+    bytes = gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.tangentBytes, uint64_t(r.vertexCount) * sizeof(uint32_t));
+    out.tangents.resize(r.vertexCount);
+    std::memcpy(out.tangents.data(), bytes.data(), bytes.size());
+  }
+  bytes = gpu::downloadBuffer(dev, g.meshes, uint64_t(r.meshSlot) * sizeof(gpu::MeshData), sizeof(gpu::MeshData));
+  gpu::MeshData md;
+  std::memcpy(&md, bytes.data(), sizeof(md));
+  out.bounds = md.boundsSphere;
+  return out;
+}
 
 void Renderer::clearHistory() {
   impl_->historyDirty = true;

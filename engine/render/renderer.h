@@ -28,11 +28,27 @@ enum class CullMode { None, Frustum, Occlusion };
 const char* renderPathName(RenderPath path);
 const char* cullModeName(CullMode mode);
 
+// Culling bounds of skinned instances: Joints = a sphere from the joints' reach (CPU, double precision,
+// provably containing every skinned vertex: animation.h); Gpu = from the skinned vertices themselves, reduced
+// on the GPU: their AABB's centre and the largest distance from it (tighter; the forward path still culls with
+// the joint-reach sphere).
+enum class SkinBounds { Joints, Gpu };
+const char* skinBoundsName(SkinBounds bounds);
+
 struct RendererConfig {
   uint32_t width = 1920;
   uint32_t height = 1080;
   uint32_t drawCapacity = 0;  // max draw commands per phase and draw list; 0 = one per object (never overflows)
   bool forceWideIds = false;  // use the 64-bit ID target even when 32 bits fit
+  SkinBounds skinBounds = SkinBounds::Joints;
+};
+
+// One skinned instance as the GPU holds it after the last frame (Renderer::readSkinnedInstance; tests, tools).
+struct SkinnedInstanceReadback {
+  uint32_t object = 0;                        // Scene::objects index
+  std::vector<gpu::SkinnedVertex> vertices;   // skin space, in the rest mesh's vertex order
+  std::vector<uint32_t> tangents;             // octahedral, same order; empty when the mesh has no tangents
+  glm::vec4 bounds{0.0f};                     // the culling sphere of its mesh slot (skin space)
 };
 
 struct FrameOptions {
@@ -95,6 +111,7 @@ struct FrameStats {
   uint64_t skinnedVertices = 0;   // their vertices (all rewritten when the pose changes)
   bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
   double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
+  std::string skinBounds;         // skinned scenes: the culling bounds used (skinBoundsName), else empty
   uint32_t pointLights = 0;       // in the scene (0: no light cull pass, no light buffers)
   bool lightsCulled = false;      // this frame ran the light cull pass (visbuf path, tiledLights, point lights)
   uint32_t lightTileOverflow = 0; // tiles whose light list overflowed LIGHTS_PER_TILE (reported, never silent)
@@ -146,6 +163,9 @@ class Renderer {
   const IdEncoding& idEncoding() const;
   // Forgets which objects were visible last frame (as after a camera cut): costs time, never pixels.
   void clearHistory();
+  // Reads skinned instance `instance` (Scene::skinnedObjects order) back: what the last frame's skinning wrote.
+  // Fails for an index past the scene's skinned instances.
+  Result<SkinnedInstanceReadback> readSkinnedInstance(uint32_t instance) const;
 
   struct Impl;
 

@@ -331,6 +331,12 @@ glm::dvec3 skinNormal(glm::dvec3 normal, const SkinVertex& skin, std::span<const
   return len > 0.0 ? n / len : glm::dvec3(0.0);
 }
 
+glm::dvec3 skinTangent(glm::dvec3 tangent, const SkinVertex& skin, std::span<const glm::dmat4> joints) {
+  const glm::dvec3 t = glm::dmat3(blendedJointMatrix(skin, joints)) * tangent;
+  const double len = glm::length(t);
+  return len > 0.0 ? t / len : glm::dvec3(0.0);
+}
+
 // --- bounds ------------------------------------------------------------------------------------------------
 
 std::vector<glm::dvec4> jointInfluenceSpheres(std::span<const glm::vec3> positions,

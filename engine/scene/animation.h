@@ -138,6 +138,9 @@ glm::dvec3 skinPosition(glm::dvec3 position, const SkinVertex& skin, std::span<c
 // n' = normalize(cofactor(B3x3) * n * sign(det B)): the inverse-transpose direction, exact under
 // non-uniform scale and defined for singular B. A zero result (degenerate B) stays (0, 0, 0).
 glm::dvec3 skinNormal(glm::dvec3 normal, const SkinVertex& skin, std::span<const glm::dmat4> joints);
+// t' = normalize(B3x3 * t): a tangent is a direction within the surface, so it maps like a position
+// difference (its handedness w is unchanged). A zero result (degenerate B) stays (0, 0, 0).
+glm::dvec3 skinTangent(glm::dvec3 tangent, const SkinVertex& skin, std::span<const glm::dmat4> joints);
 
 // --- conservative bounds -----------------------------------------------------------------------------------
 // Per joint j < jointCount, in mesh (bind) space: a sphere (xyz centre, w radius) containing every vertex

@@ -120,8 +120,9 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   objects.reserve(scene.objects.size());
   for (const Object& o : scene.objects) objects.push_back(packObject(o, scene));
   for (uint32_t i = 0; i < scene.objects.size(); ++i) g.objectMesh.push_back(scene.objects[i].mesh);
-  // Skinned instances: a region of rest vertices (uv and colour stay; position and normal are rewritten
-  // every pose) and a mesh slot of their own; the skin vertices of each source mesh once.
+  // Skinned instances: a region of skinned vertices each (position and normal; tangents where the mesh has
+  // them) and a mesh slot of their own that keeps the rest mesh's vertices (uv, colour); the skin vertices of
+  // each source mesh once.
   std::vector<SkinVertex> skinVertices;
   std::vector<int64_t> skinVertexStart(scene.meshes.size(), -1);
   for (const SkinnedObject& so : scene.skinnedObjects) {
@@ -137,12 +138,10 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     r.meshSlot = uint32_t(g.meshTable.size());
     r.sourceVertex = g.meshTable[o.mesh].vertexOffset;
     r.skinVertex = uint32_t(skinVertexStart[o.mesh]);
-    r.outVertex = uint32_t(vertices.size());
+    r.sourceExtra = g.meshTable[o.mesh].extraOffset;
     r.vertexCount = uint32_t(mesh.vertices.size());
-    vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
-    gpu::MeshData md = g.meshTable[o.mesh];
-    md.vertexOffset = r.outVertex;
-    g.meshTable.push_back(md);
+    r.hasTangents = !mesh.tangents.empty();
+    g.meshTable.push_back(g.meshTable[o.mesh]);  // addresses once the buffers exist
     objects[so.object] = packSkinnedObject(o, so.placement, scene);
     objects[so.object].meshIndex = r.meshSlot;
     g.objectMesh[so.object] = r.meshSlot;
@@ -162,19 +161,38 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     return {};
   };
   // The vertex pool: VERTEX_WINDOWS windows, and one buffer of at most the device's maxBufferSize.
+  VkPhysicalDeviceVulkan11Properties p11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_PROPERTIES};
   VkPhysicalDeviceVulkan13Properties p13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_PROPERTIES};
   VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   p2.pNext = &p13;
+  p13.pNext = &p11;
   vkGetPhysicalDeviceProperties2(device.physicalDevice(), &p2);
   const uint64_t poolLimit = std::min<uint64_t>(uint64_t(sizeof(gpu::Vertex)) << vertexWindowShift(limit) << 2,
                                                 p13.maxBufferSize);
   if (vertices.size() * sizeof(gpu::Vertex) > poolLimit)
     return makeError(ErrorCode::CapacityExceeded,
-                     fmt::format("vertex pool needs {:.1f} MiB ({} skinned instance regions included), over this "
-                                 "device's {:.1f} MiB ({} descriptor windows of maxStorageBufferRange, or "
-                                 "maxBufferSize)",
-                                 vertices.size() * sizeof(gpu::Vertex) / 1048576.0, g.skinned.size(),
-                                 poolLimit / 1048576.0, VERTEX_WINDOWS));
+                     fmt::format("vertex pool needs {:.1f} MiB, over this device's {:.1f} MiB ({} descriptor windows "
+                                 "of maxStorageBufferRange, or maxBufferSize)",
+                                 vertices.size() * sizeof(gpu::Vertex) / 1048576.0, poolLimit / 1048576.0,
+                                 VERTEX_WINDOWS));
+  // Skinned regions: packed in order into blocks of at most one buffer (maxBufferSize, maxMemoryAllocationSize:
+  // 2 GiB on lavapipe); each mesh slot holds its region's full address, so the blocks need not be contiguous.
+  const uint64_t blockLimit = std::min<uint64_t>(p13.maxBufferSize, p11.maxMemoryAllocationSize);
+  std::vector<uint64_t> blockBytes;
+  for (GpuScene::SkinnedRegion& r : g.skinned) {
+    const uint64_t v = uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex);
+    const uint64_t t = r.hasTangents ? (uint64_t(r.vertexCount) * sizeof(uint32_t) + 15) / 16 * 16 : 0;
+    if (v + t > blockLimit)
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("skinned mesh {} needs {:.1f} MiB per instance, over this device's {:.1f} MiB "
+                                   "for one buffer (maxBufferSize, maxMemoryAllocationSize)",
+                                   r.sourceMesh, (v + t) / 1048576.0, blockLimit / 1048576.0));
+    if (blockBytes.empty() || blockBytes.back() + v + t > blockLimit) blockBytes.push_back(0);
+    r.block = uint32_t(blockBytes.size() - 1);
+    r.vertexBytes = blockBytes.back();
+    r.tangentBytes = t ? r.vertexBytes + v : 0;
+    blockBytes.back() += v + t;
+  }
   for (auto [what, bytes] : {
                              std::pair{"index", indices.size() * sizeof(uint32_t)},
                              std::pair{"vertex extras (tangents, TEXCOORD_1)", extras.size() * sizeof(gpu::VertexExtra)},
@@ -187,7 +205,22 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   g.vertices = gpu::uploadVector(device, vertices, ssbo);
   g.indices = gpu::uploadVector(device, indices, ssbo | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
-  g.meshes = gpu::uploadVector(device, g.meshTable, ssbo);
+  for (uint64_t bytes : blockBytes)  // contents written by the skinning pass before any frame reads them
+    g.skinnedVertices.emplace_back(device, bytes,
+                                   ssbo | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                   gpu::MemoryUse::DeviceLocal);
+  uint64_t skinnedBytes = 0;
+  for (const gpu::Buffer& b : g.skinnedVertices) skinnedBytes += b.size();
+  for (const GpuScene::SkinnedRegion& r : g.skinned) {
+    gpu::MeshData& md = g.meshTable[r.meshSlot];
+    const VkDeviceAddress base = g.skinnedVertices[r.block].address();
+    const VkDeviceAddress v = base + r.vertexBytes, t = r.tangentBytes ? base + r.tangentBytes : 0;
+    md.skinnedVertexLow = uint32_t(v);
+    md.skinnedVertexHigh = uint32_t(v >> 32);
+    md.skinnedTangentLow = uint32_t(t);
+    md.skinnedTangentHigh = uint32_t(t >> 32);
+  }
+  g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   g.objects = gpu::uploadVector(device, objects, ssbo);
   g.materials = gpu::uploadVector(device, materials, ssbo);
   if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
@@ -205,7 +238,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.placeholderTexture = uploadTextureClass(device, white);
   g.objectCount = uint32_t(objects.size());
   g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
-            (g.skinVertices ? g.skinVertices.size() : 0) + g.vertexExtras.size() + textureBytes;
+            (g.skinVertices ? g.skinVertices.size() : 0) + skinnedBytes + g.vertexExtras.size() +
+            textureBytes;
   return g;
 }
 

@@ -24,20 +24,28 @@ struct GpuScene {
   std::vector<uint32_t> objectMesh;      // meshTable slot each object draws (its own slot when skinned)
   std::vector<uint32_t> objectList;      // draw list of each object (gpu::drawListOf; DRAW_LIST_NONE: BLEND)
 
-  // Skinned instances (Scene::skinnedObjects, same order): each owns a region of the vertex pool that the
-  // skinning pass rewrites, and a mesh table slot (the source mesh's LODs pointing at that region, bounds
-  // and LOD errors rewritten per pose). Empty for a static scene, and then nothing below is allocated.
+  // Skinned instances (Scene::skinnedObjects, same order): each owns a region of one `skinnedVertices` block
+  // that the skinning pass rewrites (16-byte SkinnedVertex records, then the skinned tangents where the mesh has
+  // tangents) and a mesh table slot (the source mesh's LODs and rest vertices, the region's device addresses,
+  // bounds and LOD errors rewritten per pose). Empty for a static scene, and then nothing below is allocated.
   struct SkinnedRegion {
     uint32_t object = 0;
     uint32_t sourceMesh = 0;    // Scene::meshes / meshTable index of the rest-pose mesh
     uint32_t meshSlot = 0;      // meshTable slot of this instance
     uint32_t sourceVertex = 0;  // first rest vertex in the pool
     uint32_t skinVertex = 0;    // first SkinVertex in skinVertices
-    uint32_t outVertex = 0;     // first vertex of the instance's region
+    uint32_t sourceExtra = EXTRA_NONE;  // first VertexExtra of the rest mesh
     uint32_t vertexCount = 0;
+    bool hasTangents = false;   // the mesh has tangents: the region also holds skinned ones
+    uint32_t block = 0;         // skinnedVertices[block] holds the region
+    uint64_t vertexBytes = 0;   // byte offset of the instance's SkinnedVertex[vertexCount] in that block
+    uint64_t tangentBytes = 0;  // byte offset of its uint[vertexCount] skinned tangents; 0: the mesh has none
   };
   std::vector<SkinnedRegion> skinned;
-  gpu::Buffer skinVertices;  // SkinVertex[] of the meshes skinned objects use (24 bytes each)
+  gpu::Buffer skinVertices;     // SkinVertex[] of the meshes skinned objects use (24 bytes each)
+  // The instances' regions (device addresses), 16 (+ 4 with tangents) bytes per vertex, in blocks of at most
+  // one buffer's size (maxBufferSize, maxMemoryAllocationSize: 2 GiB on lavapipe, about 89,000 Foxes each).
+  std::vector<gpu::Buffer> skinnedVertices;
   uint32_t objectCount = 0;
   uint32_t maxTrianglesPerDraw = 0;  // largest LOD0 triangle count: sets the triangle ID bits
   uint64_t bytes = 0;                // GPU memory of the mirror
@@ -67,7 +75,9 @@ gpu::Image uploadTextureClass(gpu::Device& device, const TextureClass& textureCl
 
 // Validates and uploads. Fails with CapacityExceeded when a buffer would exceed the device's
 // maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit; the object records are read
-// through two descriptor windows (objectWindowSplit), so they may take twice that.
+// through two descriptor windows (objectWindowSplit), so they may take twice that, and the skinned vertices by
+// device address from as many buffers as they need (CapacityExceeded only if one instance's region passes
+// maxBufferSize / maxMemoryAllocationSize).
 Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene);
 
 }  // namespace visbuf

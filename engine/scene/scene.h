@@ -141,6 +141,9 @@ Status validateScene(const Scene& scene);
 // The animation part (scene_animation.cpp): validateNodes / validateSkin / validateClip, skin vertex counts
 // and weights, skinned objects' object/skin references, and joint indices below the skin's joint count.
 Status validateSceneAnimation(const Scene& scene);
+// The joint matrices (double precision, skin space) of skinned object `so` at animation time `time` (plus its
+// timeOffset, its clip looping; the rest pose without a clip): the pose the skinning pass skins with.
+std::vector<glm::dmat4> skinnedObjectJoints(const Scene& scene, const SkinnedObject& so, double time);
 
 // World-space bounding sphere of an object (double precision, conservative: uses the largest
 // column norm of the 3x3 part as the scale).

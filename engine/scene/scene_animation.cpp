@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "scene/animation.h"
 #include "scene/scene.h"
 
 namespace visbuf {
@@ -71,6 +72,13 @@ Status validateSceneAnimation(const Scene& scene) {
                                    scene.meshes[mesh].name, maxJoint[mesh], so.skin, joints));
   }
   return {};
+}
+
+std::vector<glm::dmat4> skinnedObjectJoints(const Scene& scene, const SkinnedObject& so, double time) {
+  Pose pose = restPose(scene.nodes);
+  if (so.clip >= 0 && size_t(so.clip) < scene.animations.size())
+    sampleClip(scene.animations[size_t(so.clip)], time + so.timeOffset, true, pose);
+  return jointMatrices(scene.skins[so.skin], globalMatrices(scene.nodes, pose));
 }
 
 }  // namespace visbuf

@@ -57,14 +57,27 @@
 
 // Skinning pass (shaders/skin.comp.glsl): its own descriptor set, one thread per instance vertex.
 #define SKIN_WORKGROUP_SIZE 64
-#define SKIN_BINDING_VERTICES 0      // Vertex[] (the unified pool: rest vertices in, instance regions out)
-#define SKIN_BINDING_MESHES 1        // MeshData[] (instance slots: bounds and LOD errors per pose)
+#define SKIN_BINDING_VERTICES 0      // Vertex[] (the unified pool: the rest vertices)
+#define SKIN_BINDING_MESHES 1        // MeshData[] (instance slots: region addresses; bounds, LOD errors per pose)
 #define SKIN_BINDING_SKIN_VERTICES 2 // SkinVertex[] (joints, weights)
 #define SKIN_BINDING_JOINTS 3        // vec4[3 * joints]: joint matrix rows, skin space, per instance
 #define SKIN_BINDING_INSTANCES 4     // SkinInstance[]
 #define SKIN_BINDING_VERTICES_1 5    // vertex windows 1..3 (as BINDING_VERTICES_1..3)
 #define SKIN_BINDING_VERTICES_2 6
 #define SKIN_BINDING_VERTICES_3 7
+#define SKIN_BINDING_EXTRAS 8        // VertexExtra[] (rest tangents)
+#define SKIN_BINDING_BOUNDS 9        // uint[SKIN_BOUNDS_UINTS] per instance (GPU bounds only; else a placeholder)
+// GPU-computed skinned bounds (RendererConfig::skinBounds = Gpu): per instance the ordered-float encodings
+// (orderedFloat in skin.comp.glsl) of min x, y, z and of min -x, -y, -z over its skinned vertices, then of
+// min -|p - centre|, reduced with atomicMin only (so one fill of 0xffffffff resets them); the skin_bounds
+// variant turns them into the mesh slot's sphere in three steps (PassConstants.pad1). 32 bytes per instance.
+#define SKIN_BOUNDS_UINTS 8
+#define SKIN_BOUNDS_CENTRE 0u    // per instance: AABB centre -> boundsSphere.xyz
+#define SKIN_BOUNDS_DISTANCE 1u  // per instance vertex: largest distance from the centre
+#define SKIN_BOUNDS_RADIUS 2u    // per instance: -> boundsSphere.w
+// PassConstants.pad0 of the skinning pass: bit 0 set = GPU bounds (reduce the AABB; the resolve variant writes
+// the sphere), clear = the CPU's joint-reach sphere (SkinInstance.bounds) goes to the mesh slot.
+#define SKIN_MODE_GPU_BOUNDS 1u
 
 // Descriptor bindings (set 0) used by every pass; one layout keeps the frame script simple.
 #define BINDING_FRAME 0      // uniform FrameData

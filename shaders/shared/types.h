@@ -38,14 +38,25 @@ struct LodData {
   uint pad;
 };
 
-// A mesh of the pool. 32 + 16 * MAX_LODS bytes.
+// A mesh of the pool. 48 + 16 * MAX_LODS bytes.
 struct MeshData {
   vec4 boundsSphere;  // object space: xyz centre, w radius (contains every vertex of every LOD)
   uint vertexOffset;  // added to every index (vertexOffset of the draw)
   uint vertexCount;
   uint lodCount;      // >= 1; lods[0] is the full mesh
   uint extraOffset;   // first VertexExtra of the mesh (indexed by mesh-local vertex), EXTRA_NONE without
+  // A skinned instance's slot: buffer device addresses (low, high 32 bits; 0, 0 for every other mesh) of its
+  // SkinnedVertex[vertexCount] and its skinned tangents (uint[vertexCount], octahedral; 0, 0 when the mesh has
+  // no tangents). Indexed by mesh-local vertex; uv, colour and the tangent's w stay the rest vertex's.
+  uint skinnedVertexLow, skinnedVertexHigh;
+  uint skinnedTangentLow, skinnedTangentHigh;
   LodData lods[MAX_LODS];
+};
+
+// What skinning changes in a vertex (16 bytes): the skinned position and normal of one instance's vertex.
+struct SkinnedVertex {
+  float px, py, pz;  // skin-space position
+  uint normal;       // octahedral-encoded unit normal, as Vertex.normal
 };
 
 // One object instance: 64 bytes. The 3x4 affine transform maps object space to world space,
@@ -157,7 +168,7 @@ struct SkinInstance {
   uint sourceVertex;  // first rest vertex (pool index)
   uint skinVertex;    // first SkinVertex
   uint vertexCount;
-  uint outVertex;     // first vertex of the instance's region (pool index)
+  uint sourceExtra;   // first VertexExtra of the rest mesh (its tangents), EXTRA_NONE without
   uint firstJoint;    // first joint matrix of this instance
   uint meshSlot;      // the instance's MeshData
   uint sourceMesh;    // the rest-pose mesh's MeshData (its LOD errors)
