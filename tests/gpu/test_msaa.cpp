@@ -171,6 +171,18 @@ TEST(Msaa, VisbufMatchesForwardResolveOnManySilhouettes) {
   expectMatchesForwardResolve(boxField(), "box_field", 320, 200, {80.0, 0.002, 0.0005});
 }
 
+// Alpha-masked, double-sided cards (the masked visibility pipelines under MSAA): the cut-out is decided per
+// fragment in both paths (no sample shading), so coverage matches and only the edge evaluation points differ.
+TEST(Msaa, VisbufMatchesForwardResolveOnMaskedFoliage) {
+  FoliageParams p;
+  p.cards = 300;
+  p.extent = 8.0;
+  Scene s = makeFoliageScene(p).value();
+  s.defaultCamera.position = {0.0, 6.0, 18.0};
+  s.defaultCamera.target = {0.0, 1.5, 0.0};
+  expectMatchesForwardResolve(s, "masked_foliage", 320, 200, {80.0, 0.002, 0.0005});
+}
+
 // The per-sample path is taken exactly where the samples' IDs differ: the shading pass's count against a CPU count
 // from the read-back sample IDs; those pixels are edges (a minority of the covered ones). Where a pixel's samples
 // agree and the single-sampled frame saw the same triangle at that pixel, the colour is the 1x colour (bitwise on
