@@ -9,13 +9,7 @@ Usage: scripts/gbuffer_table.py OUT1/bench.json OUT2/bench.json ...
 import json
 import sys
 
-
-def ms(v):
-    return f"{v:,.1f}" if v >= 10 else f"{v:.2f}"
-
-
-def group(passes, keys):
-    return sum(v["median"] for k, v in passes.items() if any(k == g or k.startswith(g + " ") for g in keys))
+from table_util import group, ms
 
 
 print("| scene | size | path | cull | triangles | cull ms | pyramid ms | raster ms | resolve ms | frame ms (p95) "

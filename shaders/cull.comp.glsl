@@ -48,9 +48,12 @@ uint occlusionTest(vec3 c, float r) {
     hi = max(hi, ndc);
   }
   vec2 size = frame.viewport.xy;
-  // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding.
-  vec2 pxLo = (lo * 0.5 + 0.5) * size - 0.5 - 0.01;
-  vec2 pxHi = (hi * 0.5 + 0.5) * size - 0.5 + 0.01;
+  // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding. MSAA: a
+  // triangle can cover a sample and no centre; every sample lies within 0.5 px of its pixel's centre (per axis),
+  // so widening by 0.5 keeps every pixel with a covered sample (and the pyramid texels over it).
+  float margin = frame.msaaSamples > 1u ? 0.51 : 0.01;
+  vec2 pxLo = (lo * 0.5 + 0.5) * size - 0.5 - margin;
+  vec2 pxHi = (hi * 0.5 + 0.5) * size - 0.5 + margin;
   ivec2 a = ivec2(ceil(pxLo));
   ivec2 b = ivec2(floor(pxHi));
   a = max(a, ivec2(0));

@@ -8,7 +8,13 @@
 #include "shared/types.h"
 
 layout(local_size_x = PYRAMID_TILE, local_size_y = PYRAMID_TILE) in;
+#if MSAA
+// Level 0 of a multisampled depth: each texel is the farthest (minimum) depth over the pixel's samples, so every
+// sample's depth is nearer than or equal to it (conservative for the occlusion test at any sample).
+layout(set = 0, binding = 0) uniform sampler2DMS source;
+#else
 layout(set = 0, binding = 0) uniform sampler2D source;  // level 0: the depth image; else level k-1
+#endif
 layout(set = 0, binding = 1, r32f) uniform writeonly image2D destination;
 layout(push_constant) uniform Push { PyramidConstants pc; };
 
@@ -17,6 +23,10 @@ void main() {
   if (p.x >= int(pc.dstWidth) || p.y >= int(pc.dstHeight)) return;
   const ivec2 srcSize = ivec2(pc.srcWidth, pc.srcHeight);
   float d;
+#if MSAA
+  d = texelFetch(source, p, 0).r;
+  for (int i = 1; i < textureSamples(source); ++i) d = min(d, texelFetch(source, p, i).r);
+#else
   if (pc.level == 0u) {
     d = texelFetch(source, p, 0).r;
   } else {
@@ -26,5 +36,6 @@ void main() {
     if (s.y + 1 < srcSize.y) d = min(d, texelFetch(source, s + ivec2(0, 1), 0).r);
     if (s.x + 1 < srcSize.x && s.y + 1 < srcSize.y) d = min(d, texelFetch(source, s + ivec2(1, 1), 0).r);
   }
+#endif
   imageStore(destination, p, vec4(d));
 }

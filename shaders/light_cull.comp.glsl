@@ -16,7 +16,11 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer PointLightBlock { PointLightData pointLights[]; };
+#if MSAA
+layout(set = 0, binding = BINDING_LIGHT_DEPTH) uniform sampler2DMS sceneDepth;  // every sample is shaded: all count
+#else
 layout(set = 0, binding = BINDING_LIGHT_DEPTH) uniform sampler2D sceneDepth;
+#endif
 layout(std430, set = 0, binding = BINDING_LIGHT_TILES) buffer LightTileOut { uint tilesOut[]; };
 
 void main() {
@@ -29,10 +33,17 @@ void main() {
   float dMin = 1e30, dMax = 0.0;
   for (int y = lo.y; y < hi.y; ++y)
     for (int x = lo.x; x < hi.x; ++x) {
-      float d = texelFetch(sceneDepth, ivec2(x, y), 0).r;
-      if (d > 0.0) {  // reverse-Z: 0 is the cleared background (infinitely far)
-        dMin = min(dMin, d);
-        dMax = max(dMax, d);
+#if MSAA
+      for (int s = 0; s < int(frame.msaaSamples); ++s) {
+        float d = texelFetch(sceneDepth, ivec2(x, y), s).r;
+#else
+      {
+        float d = texelFetch(sceneDepth, ivec2(x, y), 0).r;
+#endif
+        if (d > 0.0) {  // reverse-Z: 0 is the cleared background (infinitely far)
+          dMin = min(dMin, d);
+          dMax = max(dMax, d);
+        }
       }
     }
   if (dMax == 0.0) {  // nothing covered: nothing shaded here

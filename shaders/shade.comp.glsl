@@ -2,7 +2,7 @@
 // Shading pass: one thread per pixel. ID -> draw -> object -> mesh level -> 3 indices -> 3 vertices,
 // the same clip math as the visibility vertex shader, perspective-correct barycentrics with
 // analytic derivatives, attribute interpolation, lighting. Background pixels are skipped (the
-// colour image was cleared to the background before).
+// colour image was cleared to the background before). MSAA variant: msaa_samples.glsl.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_samplerless_texture_functions : require
 #include "material.glsl"
@@ -11,8 +11,12 @@
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
 layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
 layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
+#if MSAA
+#include "msaa_samples.glsl"  // multisampled IDs: shadeMultisampledPixel() per pixel, shadeVisible() per ID
+#else
 layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
 layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+#endif
 #if WRITE_ATTRIBUTES
 layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
 
@@ -38,11 +42,9 @@ bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
   return ccw != ((o.flags & OBJECT_FLAG_FLIP_WINDING) != 0u);
 }
 
-void main() {
-  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
-  uvec2 raw = texelFetch(visibility, p, 0).xy;
-  if (raw.x == VIS_NOTHING) return;
+// The lit colour of the surface with this raw ID (not VIS_NOTHING) at `at` inside pixel p (pixel units from its
+// top-left corner; (0.5, 0.5): the centre). Derivatives are per pixel step.
+vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   uint slot, tri;
   if (frame.wideIds != 0u) {
     slot = raw.x - 1u;
@@ -61,7 +63,7 @@ void main() {
   vec4 c0 = clipPosition(o, vertexPosition(v0));
   vec4 c1 = clipPosition(o, vertexPosition(v1));
   vec4 c2 = clipPosition(o, vertexPosition(v2));
-  vec2 ndc = (vec2(p) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+  vec2 ndc = (vec2(p) + at) * frame.viewport.zw * 2.0 - 1.0;
   Barycentrics b = computeBarycentrics(c0, c1, c2, ndc, 2.0 * frame.viewport.zw);
   vec3 l = b.lambda;
 
@@ -100,8 +102,20 @@ void main() {
   si.color = l.x * unpackColor(v0.color) + l.y * unpackColor(v1.color) + l.z * unpackColor(v2.color);
   si.frontFacing = frontFacing(o, c0, c1, c2);
   Surface s = evaluateMaterial(o.materialIndex, si);
-  imageStore(colorOut, p, vec4(shadeSurface(s, uvec2(p)), 1.0));
 #if WRITE_ATTRIBUTES
   writeAttributes(p, o, v0, v1, v2, b, normal);
+#endif
+  return shadeSurface(s, uvec2(p));
+}
+
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+#if MSAA
+  shadeMultisampledPixel(p);
+#else
+  if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
+  uvec2 raw = texelFetch(visibility, p, 0).xy;
+  if (raw.x == VIS_NOTHING) return;
+  imageStore(colorOut, p, vec4(shadeVisible(raw, p, vec2(0.5)), 1.0));
 #endif
 }

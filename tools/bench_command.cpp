@@ -73,6 +73,11 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   sub->add_option("--vertices", c.vertices, "vertex precision: float, quantized (as bake --quantize stores them)")
       ->delimiter(',')
       ->check(CLI::IsMember({"float", "quantized"}));
+  sub->add_option("--msaa", c.msaa,
+                  "samples per pixel: 1,2,4 (each count against a reference at the same count; unsupported counts "
+                  "and paths fail with the device's supported ones)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"1", "2", "4"}));
   sub->add_option("--lod", c.lod, "LOD thresholds in pixels of projected error; off = full detail")->delimiter(',');
   sub->add_option("--reference", c.reference,
                   "auto (forward with no culling and no LOD unless the scene has more than --reference-max-triangles "
@@ -167,7 +172,13 @@ struct Config {
   std::string lodLabel;
   bool wideIds = false;  // visbuf: the 64-bit ID target forced where the renderer would pick 32 bits
   bool quantized = false;  // vertices quantised as `bake --quantize` stores them (pack round trip in memory)
+  uint32_t msaa = 1;       // samples per pixel (FrameOptions::msaa); its reference renders at the same count
 };
+
+// "visbuf", or "visbuf 4x" with MSAA (tables).
+std::string pathLabel(const Config& k) {
+  return k.msaa > 1 ? fmt::format("{} {}x", renderPathName(k.path), k.msaa) : std::string(renderPathName(k.path));
+}
 
 
 struct Row {
@@ -180,6 +191,7 @@ struct Row {
   // One extra (untimed) frame at the last measured camera with countOverdraw: depth-passing raster writes per
   // pixel and the bytes written per pixel (FrameStats::bytesWrittenPerPixel).
   double rasterWritesPerPixel = 0, bytesWrittenPerPixel = 0;
+  double perSamplePixels = 0;  // visbuf MSAA: median pixels shaded per distinct sample ID
   double psnrMean = INFINITY, psnrWorst = INFINITY, maxAbs = 0, meanAbs = 0, differingFraction = 0;
   std::optional<uint64_t> idMismatches;  // pixels over all measured frames; empty: not comparable
   uint64_t idPixels = 0;
@@ -251,13 +263,14 @@ int runBench(const BenchCommand& c) {
                            {"reason", "the forward path culls on the CPU by frustum only (would repeat frustum)"}});
         continue;
       }
-      for (float l : lods)
-        for (const std::string& ids : c.ids)
-          for (const std::string& v : c.vertices) {
-            if (path != RenderPath::Visbuf && ids != c.ids.front()) continue;  // no ID target to vary
-            configs.push_back(
-                {path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide", v == "quantized"});
-          }
+      for (uint32_t m : c.msaa)
+        for (float l : lods)
+          for (const std::string& ids : c.ids)
+            for (const std::string& v : c.vertices) {
+              if (path != RenderPath::Visbuf && ids != c.ids.front()) continue;  // no ID target to vary
+              configs.push_back(
+                  {path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide", v == "quantized", m});
+            }
     }
   if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
 
@@ -343,11 +356,28 @@ int runBench(const BenchCommand& c) {
                 info.sceneObjects, (unsigned long long)info.triangles, info.reference.c_str(),
                 info.referenceReason.c_str());
 
-    // References, once per measured camera.
-    std::vector<std::vector<float>> refColor(c.frames);
+    // References, once per measured camera (and per MSAA sample count: each row is compared at its own count).
+    std::map<uint32_t, std::vector<std::vector<float>>> refColors;
     std::vector<std::vector<uint32_t>> fullIds(c.frames);
     std::vector<double> refMs;
     r.clearHistory();
+    for (uint32_t m : c.msaa) {
+      if (m == 1) continue;
+      refColors[m].resize(c.frames);
+      for (uint32_t f = 0; f < c.frames; ++f) {
+        FrameOptions ro;
+        ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
+        ro.cull = CullMode::None;
+        ro.lodErrorPixels = 0.0f;
+        ro.tiledLights = false;
+        ro.msaa = m;
+        auto frame = r.renderFrame(path[c.warmup + f], ro);
+        if (!frame) return fail(frame.error());
+        refColors[m][f] = std::move(frame->color);
+      }
+    }
+    std::vector<std::vector<float>>& refColor = refColors[1];
+    refColor.resize(c.frames);
     for (uint32_t f = 0; f < c.frames; ++f) {
       const Camera& cam = path[c.warmup + f];
       FrameOptions ro;
@@ -377,7 +407,7 @@ int runBench(const BenchCommand& c) {
     for (const Config& k : configs) {
       Renderer& rk = k.wideIds || k.quantized ? *variants.at({k.wideIds, k.quantized}) : r;
       rk.clearHistory();
-      const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f;
+      const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f && k.msaa == 1;  // (1 ID per pixel)
       std::vector<FrameStats> measured;
       std::vector<ImageError> errors;
       uint64_t mismatches = 0;
@@ -387,6 +417,7 @@ int runBench(const BenchCommand& c) {
         fo.path = k.path;
         fo.cull = k.cull;
         fo.lodErrorPixels = k.lod;
+        fo.msaa = k.msaa;
         fo.readColor = measure;
         fo.readIds = measure && idComparable;
         auto frame = rk.renderFrame(path[i], fo);
@@ -394,11 +425,12 @@ int runBench(const BenchCommand& c) {
         if (!measure) continue;
         const size_t f = i - c.warmup;
         measured.push_back(frame->stats);
-        errors.push_back(compareColor(frame->color, refColor[f]));
+        errors.push_back(compareColor(frame->color, refColors.at(k.msaa)[f]));
         if (idComparable) mismatches += countIdMismatches(frame->ids, fullIds[f]);
       }
       Row row;
-      {  // bandwidth: the raster's real writes at the last measured camera (not timed: the counting costs atomics)
+      if (k.msaa == 1) {  // bandwidth: the raster's real writes at the last measured camera (not timed: the counting
+                          // costs atomics; single-sampled only)
         FrameOptions bo;
         bo.path = k.path;
         bo.cull = k.cull;
@@ -446,6 +478,9 @@ int runBench(const BenchCommand& c) {
       row.drawnMedian = median(drawn);
       row.sceneBytes = measured.back().sceneBytes;
       row.targetBytesPerPixel = measured.back().targetBytesPerPixel;
+      std::vector<double> perSample;
+      for (const FrameStats& s : measured) perSample.push_back(double(s.perSamplePixels));
+      row.perSamplePixels = median(perSample);
       // PSNR over all measured frames = that of their mean squared error; worst = lowest frame.
       double mseSum = 0.0;
       row.psnrWorst = INFINITY;
@@ -462,8 +497,8 @@ int runBench(const BenchCommand& c) {
         row.idMismatches = mismatches;
         row.idPixels = uint64_t(pixels) * measured.size();
       }
-      std::printf("  %-7s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
-                  renderPathName(k.path), cullModeName(k.cull), k.lodLabel.c_str(),
+      std::printf("  %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+                  pathLabel(k).c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
                   row.idBits.c_str(), k.quantized ? "q16" : "float", row.frameMedian, row.frameP95,
                   row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
                   row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
@@ -538,6 +573,8 @@ int runBench(const BenchCommand& c) {
     x["lodErrorPixels"] = row.config.lod;
     x["idBits"] = row.idBits;
     x["vertices"] = row.config.quantized ? "quantized" : "float";
+    x["msaa"] = row.config.msaa;
+    x["perSamplePixels"] = row.perSamplePixels;
     nlohmann::json passes = nlohmann::json::object();
     for (const auto& [name, v] : row.passMs) passes[name] = {{"median", v.first}, {"p95", v.second}};
     x["passMs"] = passes;
@@ -578,7 +615,7 @@ int runBench(const BenchCommand& c) {
     std::replace(n.begin(), n.end(), ' ', '_');
     csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
   }
-  csv += ",raster_writes_per_pixel,bytes_written_per_pixel\n";  // last: the columns before are fixed
+  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels\n";  // appended: earlier columns fixed
   for (const Row& row : rows) {
     csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
@@ -593,7 +630,8 @@ int runBench(const BenchCommand& c) {
       const auto* p = passOf(row, n);
       csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
     }
-    csv += fmt::format(",{:.4f},{:.2f}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel);
+    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
+                       row.config.msaa, row.perSamplePixels);
   }
 
   // bench.md
@@ -616,7 +654,7 @@ int runBench(const BenchCommand& c) {
     for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
     md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} / {:.1f} | {} | {} | "
                       "{:.4f} | {:.3f}% | {} | {} |\n",
-                      objectsLabel(row.objects), renderPathName(row.config.path), cullModeName(row.config.cull),
+                      objectsLabel(row.objects), pathLabel(row.config), cullModeName(row.config.cull),
                       row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
                       row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, row.bytesWrittenPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,

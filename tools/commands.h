@@ -36,6 +36,7 @@ struct RenderCommand {
   std::string view = "shaded";  // debug view written to -o instead of the shaded image
   int pyramidLevel = -1;        // --view pyramid: the level to show
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
+  uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
 };
 
 void addRenderCommand(CLI::App& app, RenderCommand& cmd);
@@ -72,6 +73,7 @@ struct BenchCommand {
   std::vector<std::string> paths{"visbuf", "forward"};
   std::vector<std::string> cull{"none", "frustum", "occlusion"};
   std::vector<std::string> lod{"off", "0.5", "1", "2", "4"};
+  std::vector<uint32_t> msaa{1};                       // samples per pixel (FrameOptions::msaa)
   std::vector<std::string> ids{"auto"};
   std::vector<std::string> vertices{"float"};          // vertex precision: float, quantized                // visbuf ID target: auto (32 bits where they fit), wide
   std::string reference = "auto";                      // auto | forward | visbuf-full

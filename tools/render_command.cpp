@@ -68,6 +68,11 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                 "also render the same frame shading every pixel with every point light (no tile lists) and report "
                 "the error against it");
   sub->add_flag("--all-lights", c.allLights, "shade every pixel with every point light (no light cull pass)");
+  sub->add_option("--msaa", c.msaa,
+                  "samples per pixel: 1, 2 or 4 (the device's supported counts; visbuf: per-sample shading where a "
+                  "pixel's samples differ, forward: hardware resolve; not with gbuffer, BLEND scenes, --view or "
+                  "--ids-out)")
+      ->capture_default_str();
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
                 "frame's draw lists (shows what the first camera culled)");
@@ -110,6 +115,9 @@ int runRender(const RenderCommand& c) {
   fo.cull = c.cull == "none" ? CullMode::None : c.cull == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
   fo.tiledLights = !c.allLights;
+  fo.msaa = c.msaa;
+  if (c.msaa > 1 && (c.view != "shaded" || !c.idsOut.empty()))
+    return fail({ErrorCode::Unsupported, "--view and --ids-out show one ID per pixel: use them with --msaa 1"});
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
     std::vector<FrameStats> runs;

@@ -47,6 +47,11 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
   out += fmt::format("memory        scene {:.1f} MiB, targets {} B/pixel\n", s.sceneBytes / 1048576.0,
                      s.targetBytesPerPixel);
+  if (s.msaaSamples > 1)
+    out += s.path == RenderPath::Visbuf
+               ? fmt::format("msaa          {}x: {} pixels ({:.2f}%) shaded per distinct sample ID\n", s.msaaSamples,
+                             s.perSamplePixels, 100.0 * s.perSamplePixels / (double(s.width) * s.height))
+               : fmt::format("msaa          {}x, hardware resolve\n", s.msaaSamples);
   if (s.rasterWritesPerPixel > 0.0)
     out += fmt::format("bandwidth     {:.2f} raster writes/pixel x {} B + resolve = {:.1f} B written/pixel\n",
                        s.rasterWritesPerPixel, s.rasterBytesPerFragment, s.bytesWrittenPerPixel);
@@ -95,6 +100,7 @@ nlohmann::json statsToJson(const FrameStats& s) {
                  {"meanPerTile", s.meanLightsPerTile}, {"bytes", s.lightBytes}};
   j["sceneBytes"] = s.sceneBytes;
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
+  j["msaa"] = {{"samples", s.msaaSamples}, {"perSamplePixels", s.perSamplePixels}};
   j["rasterBytesPerFragment"] = s.rasterBytesPerFragment;
   if (s.rasterWritesPerPixel > 0.0) {
     j["rasterWritesPerPixel"] = s.rasterWritesPerPixel;

@@ -26,6 +26,11 @@
 #include "gbuffer_textured.frag.h"
 #include "gbuffer_overdraw_textured.frag.h"
 #include "light_cull.comp.h"
+#include "light_cull_msaa.comp.h"
+#include "depth_pyramid_msaa.comp.h"
+#include "msaa_ids.comp.h"
+#include "shade_msaa.comp.h"
+#include "shade_msaa_textured.comp.h"
 #include "shade.comp.h"
 #include "shade_attributes.comp.h"
 #include "skin.comp.h"
@@ -71,6 +76,11 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("skin.comp", spv_skin_comp)
   VB_SHADER("skin_bounds.comp", spv_skin_bounds_comp)
   VB_SHADER("light_cull.comp", spv_light_cull_comp)
+  VB_SHADER("light_cull_msaa.comp", spv_light_cull_msaa_comp)
+  VB_SHADER("depth_pyramid_msaa.comp", spv_depth_pyramid_msaa_comp)
+  VB_SHADER("msaa_ids.comp", spv_msaa_ids_comp)
+  VB_SHADER("shade_msaa.comp", spv_shade_msaa_comp)
+  VB_SHADER("shade_msaa_textured.comp", spv_shade_msaa_textured_comp)
   VB_SHADER("depth_pyramid.comp", spv_depth_pyramid_comp)
   VB_SHADER("forward.vert", spv_forward_vert)
   VB_SHADER("forward.frag", spv_forward_frag)
@@ -204,7 +214,7 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
   rs.lineWidth = 1.0f;
   VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  ms.rasterizationSamples = desc.samples;
   VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
   ds.depthTestEnable = VK_TRUE;
   ds.depthWriteEnable = desc.depthWrite ? VK_TRUE : VK_FALSE;

@@ -67,6 +67,7 @@ struct GraphicsPipelineDesc {
   VkCullModeFlags cullMode = VK_CULL_MODE_BACK_BIT;
   VkCompareOp depthCompare = VK_COMPARE_OP_GREATER;  // reverse-Z
   bool depthWrite = true;
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;  // rasterisation samples (MSAA targets); no sample shading
   bool premultipliedBlend = false;  // colour = src + (1 - src.a) * dst on every attachment (transparency)
   uint32_t windowed = 1;  // specialisation constant 0 of both stages (see createComputePipeline)
   uint32_t textureClasses = 0;  // specialisation constant 1 of both stages (see Specialization)

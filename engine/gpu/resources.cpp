@@ -74,21 +74,22 @@ void Buffer::reset() {
 }
 
 Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
-             VkImageAspectFlags aspect, uint32_t mipLevels, uint32_t arrayLayers)
+             VkImageAspectFlags aspect, uint32_t mipLevels, uint32_t arrayLayers, VkSampleCountFlagBits samples)
     : device_(device.device()),
       format_(format),
       width_(width),
       height_(height),
       mipLevels_(mipLevels),
       layers_(std::max(arrayLayers, 1u)),
-      aspect_(aspect) {
+      aspect_(aspect),
+      samples_(samples) {
   VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   ici.imageType = VK_IMAGE_TYPE_2D;
   ici.format = format;
   ici.extent = {width, height, 1};
   ici.mipLevels = mipLevels;
   ici.arrayLayers = layers_;
-  ici.samples = VK_SAMPLE_COUNT_1_BIT;
+  ici.samples = samples;
   ici.tiling = VK_IMAGE_TILING_OPTIMAL;
   ici.usage = usage;
   ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
@@ -129,6 +130,7 @@ Image& Image::operator=(Image&& o) noexcept {
     mipLevels_ = o.mipLevels_;
     layers_ = o.layers_;
     aspect_ = o.aspect_;
+    samples_ = o.samples_;
   }
   return *this;
 }

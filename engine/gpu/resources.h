@@ -45,7 +45,8 @@ class Image {
  public:
   Image() = default;
   Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
-        VkImageAspectFlags aspect, uint32_t mipLevels = 1, uint32_t arrayLayers = 0);
+        VkImageAspectFlags aspect, uint32_t mipLevels = 1, uint32_t arrayLayers = 0,
+        VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
   ~Image() { reset(); }
   Image(Image&& o) noexcept { *this = std::move(o); }
   Image& operator=(Image&& o) noexcept;
@@ -61,6 +62,7 @@ class Image {
   uint32_t mipLevels() const { return mipLevels_; }
   uint32_t layers() const { return layers_; }  // array layers (its view is a 2D array view when created with > 0)
   VkImageAspectFlags aspect() const { return aspect_; }
+  VkSampleCountFlagBits samples() const { return samples_; }
   // A view of one mip level; the caller owns it (vkDestroyImageView).
   VkImageView createLevelView(uint32_t level) const;
   explicit operator bool() const { return image_ != VK_NULL_HANDLE; }
@@ -75,6 +77,7 @@ class Image {
   uint32_t mipLevels_ = 1;
   uint32_t layers_ = 1;
   VkImageAspectFlags aspect_ = 0;
+  VkSampleCountFlagBits samples_ = VK_SAMPLE_COUNT_1_BIT;
 };
 
 // Creates a device-local buffer holding `bytes` (size rounded up to 4, at least 16 bytes) via staging.

@@ -50,11 +50,12 @@ void DepthPyramidPass::create(gpu::Device& device) {
   pci.pushConstantRangeCount = 1;
   pci.pPushConstantRanges = &range;
   VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &layout_));
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, MAX_PYRAMID_LEVELS},
-                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, MAX_PYRAMID_LEVELS}};
+  // One set per level, plus the multisampled level 0's.
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, MAX_PYRAMID_LEVELS + 1},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, MAX_PYRAMID_LEVELS + 1}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
-  dpci.maxSets = MAX_PYRAMID_LEVELS;
+  dpci.maxSets = MAX_PYRAMID_LEVELS + 1;
   dpci.poolSizeCount = 2;
   dpci.pPoolSizes = sizes;
   VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
@@ -64,12 +65,15 @@ void DepthPyramidPass::create(gpu::Device& device) {
   sci.maxLod = VK_LOD_CLAMP_NONE;
   VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler_));
   pipeline_ = gpu::createComputePipeline(device, layout_, "depth_pyramid.comp");
+  msaaPipeline_ = gpu::createComputePipeline(device, layout_, "depth_pyramid_msaa.comp");
 }
 
-void DepthPyramidPass::resize(const gpu::Image& depth) {
+void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisampledDepth) {
   VkDevice dev = device_->device();
   vkDeviceWaitIdle(dev);
   releaseViews();
+  if (msaaSet_) sets_.push_back(msaaSet_);
+  msaaSet_ = VK_NULL_HANDLE;
   if (!sets_.empty()) vkFreeDescriptorSets(dev, pool_, uint32_t(sets_.size()), sets_.data());
   sets_.clear();
   width_ = depth.width();
@@ -97,12 +101,19 @@ void DepthPyramidPass::resize(const gpu::Image& depth) {
   VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, levels_, 0, 1};
   vkCmdClearColorImage(cmd, pyramid_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
   device_->submitOneShot(cmd);
-  for (uint32_t k = 0; k < levels_; ++k) {
-    VkDescriptorImageInfo src = k == 0 ? VkDescriptorImageInfo{sampler_, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
-                                       : VkDescriptorImageInfo{sampler_, levelViews_[k - 1], VK_IMAGE_LAYOUT_GENERAL};
-    VkDescriptorImageInfo dst{VK_NULL_HANDLE, levelViews_[k], VK_IMAGE_LAYOUT_GENERAL};
+  if (multisampledDepth) {
+    ai.descriptorSetCount = 1;
+    VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &msaaSet_));
+  }
+  for (uint32_t k = 0; k < levels_ + (msaaSet_ ? 1 : 0); ++k) {
+    const bool msaa = k == levels_;  // the extra set: level 0 from the multisampled depth
+    VkDescriptorImageInfo src =
+        msaa     ? VkDescriptorImageInfo{sampler_, multisampledDepth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+        : k == 0 ? VkDescriptorImageInfo{sampler_, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+                 : VkDescriptorImageInfo{sampler_, levelViews_[k - 1], VK_IMAGE_LAYOUT_GENERAL};
+    VkDescriptorImageInfo dst{VK_NULL_HANDLE, levelViews_[msaa ? 0 : k], VK_IMAGE_LAYOUT_GENERAL};
     VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
-    w[0].dstSet = w[1].dstSet = sets_[k];
+    w[0].dstSet = w[1].dstSet = msaa ? msaaSet_ : sets_[k];
     w[0].dstBinding = 0;
     w[0].descriptorCount = 1;
     w[0].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
@@ -115,13 +126,15 @@ void DepthPyramidPass::resize(const gpu::Image& depth) {
   }
 }
 
-void DepthPyramidPass::record(VkCommandBuffer cmd) const {
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.handle());
+void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled) const {
   uint32_t sw = width_, sh = height_;
   for (uint32_t k = 0; k < levels_; ++k) {
     const uint32_t dw = k == 0 ? width_ : (sw + 1) / 2, dh = k == 0 ? height_ : (sh + 1) / 2;
     gpu::PyramidConstants pc{sw, sh, dw, dh, k, 0, 0, 0};
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &sets_[k], 0, nullptr);
+    const bool msaa = multisampled && k == 0;
+    if (k <= 1) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (msaa ? msaaPipeline_ : pipeline_).handle());
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, msaa ? &msaaSet_ : &sets_[k], 0,
+                            nullptr);
     vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
     vkCmdDispatch(cmd, (dw + PYRAMID_TILE - 1) / PYRAMID_TILE, (dh + PYRAMID_TILE - 1) / PYRAMID_TILE, 1);
     // The next level reads this one.

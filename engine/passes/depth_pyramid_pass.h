@@ -23,8 +23,10 @@ class DepthPyramidPass {
   DepthPyramidPass& operator=(const DepthPyramidPass&) = delete;
   void create(gpu::Device& device);
   // (Re)creates the pyramid image for a depth image of this size and writes the per-level descriptors.
-  void resize(const gpu::Image& depth);
-  void record(VkCommandBuffer cmd) const;
+  // multisampledDepth (MSAA, same size): level 0 can also be built from it, as the farthest depth of each
+  // pixel's samples (record with multisampled = true).
+  void resize(const gpu::Image& depth, const gpu::Image* multisampledDepth = nullptr);
+  void record(VkCommandBuffer cmd, bool multisampled = false) const;
   const gpu::Image& pyramid() const { return pyramid_; }
   uint32_t levels() const { return levels_; }
 
@@ -36,6 +38,8 @@ class DepthPyramidPass {
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkSampler sampler_ = VK_NULL_HANDLE;
   gpu::Pipeline pipeline_;
+  gpu::Pipeline msaaPipeline_;  // level 0 from a multisampled depth
+  VkDescriptorSet msaaSet_ = VK_NULL_HANDLE;
   gpu::Image pyramid_;
   std::vector<VkImageView> levelViews_;
   std::vector<VkDescriptorSet> sets_;

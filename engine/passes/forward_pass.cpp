@@ -6,7 +6,8 @@
 
 namespace visbuf::passes {
 
-ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask) {
+ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
+                                VkSampleCountFlagBits samples) {
   ForwardPass p;
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
@@ -16,6 +17,7 @@ ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gp
     d.textureClasses = spec.textureClasses;
     d.skinned = spec.skinned;
     d.cullMode = drawListCullMode(list);
+    d.samples = samples;
     d.vertexShader = "forward.vert";
     d.fragmentShader = prefix + ".frag";
     d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
@@ -32,9 +34,10 @@ ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gp
 
 void ForwardPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
                          VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
-                         const std::vector<ForwardDraw>& draws, const gpu::Image* ids, bool countOverdraw) const {
+                         const std::vector<ForwardDraw>& draws, const gpu::Image* ids, bool countOverdraw,
+                         const gpu::Image* resolve) const {
   if (countOverdraw) ids = nullptr;  // one diagnostic at a time
-  beginRendering(cmd, color, background, depth, false, ids, VkClearColorValue{});
+  beginRendering(cmd, color, background, depth, false, ids, VkClearColorValue{}, resolve);
   const Variant variant = countOverdraw ? Overdraw : ids ? WithIds : Plain;
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);

@@ -26,12 +26,16 @@ struct ForwardPass {
   // counting raster writes per pixel into BINDING_OVERDRAW. Created only for the lists in listMask.
   enum Variant { Plain, WithIds, Overdraw, VariantCount };
   std::array<std::array<gpu::Pipeline, VariantCount>, DRAW_LISTS> pipelines;
-  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask);
+  // samples > 1: pipelines for multisampled colour + depth (no ID variant is used then: see record).
+  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
+                            VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
   // ids: optional rg32ui target (cleared to 0) written with the same IDs the visibility path decodes.
   // draws: in any order; the pipeline is rebound where the list changes (sort by list to bind each once).
+  // resolve: MSAA, the single-sample image the multisampled colour is averaged into (hardware resolve).
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
               VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
-              const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr, bool countOverdraw = false) const;
+              const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr, bool countOverdraw = false,
+              const gpu::Image* resolve = nullptr) const;
 };
 
 }  // namespace visbuf::passes

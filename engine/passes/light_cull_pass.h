@@ -26,7 +26,8 @@ class LightCullPass {
   // (Re)allocates the tile lists for a width x height frame.
   void resize(gpu::Device& device, uint32_t width, uint32_t height);
   // Resets the counters, then one dispatch over every tile. The depth must be in SHADER_READ_ONLY_OPTIMAL.
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  // multisampled: BINDING_LIGHT_DEPTH is the MSAA depth; the bounds take every sample.
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, bool multisampled = false) const;
   // After record: copies the counters to a host-visible buffer (transfer stage), read by stats().
   void recordReadback(VkCommandBuffer cmd) const;
   LightCullStats stats() const;
@@ -36,6 +37,7 @@ class LightCullPass {
 
  private:
   gpu::Pipeline pipeline_;
+  gpu::Pipeline msaaPipeline_;
   gpu::Buffer tiles_;     // uint[LIGHT_TILE_HEADER + tiles * LIGHT_TILE_STRIDE]
   gpu::Buffer readback_;  // the header
   uint32_t tilesX_ = 0, tilesY_ = 0;

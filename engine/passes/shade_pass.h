@@ -7,12 +7,21 @@
 
 namespace visbuf::passes {
 
+// MSAA (multisampled ID target bound at BINDING_VISIBILITY): the msaa variant shades each pixel once where its
+// samples agree and once per distinct ID where they differ (shaders/msaa_samples.glsl), counting those pixels in
+// stats[STAT_PER_SAMPLE_PIXELS]; sampleIds copies every sample's raw ID into BINDING_ATTRIBUTES (readIds).
 struct ShadePass {
+  enum Variant { Plain, Attributes, Msaa };
   gpu::Pipeline pipeline;
   gpu::Pipeline attributesPipeline;  // same shading, plus the attribute record (stress suite)
+  gpu::Pipeline msaaPipeline;        // created by createMsaa (the first MSAA frame): it compiles the materials again
+  gpu::Pipeline sampleIdsPipeline;
   static ShadePass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
+  void createMsaa(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width, uint32_t height,
-              bool writeAttributes) const;
+              Variant variant) const;
+  void recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
+                       uint32_t height) const;
 };
 
 }  // namespace visbuf::passes

@@ -19,7 +19,7 @@ VkCullModeFlags drawListCullMode(uint32_t list) {
 }
 
 VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
-                                      uint32_t listMask) {
+                                      uint32_t listMask, VkSampleCountFlagBits samples) {
   VisibilityPass p;
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
@@ -30,6 +30,7 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
     d.textureClasses = spec.textureClasses;
     d.skinned = spec.skinned;
     d.cullMode = drawListCullMode(list);
+    d.samples = samples;
     d.vertexShader = prefix + ".vert";
     const char* suffix[VariantCount] = {".frag", "_wide.frag", "_overdraw.frag", "_wide_overdraw.frag"};
     for (int v = 0; v < VariantCount; ++v) {
@@ -42,7 +43,7 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
 }
 
 void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
-                    bool load, const gpu::Image* second, VkClearColorValue secondClear) {
+                    bool load, const gpu::Image* second, VkClearColorValue secondClear, const gpu::Image* resolve) {
   VkRenderingAttachmentInfo cas[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
                                       {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
   for (int i = 0; i < 2; ++i) {
@@ -51,6 +52,11 @@ void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorVa
     cas[i].loadOp = load ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
     cas[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     cas[i].clearValue.color = i == 0 ? clear : secondClear;
+  }
+  if (resolve) {
+    cas[0].resolveMode = VK_RESOLVE_MODE_AVERAGE_BIT;
+    cas[0].resolveImageView = resolve->view();
+    cas[0].resolveImageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
   }
   VkRenderingAttachmentInfo da{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   da.imageView = depth.view();

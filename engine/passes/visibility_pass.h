@@ -43,13 +43,17 @@ struct VisibilityPass {
   // Created only for the lists in listMask (bit l: list l has objects in the scene).
   enum Variant { Narrow, Wide, NarrowOverdraw, WideOverdraw, VariantCount };
   std::array<std::array<gpu::Pipeline, VariantCount>, DRAW_LISTS> pipelines;
-  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask);
+  // samples: rasterisation samples of the targets it will draw into (MSAA: multisampled IDs and depth).
+  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
+                               VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
 };
 
 // Begins dynamic rendering on colour + depth, cleared (depth to 0, reverse-Z) or loaded; shared by the
-// visibility and forward passes.
+// visibility and forward passes. resolve: a single-sample image that the (multisampled) colour attachment is
+// averaged into at the end of the rendering (hardware MSAA resolve; COLOR_ATTACHMENT_OPTIMAL).
 void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
-                    bool load = false, const gpu::Image* second = nullptr, VkClearColorValue secondClear = {});
+                    bool load = false, const gpu::Image* second = nullptr, VkClearColorValue secondClear = {},
+                    const gpu::Image* resolve = nullptr);
 
 }  // namespace visbuf::passes

@@ -18,6 +18,7 @@
 #include <cstring>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <glm/gtc/packing.hpp>
 
 #include "gpu/check.h"
@@ -62,6 +63,32 @@ IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw,
   const uint64_t largest = ((uint64_t(drawCapacity) - 1) << e.triangleBits | ((1ull << e.triangleBits) - 1)) + 1;
   e.wide = forceWide || e.slotBits + e.triangleBits > 32 || largest > 0xFFFFFFFFull;
   return e;
+}
+
+std::vector<uint32_t> supportedMsaaSamples(gpu::Device& device) {
+  const VkPhysicalDeviceLimits& l = device.properties().limits;
+  VkSampleCountFlags counts = l.framebufferColorSampleCounts & l.framebufferDepthSampleCounts &
+                              l.sampledImageIntegerSampleCounts & l.sampledImageDepthSampleCounts;
+  // And each target format with its usage (integer colour attachments included: the limits are minimums, a
+  // format may report fewer).
+  const struct {
+    VkFormat format;
+    VkImageUsageFlags usage;
+  } targets[] = {{VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT},
+                 {VK_FORMAT_R32G32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT},
+                 {VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT},
+                 {VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT}};
+  for (const auto& t : targets) {
+    VkImageFormatProperties fp{};
+    if (vkGetPhysicalDeviceImageFormatProperties(device.physicalDevice(), t.format, VK_IMAGE_TYPE_2D,
+                                                 VK_IMAGE_TILING_OPTIMAL, t.usage, 0, &fp) != VK_SUCCESS)
+      counts = 0;
+    counts &= fp.sampleCounts;
+  }
+  std::vector<uint32_t> out{1};
+  for (uint32_t n : {2u, 4u})
+    if ((counts & n) && l.standardSampleLocations) out.push_back(n);
+  return out;
 }
 
 namespace {
@@ -143,6 +170,16 @@ struct Renderer::Impl {
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Buffer statsReadback;
   gpu::Image ids, depth, color;
+  // MSAA (FrameOptions::msaa > 1): multisampled IDs and depth (visbuf, forward shares the depth) and forward
+  // colour, created by the first frame at a count (msaaSamples) and dropped by a resize; the single-sample ids and
+  // depth above stay allocated (the descriptor set's stand-ins). Pipelines for that count likewise.
+  uint32_t msaaSamples = 0;  // sample count of idsMs / depthMs (0: none)
+  gpu::Image idsMs, depthMs, colorMs;
+  passes::VisibilityPass visibilityMs;
+  passes::ForwardPass forwardMs;
+  uint32_t visibilityMsSamples = 0, forwardMsSamples = 0;
+  bool descriptorsMsaa = false;  // BINDING_VISIBILITY / BINDING_LIGHT_DEPTH hold the multisampled views
+  std::vector<uint32_t> msaaCounts;  // supportedMsaaSamples(device)
   gpu::Image overdraw;    // r32ui, GENERAL: raster writes per pixel (countOverdraw)
   gpu::Image forwardIds;  // forward path with readIds only (rg32ui: object + 1, triangle); lazily created
   gpu::Buffer colorReadback, idsReadback, drawsReadback;
@@ -247,6 +284,11 @@ struct Renderer::Impl {
     const VkDeviceSize pixels = VkDeviceSize(width) * height;
     colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
     forwardIds.reset();
+    idsMs.reset();
+    depthMs.reset();
+    colorMs.reset();
+    msaaSamples = 0;
+    descriptorsMsaa = false;
     for (gpu::Image& t : gbufferTargets) t.reset();
     overdrawReadback.reset();
     resizeAttributes(ATTRIBUTE_FLOATS * sizeof(float));
@@ -304,7 +346,9 @@ struct Renderer::Impl {
       x.pBufferInfo = &bufs[i];
       w.push_back(x);
     }
-    VkDescriptorImageInfo idInfo{sampler, ids.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    // MSAA frames: the shading pass and the light culling read the multisampled targets (only those variants
+    // declare multisampled images; every other shader ignores these bindings).
+    VkDescriptorImageInfo idInfo{sampler, (descriptorsMsaa ? idsMs : ids).view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     VkDescriptorImageInfo colorInfo{VK_NULL_HANDLE, color.view(), VK_IMAGE_LAYOUT_GENERAL};
     VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     x.dstSet = set;
@@ -369,7 +413,8 @@ struct Renderer::Impl {
                                                         : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
     VkDescriptorBufferInfo tileInfo = hasPointLights() ? VkDescriptorBufferInfo{lightCull.tiles().handle(), 0, VK_WHOLE_SIZE}
                                                        : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
-    VkDescriptorImageInfo lightDepthInfo{sampler, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkDescriptorImageInfo lightDepthInfo{sampler, (descriptorsMsaa ? depthMs : depth).view(),
+                                         VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     x.pImageInfo = nullptr;
     x.dstBinding = BINDING_LIGHTS;
@@ -399,6 +444,65 @@ struct Renderer::Impl {
                                      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                                      VK_IMAGE_ASPECT_COLOR_BIT);
     writeDescriptors();
+  }
+
+  // FrameOptions::msaa against the device and the frame's other options (what MSAA does not cover is refused).
+  Status checkMsaa(const FrameOptions& o) const {
+    if (o.msaa == 1) return {};
+    if (o.msaa != 2 && o.msaa != 4)
+      return makeError(ErrorCode::InvalidArgument, fmt::format("msaa {}: the sample count must be 1, 2 or 4", o.msaa));
+    if (std::find(msaaCounts.begin(), msaaCounts.end(), o.msaa) == msaaCounts.end())
+      return makeError(ErrorCode::Unsupported,
+                       fmt::format("msaa {} is not supported by {}: supported sample counts (for the r32ui/rg32ui ID, "
+                                   "D32 depth and rgba16f colour targets) are {}",
+                                   o.msaa, device.name(), fmt::join(msaaCounts, ", ")));
+    const char* refused = o.path == RenderPath::GBuffer ? "the G-buffer path"
+                          : !blendObjects.empty()       ? "scenes with BLEND materials (the transparency pass)"
+                          : o.countOverdraw             ? "the overdraw count (countOverdraw, --view overdraw)"
+                          : o.readAttributes            ? "the attribute readback (readAttributes)"
+                          : o.readIds && o.path == RenderPath::Forward ? "the forward path's ID target (readIds)"
+                                                                        : nullptr;
+    if (refused)
+      return makeError(ErrorCode::Unsupported,
+                       fmt::format("msaa {}: {} is single-sampled only; use msaa 1", o.msaa, refused));
+    return {};
+  }
+
+  // The multisampled targets and pipelines of this frame's sample count (created once per count and size), and
+  // the descriptors that the shading and light culling passes read them through.
+  void prepareMsaa(const FrameOptions& options) {
+    const bool msaa = options.msaa > 1;
+    const auto samples = VkSampleCountFlagBits(options.msaa);
+    if (msaa && msaaSamples != options.msaa) {
+      idsMs = gpu::Image(device, ids.format(), config.width, config.height,
+                         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT, 1,
+                         0, samples);
+      depthMs = gpu::Image(device, VK_FORMAT_D32_SFLOAT, config.width, config.height,
+                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                           VK_IMAGE_ASPECT_DEPTH_BIT, 1, 0, samples);
+      colorMs.reset();
+      pyramid.resize(depth, &depthMs);  // level 0 from either depth
+      msaaSamples = options.msaa;
+      descriptorsMsaa = !msaa;  // the pyramid and the ID views changed: rewrite below
+    }
+    if (msaa && options.path == RenderPath::Visbuf) {
+      if (visibilityMsSamples != options.msaa)
+        visibilityMs = passes::VisibilityPass::create(device, pipelineLayout, textured, listMask, samples);
+      visibilityMsSamples = options.msaa;
+      shade.createMsaa(device, pipelineLayout, textured);
+    }
+    if (msaa && options.path == RenderPath::Forward) {
+      if (forwardMsSamples != options.msaa)
+        forwardMs = passes::ForwardPass::create(device, pipelineLayout, textured, listMask, samples);
+      forwardMsSamples = options.msaa;
+      if (!colorMs)
+        colorMs = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, config.width, config.height,
+                             VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, 1, 0, samples);
+    }
+    if (descriptorsMsaa != msaa) {
+      descriptorsMsaa = msaa;
+      writeDescriptors();
+    }
   }
 
   void beginCmd(VkCommandBuffer cmd) {
@@ -440,6 +544,7 @@ struct Renderer::Impl {
     f.wideIds = encoding.wide ? 1u : 0u;
     f.objectSplit = objectSplit;
     f.vertexWindowShift = vertexShift;
+    f.msaaSamples = options.msaa;
     return f;
   }
 
@@ -582,6 +687,10 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
   constexpr VkAccessFlags2 kDepthAccess =
       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+  // MSAA: the multisampled targets (prepareMsaa) replace the single-sample ones in every pass of the frame.
+  const bool msaa = options.msaa > 1;
+  const gpu::Image& idTarget = msaa ? idsMs : ids;
+  const gpu::Image& depthTarget = msaa ? depthMs : depth;
 
   auto recordCull = [&](uint32_t phase, const char* name) {
     VkCommandBuffer cmd = cmds[used++];
@@ -619,10 +728,10 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                             VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                             VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       else
-        gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+        gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
                           VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+      gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                         kDepthStages | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
     } else {
       // Late phase: keep the early phase's IDs and depth (the pyramid pass read the depth).
@@ -632,13 +741,14 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       if (frozen || !usePyramid)  // the depth stayed an attachment
         gpu::memoryBarrier(cmd, kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kDepthStages, kDepthAccess);
       else
-        gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
+        gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0,
+                          kDepthStages, kDepthAccess);
     }
     uint32_t t = timestamps->begin(cmd, name);
     // The same draw lists for either raster; only the targets differ.
     auto common = [&](auto& in) {
-      in.depth = &depth;
+      in.depth = &depthTarget;
       in.indexBuffer = gpuScene.indices.handle();
       in.draws = draws.handle();
       in.drawCount = stats.handle();
@@ -653,9 +763,9 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       gbuffer.record(cmd, pipelineLayout, set, in);
     } else {
       passes::VisibilityInputs in;
-      in.ids = &ids;
+      in.ids = &idTarget;
       common(in);
-      visibility.record(cmd, pipelineLayout, set, in);
+      (msaa ? visibilityMs : visibility).record(cmd, pipelineLayout, set, in);
     }
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
@@ -681,14 +791,14 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   if (!frozen && occlusion && usePyramid) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
-    gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+    gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                       kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                       VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     // The previous frame's late cull read the pyramid that this pass overwrites.
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     uint32_t t = timestamps->begin(cmd, "depth pyramid");
-    pyramid.record(cmd);
+    pyramid.record(cmd, msaa);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
     recordCull(CULL_PHASE_LATE, "cull late");
@@ -702,7 +812,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   if (cullLights(options)) {  // tile light lists from the final depth
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
-    gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+    gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                       kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                       VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     // The previous frame's shading read the lists this pass rewrites.
@@ -710,7 +820,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                        VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     uint32_t t = timestamps->begin(cmd, "light cull");
-    lightCull.record(cmd, pipelineLayout, set);
+    lightCull.record(cmd, pipelineLayout, set, msaa);
     timestamps->end(cmd, t);
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT,
@@ -721,7 +831,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   // shade
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
-  gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+  gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
@@ -732,14 +842,24 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   if (options.readAttributes) {
     vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   }
-  shade.record(cmd, pipelineLayout, set, w, h, options.readAttributes);
+  if (msaa) {  // its own counter (a frozen frame keeps the cull counts, not this one); reads the cleared colour
+    vkCmdFillBuffer(cmd, stats.handle(), STAT_PER_SAMPLE_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  shade.record(cmd, pipelineLayout, set, w, h,
+               msaa                     ? passes::ShadePass::Msaa
+               : options.readAttributes ? passes::ShadePass::Attributes
+                                        : passes::ShadePass::Plain);
   timestamps->end(cmd, t);
+  if (msaa && options.readIds) shade.recordSampleIds(cmd, pipelineLayout, set, w, h);  // (untimed) -> attributes
   VK_CHECK(vkEndCommandBuffer(cmd));
 }
 
@@ -788,6 +908,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (options.readIds && options.path == RenderPath::GBuffer)
     return makeError(ErrorCode::InvalidArgument, "the G-buffer path writes no IDs (readIds: visbuf or forward)");
   if (options.path == RenderPath::GBuffer) ensureGBufferTargets();  // once: not part of the frame's CPU time
+  if (Status s = checkMsaa(options); !s.ok()) return s.error();
+  prepareMsaa(options);  // once per sample count (and size)
+  const bool msaa = options.msaa > 1;
 
   const auto t0 = Clock::now();
   const uint32_t w = config.width, h = config.height;
@@ -797,10 +920,14 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
   const bool readAttributes = options.readAttributes && gpuCulled;  // G-buffer: position and depth only
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
-  if (readAttributes && attributes.size() < attributeBytes) {  // no frame is in flight: safe to rewrite the set
-    resizeAttributes(attributeBytes);
+  // MSAA readIds: the sample-ID copy goes through the attribute buffer (2 uints per sample).
+  const VkDeviceSize sampleIdBytes = msaa && options.readIds ? VkDeviceSize(w) * h * options.msaa * 8 : 0;
+  if (std::max(readAttributes ? attributeBytes : 0, sampleIdBytes) > attributes.size()) {
+    resizeAttributes(std::max(attributeBytes, sampleIdBytes));  // no frame is in flight: safe to rewrite the set
     writeDescriptors();
   }
+  if (idsReadback.size() < sampleIdBytes)
+    idsReadback = gpu::Buffer(device, sampleIdBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
   FrameMath math = computeFrameMath(camera, w, h);
   gpu::FrameData fd = frameData(camera, math, options);
   std::memcpy(frameBuffer.mapped(), &fd, sizeof(fd));
@@ -818,6 +945,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.pointLights = uint32_t(scene.pointLights.size());
   st.lightBytes = hasPointLights() ? pointLights.size() + lightCull.tiles().size() : 0;
   st.lightsCulled = cullLights(options);
+  st.msaaSamples = options.msaa;
 
   uint32_t used = 0;
   // setup: queries, counters
@@ -872,7 +1000,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.rasterBytesPerFragment =
         (options.path == RenderPath::GBuffer ? gbuffer.formats.bytesPerPixel() : gpu::formatBytes(ids.format())) +
         4 /*depth*/;
-    st.targetBytesPerPixel = st.rasterBytesPerFragment + 8 /*colour*/;
+    st.targetBytesPerPixel = st.rasterBytesPerFragment * options.msaa + 8 /*colour*/;  // raster targets per sample
   } else {
     std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
     if (options.readDraws)
@@ -885,10 +1013,17 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
       }
     cmd = cmds[used++];
     beginCmd(cmd);
+    // MSAA: multisampled colour + depth, the colour averaged into `color` at the end (hardware resolve).
+    const gpu::Image& colorTarget = msaa ? colorMs : color;
+    const gpu::Image& depthTarget = msaa ? depthMs : depth;
     gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                       VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-    gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+    if (msaa)
+      gpu::imageBarrier(cmd, colorMs, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, 0,
+                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                       VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
                       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
                       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
@@ -902,11 +1037,12 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
                         VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
     }
-    forward.record(cmd, pipelineLayout, set, color, kBackground, depth, gpuScene.indices.handle(), fdraws,
-                   options.readIds ? &forwardIds : nullptr, options.countOverdraw);
+    (msaa ? forwardMs : forward)
+        .record(cmd, pipelineLayout, set, colorTarget, kBackground, depthTarget, gpuScene.indices.handle(), fdraws,
+                options.readIds ? &forwardIds : nullptr, options.countOverdraw, msaa ? &color : nullptr);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
-    st.targetBytesPerPixel = 4 /*depth*/ + 8 /*colour*/;
+    st.targetBytesPerPixel = (4 /*depth*/ + 8 /*colour*/) * options.msaa + (msaa ? 8 /*resolved colour*/ : 0);
     st.rasterBytesPerFragment = 4 /*depth*/ + 8 /*colour*/;
   }
   if (!blendObjects.empty()) recordTransparent(camera, math, options, st, used);
@@ -980,7 +1116,10 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     VkBufferCopy ac{0, 0, attributeBytes};
     vkCmdCopyBuffer(cmd, attributes.handle(), attributesReadback.handle(), 1, &ac);
   }
-  if (readIds && options.path == RenderPath::Visbuf) {
+  if (readIds && options.path == RenderPath::Visbuf && msaa) {  // the sample-ID copy (shading command buffer)
+    VkBufferCopy c{0, 0, sampleIdBytes};
+    vkCmdCopyBuffer(cmd, attributes.handle(), idsReadback.handle(), 1, &c);
+  } else if (readIds && options.path == RenderPath::Visbuf) {
     gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
                       VK_ACCESS_2_TRANSFER_READ_BIT);
@@ -1013,6 +1152,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   for (auto& p : st.passMs) st.gpuMs += p.second;
   if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
+    st.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
     st.objectsTested = gpuScene.objectCount;
     st.frustumCulled = s[STAT_FRUSTUM_CULLED];
     st.occlusionCulled = s[STAT_OCCLUSION_CULLED];
@@ -1086,7 +1226,8 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
     result.ids.assign(raw, raw + pixels * 2);
   } else if (readIds) {
-    result.ids.assign(pixels * 2, 0);
+    const size_t samples = size_t(options.msaa);  // MSAA: every sample (2 uints each, like wide IDs)
+    result.ids.assign(pixels * samples * 2, 0);
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
     auto slotWritten = [&](uint32_t slot) {  // within the part of its list's region the cull pass wrote
       if (slot >= 2 * capacity) return false;
@@ -1097,15 +1238,16 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     };
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
-    for (size_t i = 0; i < pixels; ++i) {
+    const size_t stride = encoding.wide || msaa ? 2 : 1;  // the sample-ID copy writes (x, y) even for r32ui
+    for (size_t i = 0; i < pixels * samples; ++i) {
       uint32_t slot, tri;
       if (encoding.wide) {
         if (raw[2 * i] == VIS_NOTHING) continue;
         slot = raw[2 * i] - 1;
         tri = raw[2 * i + 1];
       } else {
-        if (raw[i] == VIS_NOTHING) continue;
-        uint32_t v = raw[i] - 1;
+        if (raw[stride * i] == VIS_NOTHING) continue;
+        uint32_t v = raw[stride * i] - 1;
         slot = v >> encoding.triangleBits;
         tri = v & ((1u << encoding.triangleBits) - 1u);
       }
@@ -1173,6 +1315,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                      fmt::format("draw capacity {} needs {:.1f} MiB, over maxStorageBufferRange", impl->capacity,
                                  drawBytes / 1048576.0));
   impl->encoding = chooseIdEncoding(2 * impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
+  impl->msaaCounts = supportedMsaaSamples(device);
   impl->createLayouts();
   // Descriptor windows only when needed: a scene whose objects and vertices fit one range reads them directly.
   const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||

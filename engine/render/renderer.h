@@ -70,6 +70,13 @@ struct FrameOptions {
                                 // false: every pixel loops over every point light (the reference, no culling)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
+  // Samples per pixel: 1 (no MSAA), 2 or 4 where supportedMsaaSamples() lists it. visbuf: multisampled ID and
+  // depth targets, each pixel shaded once where its samples agree and once per distinct ID where they differ;
+  // forward: multisampled colour + depth with a hardware resolve (the reference). Refused (InvalidArgument) for the
+  // G-buffer path, scenes with BLEND materials (the transparency pass is single-sampled), countOverdraw,
+  // readAttributes and the forward path's readIds. The multisampled targets and pipelines are created by the
+  // first frame that asks for a count.
+  uint32_t msaa = 1;
 };
 
 // How the visibility target's bits are split (DESIGN.md property 4).
@@ -129,12 +136,15 @@ struct FrameStats {
   // Clears are not counted. 0 without countOverdraw.
   double rasterWritesPerPixel = 0.0;
   double bytesWrittenPerPixel = 0.0;
+  uint32_t msaaSamples = 1;      // samples per pixel of this frame's raster targets
+  uint32_t perSamplePixels = 0;  // visbuf MSAA: pixels whose samples differ, shaded once per distinct ID
 };
 
 struct FrameResult {
   uint32_t width = 0, height = 0;
   std::vector<float> color;     // RGBA, linear, row-major, top row first
-  std::vector<uint32_t> ids;    // 2 per pixel: object ID + 1 (0 = nothing), triangle index in its LOD
+  std::vector<uint32_t> ids;    // 2 per pixel: object ID + 1 (0 = nothing), triangle index in its LOD; visbuf
+                                // MSAA: 2 per sample, [(pixel * samples + sample) * 2 + {0, 1}]
   std::vector<uint32_t> drawnObjects;  // with readDraws: object IDs drawn this frame (any order)
   std::vector<uint32_t> drawnLods;     // with readDraws: the LOD level of each drawn object (parallel)
   struct PyramidLevel {
@@ -173,6 +183,11 @@ class Renderer {
   explicit Renderer(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+// The FrameOptions::msaa values this device can render (ascending, always 1): counts among 2 and 4 that every
+// multisampled target supports (r32ui / rg32ui IDs, D32 depth, rgba16f colour: attachment + sampled), with the
+// standard sample locations. Lavapipe: 1, 4.
+std::vector<uint32_t> supportedMsaaSamples(gpu::Device& device);
 
 // Chooses the ID split for a draw capacity and the largest triangle count of one draw.
 IdEncoding chooseIdEncoding(uint32_t drawCapacity, uint32_t maxTrianglesPerDraw, bool forceWide);

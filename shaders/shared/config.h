@@ -14,6 +14,10 @@
 // Reserved visibility value: nothing drawn at this pixel. Encoded IDs are (slot << triBits | tri) + 1.
 #define VIS_NOTHING 0u
 
+// Multisampled visibility and forward targets: 1 (off), 2 or 4 samples per pixel at the standard sample
+// locations (Vulkan spec, "Multisampling"), where the device supports them for every target format.
+#define MAX_MSAA_SAMPLES 4
+
 // Cull modes (FrameData.cullMode).
 #define CULL_NONE 0u
 #define CULL_FRUSTUM 1u
@@ -39,7 +43,10 @@
 #define STAT_LOD_HISTOGRAM 8       // MAX_LODS counters: draws per LOD level
 #define STAT_LIST_DRAWS (STAT_LOD_HISTOGRAM + MAX_LODS)  // 2 x DRAW_LISTS: draws appended to list l in phase p
                                                          // at [p * DRAW_LISTS + l] (the indirect draw counts)
-#define STAT_COUNT (STAT_LIST_DRAWS + 2 * DRAW_LISTS)
+// MSAA frames (FrameData.msaaSamples > 1): pixels whose samples carry more than one ID (or some nothing), which
+// the shading pass shades once per distinct ID (shaders/msaa_samples.glsl). Reset by the shading pass itself.
+#define STAT_PER_SAMPLE_PIXELS (STAT_LIST_DRAWS + 2 * DRAW_LISTS)
+#define STAT_COUNT (STAT_PER_SAMPLE_PIXELS + 1)
 
 // Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
 // state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and

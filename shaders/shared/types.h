@@ -152,7 +152,7 @@ struct FrameData {
   uint vertexWindowShift;  // vertex i is in window i >> shift (BINDING_VERTICES, BINDING_VERTICES_1..3)
   uint pointLightCount;    // PointLightData records in BINDING_LIGHTS (0: none bound, none read)
   uint lightTilesX;        // tiles per row of BINDING_LIGHT_TILES when this frame built them; 0: every light
-  uint pad3;
+  uint msaaSamples;        // raster samples per pixel of the visibility/forward targets: 1 (no MSAA), 2, 4
 };
 
 // A KHR_lights_punctual point light (32 bytes): position relative to the scene anchor (like object

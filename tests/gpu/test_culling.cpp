@@ -127,8 +127,9 @@ struct PathEvent {
 // Renders every camera of the path with `mode` and with no culling at all (LOD off) and requires
 // identical decoded ID images. Occlusion mode keeps its history across frames, so the path exercises
 // the two-phase scheme with stale history, cuts and resizes.
+// msaa > 1: every sample's ID is compared (the sub-pixel test and the pyramid must keep any covered sample).
 void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint32_t h,
-                     CullMode mode = CullMode::Frustum, std::vector<PathEvent> events = {}) {
+                     CullMode mode = CullMode::Frustum, std::vector<PathEvent> events = {}, uint32_t msaa = 1) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
@@ -139,6 +140,7 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
   on.readIds = off.readIds = true;
   on.cull = mode;
   off.cull = CullMode::None;
+  on.msaa = off.msaa = msaa;
   size_t covered = 0, culledTotal = 0, occludedTotal = 0, drawnTotal = 0, visibleTotal = 0;
   int index = 0;
   for (const Camera& cam : cameraPath(scene, frames, city)) {
@@ -167,6 +169,7 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
     ASSERT_EQ(mismatches, 0u) << "frame " << index << ": culling changed " << mismatches << " pixels";
     ++index;
   }
+  if (msaa > 1) std::printf("msaa %u, every sample: ", msaa);
   std::printf("%s %ux%u %s: %d frames identical to no culling (%zu covered pixels, %zu objects culled, %zu "
               "occluded; drawn %zu vs %zu visible in the image = %.2fx)\n",
               city ? "city" : "field", w, h, cullModeName(mode), frames, covered, culledTotal, occludedTotal,
@@ -193,6 +196,16 @@ TEST(Occlusion, IdImageUnchangedByOcclusionCullingCity) {
 TEST(Occlusion, IdImageUnchangedByOcclusionCullingField) {
   checkIdEquality(fieldScene(1500, true), false, 100, 317, 229, CullMode::Occlusion,
                   {{50, 211, 97, false}, {75, 0, 0, true}});
+}
+// With MSAA: the pyramid is the farthest depth over each pixel's samples and the sub-pixel test keeps bounds that
+// can cover a sample but no pixel centre; every sample's ID must still equal the one with no culling. (The largest
+// supported count; lavapipe: 4.)
+TEST(Occlusion, IdImageUnchangedByOcclusionCullingMsaa) {
+  const uint32_t msaa = supportedMsaaSamples(test::testDevice()).back();
+  if (msaa == 1) GTEST_SKIP() << "no MSAA on this device";
+  checkIdEquality(cityScene(1200), true, 12, 211, 157, CullMode::Occlusion, {{5, 0, 0, true}, {8, 160, 90, false}},
+                  msaa);
+  checkIdEquality(fieldScene(1500, true), false, 16, 317, 229, CullMode::Occlusion, {{8, 0, 0, true}}, msaa);
 }
 // The depth pyramid at sizes with odd, non-power-of-two and degenerate levels.
 TEST(Occlusion, IdImageUnchangedAtAwkwardResolutions) {
