@@ -7,11 +7,20 @@
 #extension GL_EXT_samplerless_texture_functions : require
 #include "material.glsl"
 #include "shared/barycentrics.h"
+#include "visibility_id.glsl"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
 layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
-layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
-layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
+#if CLASSIFIED
+// Classified shading (classify_pass): one indirect dispatch per material, one workgroup per tile of its list; the
+// lanes whose pixel shows another material leave, and the material index is uniform over the dispatch.
+layout(push_constant) uniform Push { PassConstants pc; };
+layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) readonly buffer MaterialTileBlock {
+  uint header[CLASSIFY_HEADER];
+  MaterialTiles materialTiles[];
+};
+layout(std430, set = 0, binding = BINDING_TILE_LIST) readonly buffer TileListBlock { uint tileList[]; };
+#endif
 layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
 #if WRITE_ATTRIBUTES
 layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
@@ -39,21 +48,21 @@ bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
 }
 
 void main() {
+#if CLASSIFIED
+  uint tile = tileList[materialTiles[pc.material].first + gl_WorkGroupID.x];
+  ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
+#else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+#endif
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
-  uvec2 raw = texelFetch(visibility, p, 0).xy;
-  if (raw.x == VIS_NOTHING) return;
   uint slot, tri;
-  if (frame.wideIds != 0u) {
-    slot = raw.x - 1u;
-    tri = raw.y;
-  } else {
-    uint v = raw.x - 1u;
-    slot = v >> frame.triangleBits;
-    tri = v & ((1u << frame.triangleBits) - 1u);
-  }
+  if (!decodeVisibility(texelFetch(visibility, p, 0).xy, slot, tri)) return;
   DrawCommand d = draws[slot];
   ObjectData o = objectAt(d.firstInstance);
+#if CLASSIFIED
+  if (o.materialIndex != pc.material) return;
+  o.materialIndex = pc.material;  // the same value, now known to be uniform over the dispatch
+#endif
   uint base = d.firstIndex + 3u * tri;
   Vertex v0 = vertexAt(indices[base + 0u] + uint(d.vertexOffset));
   Vertex v1 = vertexAt(indices[base + 1u] + uint(d.vertexOffset));

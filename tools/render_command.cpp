@@ -59,6 +59,11 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                 "also render the same frame shading every pixel with every point light (no tile lists) and report "
                 "the error against it");
   sub->add_flag("--all-lights", c.allLights, "shade every pixel with every point light (no light cull pass)");
+  sub->add_option("--shading", c.shading,
+                  "visbuf shading: auto (the device type's default) | uber (one dispatch) | classified (per-material "
+                  "tile lists, one indirect dispatch per material)")
+      ->check(CLI::IsMember({"auto", "uber", "classified"}))
+      ->capture_default_str();
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
                 "frame's draw lists (shows what the first camera culled)");
@@ -100,6 +105,7 @@ int runRender(const RenderCommand& c) {
   fo.cull = c.cull == "none" ? CullMode::None : c.cull == "frustum" ? CullMode::Frustum : CullMode::Occlusion;
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
   fo.tiledLights = !c.allLights;
+  fo.shading = parseShadingMode(c.shading);
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
     std::vector<FrameStats> runs;

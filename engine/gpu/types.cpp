@@ -27,6 +27,8 @@ static_assert(offsetof(FrameData, projX) == 288);
 static_assert(sizeof(PointLightData) == 32);
 static_assert(offsetof(FrameData, pointLightCount) == 308);
 static_assert(sizeof(PassConstants) == 16);
+static_assert(sizeof(MaterialTiles) == 32);
+static_assert(offsetof(MaterialTiles, pixels) == 12, "the first three words are VkDispatchIndirectCommand");
 static_assert(sizeof(PyramidConstants) == 32);
 static_assert(offsetof(ObjectData, meshIndex) == 48);
 static_assert(offsetof(MeshData, lods) == 32);

@@ -24,9 +24,17 @@ namespace visbuf {
 // (the baseline of the benchmark; no IDs).
 enum class RenderPath { Visbuf, Forward, GBuffer };
 enum class CullMode { None, Frustum, Occlusion };
+// How the visbuf path's shading pass runs: one "ubershader" dispatch over every pixel (Uber), or material
+// classification followed by one indirect dispatch per material (Classified, passes/classify_pass.h). Auto:
+// the faster one for the device type, as measured by the benchmark (docs/benchmarks.md, defaultShading).
+enum class ShadingMode { Auto, Uber, Classified };
 
 const char* renderPathName(RenderPath path);
 const char* cullModeName(CullMode mode);
+const char* shadingModeName(ShadingMode mode);
+ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified", anything else: Auto
+// What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs).
+ShadingMode defaultShading(const gpu::Device& device);
 
 struct RendererConfig {
   uint32_t width = 1920;
@@ -54,6 +62,8 @@ struct FrameOptions {
                                 // false: every pixel loops over every point light (the reference, no culling)
   bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
+  ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes always uses the ubershader (its
+                                            // attributes variant)
 };
 
 // How the visibility target's bits are split (DESIGN.md property 4).
@@ -108,10 +118,18 @@ struct FrameStats {
   // depth.
   uint32_t rasterBytesPerFragment = 0;
   // With countOverdraw: depth-passing raster fragments per pixel (all pixels), and the bytes written per pixel =
-  // fragments x rasterBytesPerFragment + the resolve's colour write (visbuf/G-buffer: 8 per covered pixel).
+  // fragments x rasterBytesPerFragment + the resolve's colour write (visbuf/G-buffer: 8 per covered pixel) + classified
+  // shading's tile list and material records.
   // Clears are not counted. 0 without countOverdraw.
   double rasterWritesPerPixel = 0.0;
   double bytesWrittenPerPixel = 0.0;
+  // Visbuf shading: the mode used. Classified only: the materials with pixels, the (tile, material) pairs (=
+  // workgroups of all shading dispatches) and, per scene material, its 8x8 tiles and pixels on screen.
+  ShadingMode shading = ShadingMode::Uber;
+  uint32_t materialsPresent = 0;
+  uint32_t classifiedTiles = 0;
+  std::vector<uint32_t> materialTiles;
+  std::vector<uint32_t> materialPixels;
 };
 
 struct FrameResult {

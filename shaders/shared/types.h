@@ -165,11 +165,24 @@ struct SkinInstance {
   vec4 bounds;        // skin space: xyz centre, w radius, contains every skinned vertex of the pose
 };
 
+// Material classification: one record per material (32 bytes; config.h BINDING_MATERIAL_TILES). The first three
+// words are the VkDispatchIndirectCommand of the material's shading dispatch (one workgroup per listed tile).
+struct MaterialTiles {
+  uint tiles;    // tiles holding at least one of its pixels (= the dispatch's groupCountX)
+  uint groupsY;  // 1 (written by the scan)
+  uint groupsZ;  // 1
+  uint pixels;   // its pixels on screen
+  uint first;    // its first entry in the tile list (exclusive prefix sum of `tiles`)
+  uint cursor;   // entries written so far by the scatter
+  uint pad0;
+  uint pad1;
+};
+
 // Push constants of the cull, visibility and depth pyramid passes (16 bytes).
 struct PassConstants {
   uint phase;     // CULL_PHASE_EARLY / CULL_PHASE_LATE
   uint drawBase;  // slot of this phase's first draw in the draw buffer (late draws follow the early ones)
-  uint pad0;
+  uint material;  // classified shading: the material of this dispatch; classification's scan: the material count
   uint pad1;
 };
 
