@@ -3,11 +3,13 @@
 #   untextured (default): visbuf, gbuffer and forward on city (10,000 objects, bench's avenue walk) and DamagedHelmet
 #     (orbit), at 1920x1080 and 3840x2160, frustum and occlusion culling, LOD 1 px.
 #   --textured: the same paths with textures, visbuf with both shading modes (ubershader, material classification),
-#     frustum culling, LOD 1 px, on an overdraw-heavy many-material scene (field of FIELD_OBJECTS knots with 256
-#     generated PBR materials, 3 of 4 textured) and the low-overdraw DamagedHelmet (one textured material).
+#     frustum culling, LOD 1 px, on an overdraw-heavy many-material scene (foliage-opaque: CARDS double-sided cards
+#     with 256 generated PBR materials, 3 of 4 textured) and the low-overdraw DamagedHelmet (one textured material;
+#     VISBUF_HELMET may name a pack baked from it, as the GPU bundle does: the GPU build has no image decoder).
 # Usage: scripts/gbuffer_bench.sh [--device cpu|gpu] [--textured] [OUTDIR]     (default OUTDIR: gbuffer-bench)
 # VISBUF_BIN and VISBUF_HELMET override the program and the helmet's path (a self-contained GPU bundle);
-# FIELD_OBJECTS the field's object count (default 4000: a lavapipe 4K run of the textured set stays within minutes).
+# CARDS: the foliage card count (default 40000: ~3.5 raster writes per pixel, and a lavapipe 4K run of the textured
+# set stays within minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=cpu out=gbuffer-bench textured=0
@@ -24,14 +26,14 @@ frames="--warmup 2 --frames 5"                         # lavapipe: seconds per f
 [ "$device" = cpu ] || frames="--warmup 3 --frames 10"
 mkdir -p "$out"
 if ((textured)); then
-  [ "$device" = cpu ] && frames="--warmup 1 --frames 3"
+  [ "$device" = cpu ] && frames="--warmup 1 --frames 2"  # lavapipe: the 4K ubershader frame takes minutes
   for size in 1920x1080 3840x2160; do
-    "$bin" bench --device "$device" --scene field --objects "${FIELD_OBJECTS:-4000}" --materials 256 --size $size \
-      --paths visbuf,gbuffer,forward --shading uber,classified --cull frustum --lod 1 $frames -o "$out/field_$size"
+    "$bin" bench --device "$device" --scene foliage-opaque --objects "${CARDS:-40000}" --materials 256 --size $size \
+      --paths visbuf,gbuffer,forward --shading uber,classified --cull frustum --lod 1 $frames -o "$out/foliage_$size"
     "$bin" bench --device "$device" --scene "$helmet" --size $size --paths visbuf,gbuffer,forward \
       --shading uber,classified --cull frustum --lod 1 $frames -o "$out/helmet_$size"
   done
-  python3 scripts/gbuffer_table.py "$out"/field_*/bench.json "$out"/helmet_*/bench.json | tee "$out/table.md"
+  python3 scripts/gbuffer_table.py "$out"/foliage_*/bench.json "$out"/helmet_*/bench.json | tee "$out/table.md"
   exit
 fi
 for size in 1920x1080 3840x2160; do

@@ -1,7 +1,8 @@
 #version 460
 // Material classification, between the count and the scatter (classify.comp.glsl): one workgroup turns the
 // per-material tile counts into first list entries (exclusive prefix sum, CLASSIFY_SCAN_WORKGROUP materials a
-// step, Hillis-Steele within a step) and completes each material's indirect dispatch (y = z = 1). Also counts
+// step, Hillis-Steele within a step) and writes each material's indirect dispatch (rows of CLASSIFY_DISPATCH_WIDTH
+// workgroups; none for a material without tiles). Also counts
 // the materials present and the (tile, material) pairs.
 #extension GL_GOOGLE_include_directive : require
 #include "shared/types.h"
@@ -35,7 +36,8 @@ void main() {
     }
     if (i < pc.material) {
       materialTiles[i].first = carry + sums[lane] - tiles;
-      materialTiles[i].groupsY = 1u;
+      materialTiles[i].groupsX = min(tiles, CLASSIFY_DISPATCH_WIDTH);
+      materialTiles[i].groupsY = (tiles + CLASSIFY_DISPATCH_WIDTH - 1u) / CLASSIFY_DISPATCH_WIDTH;
       materialTiles[i].groupsZ = 1u;
     }
     barrier();

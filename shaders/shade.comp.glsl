@@ -49,7 +49,9 @@ bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
 
 void main() {
 #if CLASSIFIED
-  uint tile = tileList[materialTiles[pc.material].first + gl_WorkGroupID.x];
+  uint entry = gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x;  // (the last row may be partial)
+  if (entry >= materialTiles[pc.material].tiles) return;
+  uint tile = tileList[materialTiles[pc.material].first + entry];
   ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
 #else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);

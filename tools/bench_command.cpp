@@ -75,7 +75,7 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
                   "tile lists and dispatches)")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "uber", "classified"}));
-  sub->add_option("--materials", c.materials, "field, city: N generated PBR materials (3 of 4 textured)");
+  sub->add_option("--materials", c.materials, "field, city, foliage: N generated PBR materials (3 of 4 textured)");
   sub->add_option("--vertices", c.vertices, "vertex precision: float, quantized (as bake --quantize stores them)")
       ->delimiter(',')
       ->check(CLI::IsMember({"float", "quantized"}));

@@ -73,7 +73,7 @@ struct BenchCommand {
   std::vector<std::string> lod{"off", "0.5", "1", "2", "4"};
   std::vector<std::string> ids{"auto"};
   std::vector<std::string> shading{"auto"};           // visbuf shading: auto, uber, classified
-  uint32_t materials = 0;                              // field/city: N generated materials (--materials)
+  uint32_t materials = 0;                              // generated layouts: N generated materials (--materials)
   std::vector<std::string> vertices{"float"};          // vertex precision: float, quantized                // visbuf ID target: auto (32 bits where they fit), wide
   std::string reference = "auto";                      // auto | forward | visbuf-full
   uint64_t referenceMaxTriangles = 50'000'000;         // auto: forward reference up to this many triangles

@@ -23,8 +23,8 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)");
   app.add_flag("--no-sun", o.noSun, "no directional light (ambient, emissive and point lights only)");
   app.add_option("--materials", o.materials,
-                 "field, city: replace the materials with N generated PBR materials (3 of 4 textured), assigned to "
-                 "objects by hash (material classification's many-material scenes)");
+                 "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
+                 "assigned to objects by hash (material classification's many-material scenes)");
 }
 
 namespace {
@@ -44,8 +44,9 @@ Result<Scene> loadScene(const SceneOptions& o) {
   Result<Scene> scene = loadSceneWithoutLights(o);
   if (!scene) return scene;
   if (o.materials > 0) {
-    if (o.scene != "field" && o.scene != "city")
-      return makeError(ErrorCode::InvalidArgument, "--materials applies to the field and city layouts only");
+    if (o.scene != "field" && o.scene != "city" && o.scene != "foliage" && o.scene != "foliage-opaque")
+      return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
+                                                   "foliage, foliage-opaque)");
     if (Status s = applyGeneratedMaterials(*scene, o.materials, o.seed); !s) return s.error();
   }
   scatterPointLights(*scene, o.lights, o.seed);

@@ -29,6 +29,7 @@ static_assert(offsetof(FrameData, pointLightCount) == 308);
 static_assert(sizeof(PassConstants) == 16);
 static_assert(sizeof(MaterialTiles) == 32);
 static_assert(offsetof(MaterialTiles, pixels) == 12, "the first three words are VkDispatchIndirectCommand");
+static_assert(CLASSIFY_DISPATCH_WIDTH * 32768ull >= 2048ull * 2048ull, "the largest frame's tiles fit 32,768 rows");
 static_assert(sizeof(PyramidConstants) == 32);
 static_assert(offsetof(ObjectData, meshIndex) == 48);
 static_assert(offsetof(MeshData, lods) == 32);

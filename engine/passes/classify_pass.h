@@ -3,7 +3,7 @@
 //   classify_count.comp    one workgroup per 8x8 shading tile: the materials present, per material +1 tile and
 //                          its pixel count (MaterialTiles records, BINDING_MATERIAL_TILES);
 //   classify_scan.comp     exclusive prefix sum of the tile counts: each material's first tile-list entry, and
-//                          its VkDispatchIndirectCommand (tiles, 1, 1);
+//                          its VkDispatchIndirectCommand (its tiles in rows of CLASSIFY_DISPATCH_WIDTH);
 //   classify_scatter.comp  each tile appended to the list of every material present in it (BINDING_TILE_LIST);
 //   shade_classified.comp  one vkCmdDispatchIndirect per material (push constant: the material), one workgroup
 //                          per listed tile; lanes showing another material leave. Materials without a texture

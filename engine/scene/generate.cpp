@@ -350,9 +350,13 @@ Status applyGeneratedMaterials(Scene& scene, uint32_t count, uint64_t seed) {
       scene.textures.push_back(t);
     }
   Rng rng(seed ^ 0x6d61746572ull);
+  const Material first = scene.materials.empty() ? Material{} : scene.materials.front();
   scene.materials.clear();
   for (uint32_t i = 0; i < count; ++i) {
     Material m;
+    m.alphaMode = first.alphaMode;
+    m.alphaCutoff = first.alphaCutoff;
+    m.doubleSided = first.doubleSided;
     m.name = "generated " + std::to_string(i);
     m.baseColor = glm::vec4(float(rng.uniform(0.3, 1.0)), float(rng.uniform(0.3, 1.0)), float(rng.uniform(0.3, 1.0)), 1.0f);
     m.metallic = float(rng.uniform(0.0, 0.3));

@@ -154,6 +154,10 @@
 #define CLASSIFY_STAT_MATERIALS 1      // materials with at least one pixel
 #define CLASSIFY_SCAN_WORKGROUP 256    // the prefix sum: one workgroup, CLASSIFY_SCAN_WORKGROUP materials a step
 #define CLASSIFY_NO_MATERIAL 0xffffffffu
+// Workgroups per row of a material's shading dispatch. Vulkan guarantees only 65,535 workgroups in x, and one
+// material can cover more tiles (a 4K frame has 129,600); rows of 128 fit the largest frame (2048^2 tiles) in
+// 32,768 rows.
+#define CLASSIFY_DISPATCH_WIDTH 128u
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
 //  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),

@@ -166,16 +166,17 @@ struct SkinInstance {
 };
 
 // Material classification: one record per material (32 bytes; config.h BINDING_MATERIAL_TILES). The first three
-// words are the VkDispatchIndirectCommand of the material's shading dispatch (one workgroup per listed tile).
+// words are the VkDispatchIndirectCommand of the material's shading dispatch: one workgroup per listed tile, in rows
+// of CLASSIFY_DISPATCH_WIDTH (written by the scan).
 struct MaterialTiles {
-  uint tiles;    // tiles holding at least one of its pixels (= the dispatch's groupCountX)
-  uint groupsY;  // 1 (written by the scan)
+  uint groupsX;  // min(tiles, CLASSIFY_DISPATCH_WIDTH)
+  uint groupsY;  // ceil(tiles / CLASSIFY_DISPATCH_WIDTH)
   uint groupsZ;  // 1
   uint pixels;   // its pixels on screen
   uint first;    // its first entry in the tile list (exclusive prefix sum of `tiles`)
   uint cursor;   // entries written so far by the scatter
+  uint tiles;    // tiles holding at least one of its pixels
   uint pad0;
-  uint pad1;
 };
 
 // Push constants of the cull, visibility and depth pyramid passes (16 bytes).

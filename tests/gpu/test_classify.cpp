@@ -16,6 +16,7 @@
 #include "render/renderer.h"
 #include "scene/generate.h"
 #include "scene/scene.h"
+#include "shared/config.h"
 
 namespace visbuf {
 namespace {
@@ -120,13 +121,14 @@ TEST(Classification, ClassifiedShadingEqualsUbershader) {
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
-// An untextured scene (only the untextured classified pipeline) equals the ubershader too; Auto resolves per device
+// An untextured scene (only the untextured classified pipeline) equals the ubershader too, with its one material's
+// dispatch over several rows of CLASSIFY_DISPATCH_WIDTH workgroups, the last one partial; Auto resolves per device
 // type, and the attribute record (the ubershader's variant) forces the ubershader.
 TEST(Classification, UntexturedAutoAndAttributes) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   const Scene s = quadGrid();
-  auto r = Renderer::create(dev, s, {.width = 97, .height = 61});
+  auto r = Renderer::create(dev, s, {.width = 161, .height = 97});
   ASSERT_TRUE(r.ok()) << r.error().message;
   FrameOptions fo;
   fo.readIds = true;
@@ -143,6 +145,9 @@ TEST(Classification, UntexturedAutoAndAttributes) {
   EXPECT_GT(covered, 0u);
   EXPECT_EQ(cls->stats.materialsPresent, 1u);
   EXPECT_EQ(cls->stats.materialPixels, std::vector<uint32_t>{covered});
+  ASSERT_EQ(cls->stats.materialTiles.size(), 1u);
+  EXPECT_GT(cls->stats.materialTiles[0], CLASSIFY_DISPATCH_WIDTH);
+  EXPECT_NE(cls->stats.materialTiles[0] % CLASSIFY_DISPATCH_WIDTH, 0u);
   fo = {};
   auto f = (*r)->renderFrame(s.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
