@@ -53,9 +53,12 @@ const char* shadingModeName(ShadingMode mode) {
 ShadingMode parseShadingMode(const std::string& name) {
   return name == "uber" ? ShadingMode::Uber : name == "classified" ? ShadingMode::Classified : ShadingMode::Auto;
 }
-// The benchmark's verdict (docs/benchmarks.md, "Material classification"): see the figures there.
+// The benchmark's verdict per device type (docs/benchmarks.md, "Textured visibility buffer vs G-buffer vs forward,
+// and material classification"): the ubershader on both measured so far.
 ShadingMode defaultShading(const gpu::Device& device) {
-  return device.isCpu() ? ShadingMode::Uber : ShadingMode::Classified;
+  if (device.isCpu())  // lavapipe: classifying (two passes over the IDs) costs more than the shading saves
+    return ShadingMode::Uber;
+  return ShadingMode::Uber;  // H100: many small per-material dispatches shade slower than one divergent dispatch
 }
 
 std::string IdEncoding::describe() const {
