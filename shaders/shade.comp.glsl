@@ -7,15 +7,24 @@
 #extension GL_EXT_samplerless_texture_functions : require
 #include "material.glsl"
 #include "shared/barycentrics.h"
+#include "visibility_id.glsl"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
 layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
-layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
 #if MSAA
 #include "msaa_samples.glsl"  // multisampled IDs: shadeMultisampledPixel() per pixel, shadeVisible() per ID
 #else
-layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
 layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+#endif
+#if CLASSIFIED
+// Classified shading (classify_pass): one indirect dispatch per material, one workgroup per tile of its list; the
+// lanes whose pixel shows another material leave, and the material index is uniform over the dispatch.
+layout(push_constant) uniform Push { PassConstants pc; };
+layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) readonly buffer MaterialTileBlock {
+  uint header[CLASSIFY_HEADER];
+  MaterialTiles materialTiles[];
+};
+layout(std430, set = 0, binding = BINDING_TILE_LIST) readonly buffer TileListBlock { uint tileList[]; };
 #endif
 #if WRITE_ATTRIBUTES
 layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
@@ -46,16 +55,12 @@ bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
 // top-left corner; (0.5, 0.5): the centre). Derivatives are per pixel step.
 vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   uint slot, tri;
-  if (frame.wideIds != 0u) {
-    slot = raw.x - 1u;
-    tri = raw.y;
-  } else {
-    uint v = raw.x - 1u;
-    slot = v >> frame.triangleBits;
-    tri = v & ((1u << frame.triangleBits) - 1u);
-  }
+  decodeVisibility(raw, slot, tri);
   DrawCommand d = draws[slot];
   ObjectData o = objectAt(d.firstInstance);
+#if CLASSIFIED
+  o.materialIndex = pc.material;  // the same value (main() checked it), now known to be uniform over the dispatch
+#endif
   uint base = d.firstIndex + 3u * tri;
   Vertex v0 = meshVertex(o.meshIndex, indices[base + 0u] + uint(d.vertexOffset));
   Vertex v1 = meshVertex(o.meshIndex, indices[base + 1u] + uint(d.vertexOffset));
@@ -109,13 +114,24 @@ vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
 }
 
 void main() {
+#if CLASSIFIED
+  uint entry = gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x;  // (the last row may be partial)
+  if (entry >= materialTiles[pc.material].tiles) return;
+  uint tile = tileList[materialTiles[pc.material].first + entry];
+  ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
+#else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+#endif
 #if MSAA
   shadeMultisampledPixel(p);
 #else
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
   uvec2 raw = texelFetch(visibility, p, 0).xy;
-  if (raw.x == VIS_NOTHING) return;
+  uint slot, tri;
+  if (!decodeVisibility(raw, slot, tri)) return;
+#if CLASSIFIED
+  if (objectAt(draws[slot].firstInstance).materialIndex != pc.material) return;
+#endif
   imageStore(colorOut, p, vec4(shadeVisible(raw, p, vec2(0.5)), 1.0));
 #endif
 }

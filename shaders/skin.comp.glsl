@@ -6,7 +6,7 @@
 // shading pass and the forward path read it through meshVertex() in common.glsl. Uv, colour and the tangent's
 // handedness stay the rest vertex's, so they are not copied per instance.
 // Thread 0 of each instance writes the instance's LOD errors scaled by the pose, and with joint-reach bounds
-// the CPU's sphere (animation.h). With GPU bounds (pc.pad0 & SKIN_MODE_GPU_BOUNDS) every subgroup reduces its
+// the CPU's sphere (animation.h). With GPU bounds (pc.material & SKIN_MODE_GPU_BOUNDS) every subgroup reduces its
 // skinned positions to an AABB and merges it into the instance's bounds record with 6 atomicMin; the
 // RESOLVE_BOUNDS variant (skin_bounds.comp, after this pass) turns that AABB into the slot's sphere.
 #extension GL_GOOGLE_include_directive : require
@@ -116,7 +116,7 @@ void main() {
   uint inst = gl_WorkGroupID.y + gl_WorkGroupID.z * 65535u;
   if (inst >= pc.phase) return;
   SkinInstance si = instances[inst];
-  const bool gpuBounds = (pc.pad0 & SKIN_MODE_GPU_BOUNDS) != 0u;
+  const bool gpuBounds = (pc.material & SKIN_MODE_GPU_BOUNDS) != 0u;
   uint v = gl_GlobalInvocationID.x;
   if (v == 0u) {
     if (!gpuBounds) meshes[si.meshSlot].boundsSphere = si.bounds;

@@ -70,6 +70,12 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   sub->add_option("--ids", c.ids, "visbuf ID target: auto (32 bits where they fit), wide (64 bits forced)")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "wide"}));
+  sub->add_option("--shading", c.shading,
+                  "visbuf shading: auto (the device type's default), uber (one dispatch), classified (per-material "
+                  "tile lists and dispatches)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"auto", "uber", "classified"}));
+  sub->add_option("--materials", c.materials, "field, city, foliage: N generated PBR materials (3 of 4 textured)");
   sub->add_option("--vertices", c.vertices, "vertex precision: float, quantized (as bake --quantize stores them)")
       ->delimiter(',')
       ->check(CLI::IsMember({"float", "quantized"}));
@@ -173,6 +179,7 @@ struct Config {
   bool wideIds = false;  // visbuf: the 64-bit ID target forced where the renderer would pick 32 bits
   bool quantized = false;  // vertices quantised as `bake --quantize` stores them (pack round trip in memory)
   uint32_t msaa = 1;       // samples per pixel (FrameOptions::msaa); its reference renders at the same count
+  ShadingMode shading = ShadingMode::Auto;  // visbuf only
 };
 
 // "visbuf", or "visbuf 4x" with MSAA (tables).
@@ -197,6 +204,8 @@ struct Row {
   uint64_t idPixels = 0;
   std::string reference;
   std::string idBits;  // "32" / "64": bits per pixel of the visbuf ID target; "-": forward (none)
+  std::string shading = "-";  // visbuf: the shading mode used (uber / classified); "-": other paths
+  double materialsPresent = 0, classifiedTiles = 0;  // classified: medians over the measured frames
   bool pareto = false;
 };
 
@@ -234,8 +243,8 @@ int runBench(const BenchCommand& c) {
   if (!size) return fail(size.error());
   auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
   if (!devOptions) return fail(devOptions.error());
-  if (c.paths.empty() || c.cull.empty() || c.lod.empty())
-    return fail({ErrorCode::InvalidArgument, "--paths, --cull and --lod need at least one value each"});
+  if (c.paths.empty() || c.cull.empty() || c.lod.empty() || c.shading.empty())
+    return fail({ErrorCode::InvalidArgument, "--paths, --cull, --lod and --shading need at least one value each"});
 
   // The configuration matrix.
   std::vector<float> lods;
@@ -266,11 +275,13 @@ int runBench(const BenchCommand& c) {
       for (uint32_t m : c.msaa)
         for (float l : lods)
           for (const std::string& ids : c.ids)
-            for (const std::string& v : c.vertices) {
-              if (path != RenderPath::Visbuf && ids != c.ids.front()) continue;  // no ID target to vary
-              configs.push_back(
-                  {path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide", v == "quantized", m});
-            }
+            for (const std::string& v : c.vertices)
+              for (const std::string& sh : c.shading) {
+                if (path != RenderPath::Visbuf && (ids != c.ids.front() || sh != c.shading.front()))
+                  continue;  // no ID target or shading pass to vary
+                configs.push_back({path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide",
+                                   v == "quantized", m, parseShadingMode(sh)});
+              }
     }
   if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
 
@@ -305,6 +316,7 @@ int runBench(const BenchCommand& c) {
     so.seed = c.seed;
     so.mesh = c.mesh;
     so.lights = c.lights;
+    so.materials = c.materials;
     auto scene = loadScene(so);
     if (!scene) return fail(scene.error());
     RendererConfig rc;
@@ -420,6 +432,7 @@ int runBench(const BenchCommand& c) {
         fo.msaa = k.msaa;
         fo.readColor = measure;
         fo.readIds = measure && idComparable;
+        fo.shading = k.shading;
         auto frame = rk.renderFrame(path[i], fo);
         if (!frame) return fail(frame.error());
         if (!measure) continue;
@@ -437,6 +450,7 @@ int runBench(const BenchCommand& c) {
         bo.lodErrorPixels = k.lod;
         bo.readColor = false;
         bo.countOverdraw = true;
+        bo.shading = k.shading;
         auto frame = rk.renderFrame(path.back(), bo);
         if (!frame) return fail(frame.error());
         row.rasterWritesPerPixel = frame->stats.rasterWritesPerPixel;
@@ -446,6 +460,7 @@ int runBench(const BenchCommand& c) {
       row.config = k;
       row.reference = info.reference;
       row.idBits = k.path != RenderPath::Visbuf ? "-" : rk.idEncoding().wide ? "64" : "32";
+      if (k.path == RenderPath::Visbuf) row.shading = shadingModeName(measured.back().shading);
       std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
       std::vector<std::string> passNames;
       for (const FrameStats& s : measured) {
@@ -476,6 +491,12 @@ int runBench(const BenchCommand& c) {
       row.wallMedian = median(wall);
       row.trianglesMedian = median(tris);
       row.drawnMedian = median(drawn);
+      {
+        std::vector<double> present, pairs;
+        for (const FrameStats& s : measured) present.push_back(s.materialsPresent), pairs.push_back(s.classifiedTiles);
+        row.materialsPresent = median(present);
+        row.classifiedTiles = median(pairs);
+      }
       row.sceneBytes = measured.back().sceneBytes;
       row.targetBytesPerPixel = measured.back().targetBytesPerPixel;
       std::vector<double> perSample;
@@ -497,8 +518,8 @@ int runBench(const BenchCommand& c) {
         row.idMismatches = mismatches;
         row.idPixels = uint64_t(pixels) * measured.size();
       }
-      std::printf("  %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
-                  pathLabel(k).c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
+      std::printf("  %-10s %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+                  pathLabel(k).c_str(), row.shading.c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
                   row.idBits.c_str(), k.quantized ? "q16" : "float", row.frameMedian, row.frameP95,
                   row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
                   row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
@@ -542,6 +563,7 @@ int runBench(const BenchCommand& c) {
   j["date"] = date;
   j["scene"] = c.scene;
   j["mesh"] = c.mesh;
+  j["materials"] = c.materials;
   j["seed"] = c.seed;
   j["width"] = size->first;
   j["height"] = size->second;
@@ -572,6 +594,11 @@ int runBench(const BenchCommand& c) {
     x["lod"] = row.config.lodLabel;
     x["lodErrorPixels"] = row.config.lod;
     x["idBits"] = row.idBits;
+    x["shading"] = row.shading;
+    if (row.shading == "classified") {
+      x["materialsPresent"] = row.materialsPresent;
+      x["tileMaterialPairs"] = row.classifiedTiles;
+    }
     x["vertices"] = row.config.quantized ? "quantized" : "float";
     x["msaa"] = row.config.msaa;
     x["perSamplePixels"] = row.perSamplePixels;
@@ -615,7 +642,7 @@ int runBench(const BenchCommand& c) {
     std::replace(n.begin(), n.end(), ' ', '_');
     csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
   }
-  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels\n";  // appended: earlier columns fixed
+  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels,shading\n";  // appended: earlier columns fixed
   for (const Row& row : rows) {
     csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
@@ -630,8 +657,8 @@ int runBench(const BenchCommand& c) {
       const auto* p = passOf(row, n);
       csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
     }
-    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
-                       row.config.msaa, row.perSamplePixels);
+    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f},{}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
+                       row.config.msaa, row.perSamplePixels, row.shading);
   }
 
   // bench.md
@@ -654,8 +681,10 @@ int runBench(const BenchCommand& c) {
     for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
     md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} / {:.1f} | {} | {} | "
                       "{:.4f} | {:.3f}% | {} | {} |\n",
-                      objectsLabel(row.objects), pathLabel(row.config), cullModeName(row.config.cull),
-                      row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
+                      objectsLabel(row.objects),
+                      row.shading == "-" ? pathLabel(row.config)
+                                         : fmt::format("{} ({})", pathLabel(row.config), row.shading),
+                      cullModeName(row.config.cull), row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
                       row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, row.bytesWrittenPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),

@@ -33,6 +33,7 @@ struct RenderCommand {
   bool referenceFull = false;  // also render visbuf with no culling and no LOD and report the error against it
   bool referenceLights = false;  // also render the same frame with every point light at every pixel (no tiles)
   bool allLights = false;        // shade every pixel with every point light (no light cull pass)
+  std::string shading = "auto";  // visbuf shading: auto | uber | classified
   std::string view = "shaded";  // debug view written to -o instead of the shaded image
   int pyramidLevel = -1;        // --view pyramid: the level to show
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
@@ -75,6 +76,8 @@ struct BenchCommand {
   std::vector<std::string> lod{"off", "0.5", "1", "2", "4"};
   std::vector<uint32_t> msaa{1};                       // samples per pixel (FrameOptions::msaa)
   std::vector<std::string> ids{"auto"};
+  std::vector<std::string> shading{"auto"};           // visbuf shading: auto, uber, classified
+  uint32_t materials = 0;                              // generated layouts: N generated materials (--materials)
   std::vector<std::string> vertices{"float"};          // vertex precision: float, quantized                // visbuf ID target: auto (32 bits where they fit), wide
   std::string reference = "auto";                      // auto | forward | visbuf-full
   uint64_t referenceMaxTriangles = 50'000'000;         // auto: forward reference up to this many triangles

@@ -73,6 +73,11 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                   "pixel's samples differ, forward: hardware resolve; not with gbuffer, BLEND scenes, --view or "
                   "--ids-out)")
       ->capture_default_str();
+  sub->add_option("--shading", c.shading,
+                  "visbuf shading: auto (the device type's default) | uber (one dispatch) | classified (per-material "
+                  "tile lists, one indirect dispatch per material; MSAA frames: uber)")
+      ->check(CLI::IsMember({"auto", "uber", "classified"}))
+      ->capture_default_str();
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
                 "frame's draw lists (shows what the first camera culled)");
@@ -118,6 +123,7 @@ int runRender(const RenderCommand& c) {
   fo.msaa = c.msaa;
   if (c.msaa > 1 && (c.view != "shaded" || !c.idsOut.empty()))
     return fail({ErrorCode::Unsupported, "--view and --ids-out show one ID per pixel: use them with --msaa 1"});
+  fo.shading = parseShadingMode(c.shading);
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
     std::vector<FrameStats> runs;

@@ -22,6 +22,9 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
   app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)");
   app.add_flag("--no-sun", o.noSun, "no directional light (ambient, emissive and point lights only)");
+  app.add_option("--materials", o.materials,
+                 "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
+                 "assigned to objects by hash (material classification's many-material scenes)");
 }
 
 namespace {
@@ -40,6 +43,12 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o);
 Result<Scene> loadScene(const SceneOptions& o) {
   Result<Scene> scene = loadSceneWithoutLights(o);
   if (!scene) return scene;
+  if (o.materials > 0) {
+    if (o.scene != "field" && o.scene != "city" && o.scene != "foliage" && o.scene != "foliage-opaque")
+      return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
+                                                   "foliage, foliage-opaque)");
+    if (Status s = applyGeneratedMaterials(*scene, o.materials, o.seed); !s) return s.error();
+  }
   scatterPointLights(*scene, o.lights, o.seed);
   if (o.noSun) scene->lightIntensity = 0.0f;
   return scene;

@@ -18,6 +18,7 @@ struct SceneOptions {
   std::string mesh;             // field: instanced mesh file (.gltf/.glb); empty = procedural knot
   uint32_t lights = 0;          // point lights scattered over the scene (scatterPointLights)
   bool noSun = false;           // switch the directional light off
+  uint32_t materials = 0;       // generated layouts: replace the materials with N generated ones (applyGeneratedMaterials)
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);

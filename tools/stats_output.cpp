@@ -42,6 +42,13 @@ std::string formatStats(const FrameStats& s) {
                            s.pointLights, s.meanLightsPerTile, s.maxLightsPerTile, s.lightTileOverflow,
                            s.lightTileOverflow ? fmt::format("  (WARNING: {} tile lights dropped)", s.lightsDropped) : "")
              : fmt::format("lights        {} point lights, every light at every pixel (no tiles)\n", s.pointLights);
+  if (s.path == RenderPath::Visbuf)
+    out += s.shading == ShadingMode::Classified
+               ? fmt::format("shading       classified: {} of {} materials present, {} (tile, material) pairs for {} "
+                             "8x8 tiles\n",
+                             s.materialsPresent, s.materialPixels.size(), s.classifiedTiles,
+                             ((s.width + 7) / 8) * ((s.height + 7) / 8))
+               : std::string("shading       uber (one dispatch, every material)\n");
   for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
   out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
@@ -98,6 +105,12 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["lights"] = {{"pointLights", s.pointLights}, {"culled", s.lightsCulled}, {"tileOverflow", s.lightTileOverflow},
                  {"dropped", s.lightsDropped}, {"maxPerTile", s.maxLightsPerTile},
                  {"meanPerTile", s.meanLightsPerTile}, {"bytes", s.lightBytes}};
+  if (s.path == RenderPath::Visbuf) {
+    j["shading"] = shadingModeName(s.shading);
+    if (s.shading == ShadingMode::Classified)
+      j["classification"] = {{"materialsPresent", s.materialsPresent}, {"tileMaterialPairs", s.classifiedTiles},
+                             {"materialTiles", s.materialTiles}, {"materialPixels", s.materialPixels}};
+  }
   j["sceneBytes"] = s.sceneBytes;
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
   j["msaa"] = {{"samples", s.msaaSamples}, {"perSamplePixels", s.perSamplePixels}};

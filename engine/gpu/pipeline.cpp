@@ -60,6 +60,11 @@
 #include "forward_masked_ids_textured.frag.h"
 #include "forward_masked_overdraw_textured.frag.h"
 #include "transparent_textured.frag.h"
+#include "classify_count.comp.h"
+#include "classify_scan.comp.h"
+#include "classify_scatter.comp.h"
+#include "shade_classified.comp.h"
+#include "shade_classified_textured.comp.h"
 
 namespace visbuf::gpu {
 
@@ -120,6 +125,11 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("gbuffer_overdraw_textured.frag", spv_gbuffer_overdraw_textured_frag)
   VB_SHADER("gbuffer_lighting.comp", spv_gbuffer_lighting_comp)
   VB_SHADER("gbuffer_lighting_attributes.comp", spv_gbuffer_lighting_attributes_comp)
+  VB_SHADER("classify_count.comp", spv_classify_count_comp)
+  VB_SHADER("classify_scan.comp", spv_classify_scan_comp)
+  VB_SHADER("classify_scatter.comp", spv_classify_scatter_comp)
+  VB_SHADER("shade_classified.comp", spv_shade_classified_comp)
+  VB_SHADER("shade_classified_textured.comp", spv_shade_classified_textured_comp)
 #undef VB_SHADER
   return {};
 }

@@ -2,6 +2,7 @@
 //
 //   setup ─► cull.comp ─► visibility.{vert,frag} ─► [light_cull.comp] ─► shade.comp ─► readback   (visbuf path;
 //                                                      light culling only with point lights)
+//                         classified shading: ... ─► classify.comp ─► shade.comp per material ─► readback
 //   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
 //   both: ─► transparent_pass before the readback, only for scenes with BLEND materials
 //   setup ─► cull.comp ─► gbuffer.{vert,frag} ─► gbuffer_lighting.comp ─► readback (G-buffer baseline)
@@ -24,6 +25,7 @@
 #include "gpu/check.h"
 #include "gpu/pipeline.h"
 #include "gpu/resources.h"
+#include "passes/classify_pass.h"
 #include "passes/cull_pass.h"
 #include "passes/depth_pyramid_pass.h"
 #include "passes/forward_pass.h"
@@ -45,6 +47,19 @@ const char* renderPathName(RenderPath path) {
 }
 const char* cullModeName(CullMode mode) {
   return mode == CullMode::None ? "none" : mode == CullMode::Frustum ? "frustum" : "occlusion";
+}
+const char* shadingModeName(ShadingMode mode) {
+  return mode == ShadingMode::Auto ? "auto" : mode == ShadingMode::Uber ? "uber" : "classified";
+}
+ShadingMode parseShadingMode(const std::string& name) {
+  return name == "uber" ? ShadingMode::Uber : name == "classified" ? ShadingMode::Classified : ShadingMode::Auto;
+}
+// The benchmark's verdict per device type (docs/benchmarks.md, "Textured visibility buffer vs G-buffer vs forward,
+// and material classification"): the ubershader on both measured so far.
+ShadingMode defaultShading(const gpu::Device& device) {
+  if (device.isCpu())  // lavapipe: classifying (two passes over the IDs) costs more than the shading saves
+    return ShadingMode::Uber;
+  return ShadingMode::Uber;  // H100: many small per-material dispatches shade slower than one divergent dispatch
 }
 
 const char* skinBoundsName(SkinBounds bounds) { return bounds == SkinBounds::Gpu ? "gpu" : "joints"; }
@@ -94,8 +109,8 @@ std::vector<uint32_t> supportedMsaaSamples(gpu::Device& device) {
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 12;  // at most 11: setup, skin, 2 x (cull, raster), pyramid, light cull,
-                                          // shade (or G-buffer lighting), transparent, readback
+constexpr uint32_t kCommandBuffers = 12;  // at most 12: setup, skin, 2 x (cull, raster), pyramid, light cull,
+                                          // classify, shade (or G-buffer lighting), transparent, readback
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
 
@@ -141,6 +156,7 @@ struct Renderer::Impl {
   passes::CullPass cull;
   passes::VisibilityPass visibility;
   passes::ShadePass shade;
+  passes::ClassifyPass classify;  // created by the first classified frame
   passes::ForwardPass forward;
   passes::TransparentPass transparent;  // created only when blendObjects is not empty
   passes::DepthPyramidPass pyramid;
@@ -227,6 +243,8 @@ struct Renderer::Impl {
         {BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_LIGHT_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_LIGHT_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_MATERIAL_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_TILE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -240,7 +258,7 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15 + 2 /*lights*/},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15 + 2 /*lights*/ + 2 /*classification*/},
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
@@ -304,6 +322,7 @@ struct Renderer::Impl {
     idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::HostVisible);
     if (hasPointLights()) lightCull.resize(device, width, height);
+    if (classify.created()) classify.resize(device, width, height);
     config.width = width;
     config.height = height;
     writeDescriptors();
@@ -428,6 +447,18 @@ struct Renderer::Impl {
     x.pBufferInfo = nullptr;
     x.pImageInfo = &lightDepthInfo;
     w.push_back(x);
+    // Classification: until a classified frame creates its buffers, the stats buffer stands in (never read).
+    VkDescriptorBufferInfo classifyInfo[2] = {{stats.handle(), 0, VK_WHOLE_SIZE}, {stats.handle(), 0, VK_WHOLE_SIZE}};
+    if (classify.created())
+      classifyInfo[0].buffer = classify.materialTiles().handle(), classifyInfo[1].buffer = classify.tileList().handle();
+    x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    x.pImageInfo = nullptr;
+    x.dstBinding = BINDING_MATERIAL_TILES;
+    x.pBufferInfo = &classifyInfo[0];
+    w.push_back(x);
+    x.dstBinding = BINDING_TILE_LIST;
+    x.pBufferInfo = &classifyInfo[1];
+    w.push_back(x);
     vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
   }
 
@@ -503,6 +534,21 @@ struct Renderer::Impl {
       descriptorsMsaa = msaa;
       writeDescriptors();
     }
+  }
+
+  // The classification pipelines and buffers (only renderers that shade classified frames pay for them).
+  void ensureClassify() {
+    if (classify.created()) return;
+    std::vector<bool> sampling;  // per material: samples a texture
+    for (const Material& m : scene.materials) sampling.push_back(packMaterial(m, scene).slotCount > 0);
+    classify.create(device, pipelineLayout, textured, std::move(sampling));
+    classify.resize(device, config.width, config.height);
+    writeDescriptors();
+  }
+  // The shading mode of a visbuf frame (Auto resolved; the attribute record and MSAA exist in the ubershader only).
+  ShadingMode shadingFor(const FrameOptions& options) const {
+    if (options.path != RenderPath::Visbuf || options.readAttributes || options.msaa > 1) return ShadingMode::Uber;
+    return options.shading == ShadingMode::Auto ? defaultShading(device) : options.shading;
   }
 
   void beginCmd(VkCommandBuffer cmd) {
@@ -828,12 +874,22 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     VK_CHECK(vkEndCommandBuffer(cmd));
   }
 
-  // shade
+  // The IDs become the sampled input of the classification (if any) and the shading.
+  const bool classified = shadingFor(options) == ShadingMode::Classified;
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  if (classified) {
+    uint32_t t = timestamps->begin(cmd, "classify");
+    classify.recordClassify(cmd, pipelineLayout, set);
+    timestamps->end(cmd, t);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+    cmd = cmds[used++];
+    beginCmd(cmd);
+  }
+  // shade
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
                     VK_ACCESS_2_TRANSFER_WRITE_BIT);
@@ -854,10 +910,13 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   }
-  shade.record(cmd, pipelineLayout, set, w, h,
-               msaa                     ? passes::ShadePass::Msaa
-               : options.readAttributes ? passes::ShadePass::Attributes
-                                        : passes::ShadePass::Plain);
+  if (classified)
+    classify.recordShade(cmd, pipelineLayout, set);
+  else
+    shade.record(cmd, pipelineLayout, set, w, h,
+                 msaa                     ? passes::ShadePass::Msaa
+                 : options.readAttributes ? passes::ShadePass::Attributes
+                                          : passes::ShadePass::Plain);
   timestamps->end(cmd, t);
   if (msaa && options.readIds) shade.recordSampleIds(cmd, pipelineLayout, set, w, h);  // (untimed) -> attributes
   VK_CHECK(vkEndCommandBuffer(cmd));
@@ -911,6 +970,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (Status s = checkMsaa(options); !s.ok()) return s.error();
   prepareMsaa(options);  // once per sample count (and size)
   const bool msaa = options.msaa > 1;
+  if (shadingFor(options) == ShadingMode::Classified) ensureClassify();  // likewise
 
   const auto t0 = Clock::now();
   const uint32_t w = config.width, h = config.height;
@@ -946,6 +1006,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.lightBytes = hasPointLights() ? pointLights.size() + lightCull.tiles().size() : 0;
   st.lightsCulled = cullLights(options);
   st.msaaSamples = options.msaa;
+  st.shading = shadingFor(options);
 
   uint32_t used = 0;
   // setup: queries, counters
@@ -1150,6 +1211,13 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.meanLightsPerTile = double(ls.pairs) / (double(lightCull.tilesX()) * lightCull.tilesY());
   }
   for (auto& p : st.passMs) st.gpuMs += p.second;
+  if (st.shading == ShadingMode::Classified) {
+    passes::ClassifyStats cs = classify.stats();
+    st.materialsPresent = cs.materialsPresent;
+    st.classifiedTiles = cs.pairs;
+    st.materialTiles = std::move(cs.tiles);
+    st.materialPixels = std::move(cs.pixels);
+  }
   if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
     st.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
@@ -1216,7 +1284,12 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     }
     st.rasterWritesPerPixel = double(fragments) / double(pixels);
     const double resolveBytes = gpuCulled ? 8.0 * double(covered) / double(pixels) : 0.0;  // colour, covered only
-    st.bytesWrittenPerPixel = st.rasterWritesPerPixel * st.rasterBytesPerFragment + resolveBytes;
+    // Classified shading also writes its tile list (4 B per (tile, material) pair) and the per-material records.
+    const double classifyBytes =
+        st.shading == ShadingMode::Classified
+            ? (4.0 * st.classifiedTiles + double(sizeof(gpu::MaterialTiles)) * st.materialTiles.size()) / double(pixels)
+            : 0.0;
+    st.bytesWrittenPerPixel = st.rasterWritesPerPixel * st.rasterBytesPerFragment + resolveBytes + classifyBytes;
   }
   if (readAttributes) {
     const float* a = static_cast<const float*>(attributesReadback.mapped());

@@ -24,9 +24,17 @@ namespace visbuf {
 // (the baseline of the benchmark; no IDs).
 enum class RenderPath { Visbuf, Forward, GBuffer };
 enum class CullMode { None, Frustum, Occlusion };
+// How the visbuf path's shading pass runs: one "ubershader" dispatch over every pixel (Uber), or material
+// classification followed by one indirect dispatch per material (Classified, passes/classify_pass.h). Auto:
+// the faster one for the device type, as measured by the benchmark (docs/benchmarks.md, defaultShading).
+enum class ShadingMode { Auto, Uber, Classified };
 
 const char* renderPathName(RenderPath path);
 const char* cullModeName(CullMode mode);
+const char* shadingModeName(ShadingMode mode);
+ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified", anything else: Auto
+// What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs).
+ShadingMode defaultShading(const gpu::Device& device);
 
 // Culling bounds of skinned instances: Joints = a sphere from the joints' reach (CPU, double precision,
 // provably containing every skinned vertex: animation.h); Gpu = from the skinned vertices themselves, reduced
@@ -77,6 +85,8 @@ struct FrameOptions {
   // readAttributes and the forward path's readIds. The multisampled targets and pipelines are created by the
   // first frame that asks for a count.
   uint32_t msaa = 1;
+  ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
+                                            // ubershader (its attributes / MSAA variant)
 };
 
 // How the visibility target's bits are split (DESIGN.md property 4).
@@ -132,12 +142,20 @@ struct FrameStats {
   // depth.
   uint32_t rasterBytesPerFragment = 0;
   // With countOverdraw: depth-passing raster fragments per pixel (all pixels), and the bytes written per pixel =
-  // fragments x rasterBytesPerFragment + the resolve's colour write (visbuf/G-buffer: 8 per covered pixel).
+  // fragments x rasterBytesPerFragment + the resolve's colour write (visbuf/G-buffer: 8 per covered pixel) + classified
+  // shading's tile list and material records.
   // Clears are not counted. 0 without countOverdraw.
   double rasterWritesPerPixel = 0.0;
   double bytesWrittenPerPixel = 0.0;
   uint32_t msaaSamples = 1;      // samples per pixel of this frame's raster targets
   uint32_t perSamplePixels = 0;  // visbuf MSAA: pixels whose samples differ, shaded once per distinct ID
+  // Visbuf shading: the mode used. Classified only: the materials with pixels, the (tile, material) pairs (=
+  // workgroups of all shading dispatches) and, per scene material, its 8x8 tiles and pixels on screen.
+  ShadingMode shading = ShadingMode::Uber;
+  uint32_t materialsPresent = 0;
+  uint32_t classifiedTiles = 0;
+  std::vector<uint32_t> materialTiles;
+  std::vector<uint32_t> materialPixels;
 };
 
 struct FrameResult {

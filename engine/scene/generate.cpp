@@ -1,6 +1,8 @@
 #include "scene/generate.h"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -279,6 +281,101 @@ Result<Scene> makeFoliageScene(const FoliageParams& params) {
   scene.defaultCamera.target = {0.0, params.extent / 8.0, 0.0};
   scene.defaultCamera.nearPlane = 0.1;
   return scene;
+}
+
+}  // namespace visbuf
+
+namespace visbuf {
+
+namespace {
+// A class of `layers` square images, level 0 from texel(layer, x, y), the chain by 2x2 box filtering of the stored
+// values (sRGB values averaged as stored: close enough for a benchmark texture).
+template <typename Texel>
+TextureClass proceduralClass(uint32_t size, ColorSpace space, uint32_t layers, Texel texel) {
+  TextureClass c;
+  c.size = size;
+  c.colorSpace = space;
+  c.layers = layers;
+  c.mipCount = TextureClass::mipCountFor(size);
+  c.texels.resize(c.totalBytes());
+  for (uint32_t l = 0; l < layers; ++l) {
+    uint8_t* p = c.texels.data() + c.offset(0, l);
+    for (uint32_t y = 0; y < size; ++y)
+      for (uint32_t x = 0; x < size; ++x) {
+        const glm::u8vec4 t = texel(l, x, y);
+        for (int k = 0; k < 4; ++k) p[4 * (y * size + x) + k] = t[k];
+      }
+    for (uint32_t m = 1; m < c.mipCount; ++m) {
+      const uint32_t n = std::max(size >> m, 1u), prev = std::max(size >> (m - 1), 1u);
+      const uint8_t* src = c.texels.data() + c.offset(m - 1, l);
+      uint8_t* dst = c.texels.data() + c.offset(m, l);
+      for (uint32_t y = 0; y < n; ++y)
+        for (uint32_t x = 0; x < n; ++x)
+          for (int k = 0; k < 4; ++k) {
+            uint32_t sum = 0;
+            for (uint32_t dy = 0; dy < 2; ++dy)
+              for (uint32_t dx = 0; dx < 2; ++dx)
+                sum += src[4 * (std::min(2 * y + dy, prev - 1) * prev + std::min(2 * x + dx, prev - 1)) + k];
+            dst[4 * (y * n + x) + k] = uint8_t((sum + 2) / 4);
+          }
+    }
+  }
+  return c;
+}
+}  // namespace
+
+Status applyGeneratedMaterials(Scene& scene, uint32_t count, uint64_t seed) {
+  if (count == 0) return makeError(ErrorCode::InvalidArgument, "--materials must be at least 1");
+  if (!scene.textures.empty() || !scene.textureClasses.empty())
+    return makeError(ErrorCode::InvalidArgument, "--materials replaces the materials of a generated scene (field, "
+                                                 "city); this scene has textures of its own");
+  constexpr uint32_t kColorLayers = 4, kDataLayers = 2;
+  scene.textureClasses.push_back(proceduralClass(128, ColorSpace::Srgb, kColorLayers, [](uint32_t l, uint32_t x, uint32_t y) {
+    const uint32_t cells = 4u << l;  // 4, 8, 16, 32 checks a side; odd layers striped
+    const bool on = l % 2 ? (x * cells / 128) % 2 == 0 : ((x * cells / 128) + (y * cells / 128)) % 2 == 0;
+    return on ? glm::u8vec4(235, 225, 200, 255) : glm::u8vec4(uint8_t(40 + 50 * l), 70, 90, 255);
+  }));
+  scene.textureClasses.push_back(proceduralClass(64, ColorSpace::Linear, kDataLayers, [](uint32_t l, uint32_t x, uint32_t y) {
+    const uint32_t h = (x * 73856093u) ^ (y * 19349663u) ^ (l * 83492791u);
+    return glm::u8vec4(255, uint8_t(96 + (h & 127)), uint8_t(l ? (h >> 8) & 255 : 0), 255);  // G roughness, B metal
+  }));
+  for (uint32_t c = 0; c < 2; ++c)
+    for (uint32_t l = 0; l < scene.textureClasses[c].layers; ++l) {
+      Texture t;
+      t.name = std::string("generated ") + (c ? "data " : "colour ") + std::to_string(l);
+      t.colorSpace = scene.textureClasses[c].colorSpace;
+      t.sizeClass = c;
+      t.layer = l;
+      t.originalWidth = t.originalHeight = scene.textureClasses[c].size;
+      scene.textures.push_back(t);
+    }
+  Rng rng(seed ^ 0x6d61746572ull);
+  const Material first = scene.materials.empty() ? Material{} : scene.materials.front();
+  scene.materials.clear();
+  for (uint32_t i = 0; i < count; ++i) {
+    Material m;
+    m.alphaMode = first.alphaMode;
+    m.alphaCutoff = first.alphaCutoff;
+    m.doubleSided = first.doubleSided;
+    m.name = "generated " + std::to_string(i);
+    m.baseColor = glm::vec4(float(rng.uniform(0.3, 1.0)), float(rng.uniform(0.3, 1.0)), float(rng.uniform(0.3, 1.0)), 1.0f);
+    m.metallic = float(rng.uniform(0.0, 0.3));
+    m.roughness = float(rng.uniform(0.3, 0.9));
+    if (i % 4 != 3) {
+      m.baseColorTexture.texture = m.baseColorTexture.baked = int32_t(i % kColorLayers);
+      const float scale = float(1 << (i % 3));
+      m.baseColorTexture.transform = glm::mat3x2(glm::vec2(scale, 0.0f), glm::vec2(0.0f, scale), glm::vec2(0.0f));
+      if (i % 2 == 0)
+        m.metallicRoughnessTexture.texture = m.metallicRoughnessTexture.baked = int32_t(kColorLayers + (i / 2) % kDataLayers);
+    }
+    scene.materials.push_back(m);
+  }
+  for (uint32_t i = 0; i < scene.objects.size(); ++i) {
+    uint64_t h = (uint64_t(i) + 1) * 0x9E3779B97F4A7C15ull ^ seed;
+    h = (h ^ (h >> 31)) * 0xBF58476D1CE4E5B9ull;
+    scene.objects[i].material = uint32_t((h ^ (h >> 29)) % count);
+  }
+  return {};
 }
 
 }  // namespace visbuf

@@ -45,6 +45,15 @@ struct CityParams {
 // A grid of buildings with street clutter and a street-level camera: heavy occlusion.
 Result<Scene> makeCityScene(const CityParams& params);
 
+// Replaces a generated scene's materials with `count` procedural PBR materials (the many-material scenes of the
+// material classification benchmark): three of four sample a base colour texture and half of those also a
+// metallic-roughness texture (layers of two procedural texture classes: 128^2 sRGB checkers/stripes and 64^2
+// linear noise, full mip chains, trilinear), the rest are untextured; factors vary per material. They keep the alpha
+// mode, cutoff and sidedness of the scene's first material (foliage cards stay double-sided, and masked). Object i
+// gets material hash(i, seed) % count, so neighbouring objects differ. Fails for count 0 or a scene that already
+// has textures (a glTF asset keeps its own materials).
+Status applyGeneratedMaterials(Scene& scene, uint32_t count, uint64_t seed);
+
 struct FoliageParams {
   uint32_t cards = 20000;
   uint64_t seed = 1;

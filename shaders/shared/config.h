@@ -82,7 +82,7 @@
 #define SKIN_BOUNDS_CENTRE 0u    // per instance: AABB centre -> boundsSphere.xyz
 #define SKIN_BOUNDS_DISTANCE 1u  // per instance vertex: largest distance from the centre
 #define SKIN_BOUNDS_RADIUS 2u    // per instance: -> boundsSphere.w
-// PassConstants.pad0 of the skinning pass: bit 0 set = GPU bounds (reduce the AABB; the resolve variant writes
+// PassConstants.material (third word) of the skinning pass: bit 0 set = GPU bounds (reduce the AABB; the resolve variant writes
 // the sphere), clear = the CPU's joint-reach sphere (SkinInstance.bounds) goes to the mesh slot.
 #define SKIN_MODE_GPU_BOUNDS 1u
 
@@ -159,6 +159,25 @@
 #define LIGHT_STAT_DROPPED 1          // (tile, light) pairs dropped for lack of capacity
 #define LIGHT_STAT_MAX_PER_TILE 2     // the longest list before clamping
 #define LIGHT_STAT_PAIRS 3            // (tile, light) pairs kept
+
+// Material classification (classify_pass, classify.comp.glsl, classify_scan.comp.glsl): the shading tiles
+// (SHADE_TILE_X x SHADE_TILE_Y pixels) are listed per material present in them, and each material is shaded by its
+// own indirect dispatch over its list (a tile with k materials is in k lists; a material without pixels gets 0
+// workgroups). BINDING_MATERIAL_TILES: CLASSIFY_HEADER uints, then MaterialTiles (types.h) per material, whose
+// first three words are the VkDispatchIndirectCommand. BINDING_TILE_LIST: one uint per (tile, material) pair, tile x
+// in the low 16 bits, y in the high 16 (at most 2048 tiles a side at 16384 pixels), grouped by material. Its
+// capacity, tiles x min(materials, tile pixels), can never overflow; 1080p with >= 64 materials: 8.3 MB.
+#define BINDING_MATERIAL_TILES 29
+#define BINDING_TILE_LIST 30
+#define CLASSIFY_HEADER 8              // uints before the first MaterialTiles record:
+#define CLASSIFY_STAT_PAIRS 0          // (tile, material) pairs listed (the scan's total)
+#define CLASSIFY_STAT_MATERIALS 1      // materials with at least one pixel
+#define CLASSIFY_SCAN_WORKGROUP 256    // the prefix sum: one workgroup, CLASSIFY_SCAN_WORKGROUP materials a step
+#define CLASSIFY_NO_MATERIAL 0xffffffffu
+// Workgroups per row of a material's shading dispatch. Vulkan guarantees only 65,535 workgroups in x, and one
+// material can cover more tiles (a 4K frame has 129,600); rows of 128 fit the largest frame (2048^2 tiles) in
+// 32,768 rows.
+#define CLASSIFY_DISPATCH_WIDTH 128u
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
 //  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),

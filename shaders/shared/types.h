@@ -176,11 +176,26 @@ struct SkinInstance {
   vec4 bounds;        // skin space: xyz centre, w radius, contains every skinned vertex of the pose
 };
 
+// Material classification: one record per material (32 bytes; config.h BINDING_MATERIAL_TILES). The first three
+// words are the VkDispatchIndirectCommand of the material's shading dispatch: one workgroup per listed tile, in rows
+// of CLASSIFY_DISPATCH_WIDTH (written by the scan).
+struct MaterialTiles {
+  uint groupsX;  // min(tiles, CLASSIFY_DISPATCH_WIDTH)
+  uint groupsY;  // ceil(tiles / CLASSIFY_DISPATCH_WIDTH)
+  uint groupsZ;  // 1
+  uint pixels;   // its pixels on screen
+  uint first;    // its first entry in the tile list (exclusive prefix sum of `tiles`)
+  uint cursor;   // entries written so far by the scatter
+  uint tiles;    // tiles holding at least one of its pixels
+  uint pad0;
+};
+
 // Push constants of the cull, visibility and depth pyramid passes (16 bytes).
 struct PassConstants {
   uint phase;     // CULL_PHASE_EARLY / CULL_PHASE_LATE
   uint drawBase;  // slot of this phase's first draw in the draw buffer (late draws follow the early ones)
-  uint pad0;
+  uint material;  // classified shading: the material of this dispatch; classification's scan: the material count;
+                  // skinning: SKIN_MODE_* flags
   uint pad1;
 };
 

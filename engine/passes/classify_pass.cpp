@@ -1,0 +1,98 @@
+#include "passes/classify_pass.h"
+
+#include <algorithm>
+
+#include "shared/types.h"
+#include "shared/config.h"
+
+namespace visbuf::passes {
+
+namespace {
+constexpr VkDeviceSize kHeaderBytes = CLASSIFY_HEADER * sizeof(uint32_t);
+}
+
+void ClassifyPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
+                          std::vector<bool> textured) {
+  textured_ = std::move(textured);
+  if (textured_.empty()) textured_.push_back(false);  // (a scene without materials: one unused record)
+  count_ = gpu::createComputePipeline(device, layout, "classify_count.comp", spec.windowed);
+  scan_ = gpu::createComputePipeline(device, layout, "classify_scan.comp", spec.windowed);
+  scatter_ = gpu::createComputePipeline(device, layout, "classify_scatter.comp", spec.windowed);
+  const bool anyTextured = spec.textureClasses > 0 && std::find(textured_.begin(), textured_.end(), true) != textured_.end();
+  if (anyTextured) shadeTextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", spec);
+  if (!anyTextured || std::find(textured_.begin(), textured_.end(), false) != textured_.end())
+    shadeUntextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", {spec.windowed, 0});
+  if (!anyTextured) textured_.assign(textured_.size(), false);
+  const VkDeviceSize bytes = kHeaderBytes + textured_.size() * sizeof(gpu::MaterialTiles);
+  materialTiles_ = gpu::Buffer(device, bytes,
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                               gpu::MemoryUse::DeviceLocal);
+  readback_ = gpu::Buffer(device, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+}
+
+void ClassifyPass::resize(gpu::Device& device, uint32_t width, uint32_t height) {
+  tilesX_ = (width + SHADE_TILE_X - 1) / SHADE_TILE_X;
+  tilesY_ = (height + SHADE_TILE_Y - 1) / SHADE_TILE_Y;
+  const VkDeviceSize perTile = std::min<VkDeviceSize>(textured_.size(), SHADE_TILE_X * SHADE_TILE_Y);
+  tileList_ = gpu::Buffer(device, VkDeviceSize(tilesX_) * tilesY_ * perTile * sizeof(uint32_t),
+                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::DeviceLocal);
+}
+
+void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const {
+  constexpr VkAccessFlags2 kReadWrite = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+  // The previous frame's shading read the records this frame clears (its fence has passed; ordering only).
+  vkCmdFillBuffer(cmd, materialTiles_.handle(), 0, VK_WHOLE_SIZE, 0);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, count_.handle());
+  vkCmdDispatch(cmd, tilesX_, tilesY_, 1);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
+  const gpu::PassConstants pc{0, 0, uint32_t(textured_.size()), 0};
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scan_.handle());
+  vkCmdDispatch(cmd, 1, 1, 1);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scatter_.handle());
+  vkCmdDispatch(cmd, tilesX_, tilesY_, 1);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                         VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                     VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
+                         VK_ACCESS_2_TRANSFER_READ_BIT);
+  VkBufferCopy c{0, 0, materialTiles_.size()};
+  vkCmdCopyBuffer(cmd, materialTiles_.handle(), readback_.handle(), 1, &c);
+}
+
+void ClassifyPass::recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const {
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  for (bool textured : {true, false}) {
+    const gpu::Pipeline& p = textured ? shadeTextured_ : shadeUntextured_;
+    if (!p.handle()) continue;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
+    for (uint32_t m = 0; m < textured_.size(); ++m) {
+      if (textured_[m] != textured) continue;
+      const gpu::PassConstants pc{0, 0, m, 0};
+      vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+      vkCmdDispatchIndirect(cmd, materialTiles_.handle(), kHeaderBytes + VkDeviceSize(m) * sizeof(gpu::MaterialTiles));
+    }
+  }
+}
+
+ClassifyStats ClassifyPass::stats() const {
+  const auto* h = static_cast<const uint32_t*>(readback_.mapped());
+  const auto* records = reinterpret_cast<const gpu::MaterialTiles*>(h + CLASSIFY_HEADER);
+  ClassifyStats s;
+  s.pairs = h[CLASSIFY_STAT_PAIRS];
+  s.materialsPresent = h[CLASSIFY_STAT_MATERIALS];
+  for (size_t m = 0; m < textured_.size(); ++m) {
+    s.tiles.push_back(records[m].tiles);
+    s.pixels.push_back(records[m].pixels);
+  }
+  return s;
+}
+
+}  // namespace visbuf::passes

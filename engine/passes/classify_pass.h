@@ -1,0 +1,58 @@
+// Material classification and classified shading: the alternative to the single "ubershader" dispatch of the
+// shading pass (shade_pass). Per frame, on the GPU:
+//   classify_count.comp    one workgroup per 8x8 shading tile: the materials present, per material +1 tile and
+//                          its pixel count (MaterialTiles records, BINDING_MATERIAL_TILES);
+//   classify_scan.comp     exclusive prefix sum of the tile counts: each material's first tile-list entry, and
+//                          its VkDispatchIndirectCommand (its tiles in rows of CLASSIFY_DISPATCH_WIDTH);
+//   classify_scatter.comp  each tile appended to the list of every material present in it (BINDING_TILE_LIST);
+//   shade_classified.comp  one vkCmdDispatchIndirect per material (push constant: the material), one workgroup
+//                          per listed tile; lanes showing another material leave. Materials without a texture
+//                          use the untextured variant (no sampling code); a material with no pixels gets 0
+//                          workgroups.
+// Reads: frame, IDs (SHADER_READ_ONLY_OPTIMAL), draws, objects; shading as shade_pass. Writes: the colour image
+// (GENERAL, cleared to the background before), the classification buffers.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+
+namespace visbuf::passes {
+
+struct ClassifyStats {
+  uint32_t pairs = 0;             // (tile, material) pairs listed = workgroups of all shading dispatches
+  uint32_t materialsPresent = 0;  // materials with at least one pixel
+  std::vector<uint32_t> tiles;    // per material: tiles holding its pixels
+  std::vector<uint32_t> pixels;   // per material: its pixels
+};
+
+class ClassifyPass {
+ public:
+  // textured[m]: material m samples a texture (its dispatch uses the textured shading pipeline; with spec
+  // .textureClasses == 0 every material uses the untextured one).
+  void create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, std::vector<bool> textured);
+  bool created() const { return !textured_.empty(); }
+  // (Re)allocates the tile list for a width x height frame: tiles x min(materials, 64) entries.
+  void resize(gpu::Device& device, uint32_t width, uint32_t height);
+  // Count, scan and scatter, then the barrier to the indirect dispatches and a copy of the records for stats().
+  void recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  // The shading dispatches, one per material.
+  void recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  ClassifyStats stats() const;  // after the frame's fence
+  const gpu::Buffer& materialTiles() const { return materialTiles_; }
+  const gpu::Buffer& tileList() const { return tileList_; }
+  uint64_t bytes() const { return materialTiles_.size() + tileList_.size(); }
+
+ private:
+  gpu::Pipeline count_, scan_, scatter_;
+  gpu::Pipeline shadeTextured_, shadeUntextured_;
+  std::vector<bool> textured_;   // per material
+  gpu::Buffer materialTiles_;    // CLASSIFY_HEADER uints + MaterialTiles[materials]
+  gpu::Buffer readback_;         // its copy
+  gpu::Buffer tileList_;         // uint[tiles x min(materials, 64)]
+  uint32_t tilesX_ = 0, tilesY_ = 0;
+};
+
+}  // namespace visbuf::passes

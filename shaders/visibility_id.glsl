@@ -1,0 +1,43 @@
+// Reading the visibility target: the draw commands the IDs index and the decoding of one texel (config.h
+// VIS_NOTHING, FrameData.wideIds / triangleBits). Shared by the shading pass and the material classification.
+#ifndef VISBUF_VISIBILITY_ID_GLSL
+#define VISBUF_VISIBILITY_ID_GLSL
+
+#include "common.glsl"
+#ifndef MSAA
+#define MSAA 0
+#endif
+
+layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
+#if !MSAA  // (the MSAA shading variant reads the multisampled target: msaa_samples.glsl)
+layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
+#endif
+
+// The draw slot and the triangle in its LOD of a visibility texel; false where nothing was drawn.
+bool decodeVisibility(uvec2 raw, out uint slot, out uint tri) {
+  slot = 0u;
+  tri = 0u;
+  if (raw.x == VIS_NOTHING) return false;
+  if (frame.wideIds != 0u) {
+    slot = raw.x - 1u;
+    tri = raw.y;
+  } else {
+    uint v = raw.x - 1u;
+    slot = v >> frame.triangleBits;
+    tri = v & ((1u << frame.triangleBits) - 1u);
+  }
+  return true;
+}
+
+#if !MSAA
+// The material drawn at pixel p (CLASSIFY_NO_MATERIAL: nothing, or outside the frame).
+uint materialAt(ivec2 p) {
+  uint slot, tri;
+  if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y) ||
+      !decodeVisibility(texelFetch(visibility, p, 0).xy, slot, tri))
+    return CLASSIFY_NO_MATERIAL;
+  return objectAt(draws[slot].firstInstance).materialIndex;
+}
+#endif
+
+#endif
