@@ -12,11 +12,7 @@ ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gp
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
     const std::string prefix = drawListMasked(list) ? "forward_masked" : "forward";
-    gpu::GraphicsPipelineDesc d;
-    d.windowed = spec.windowed;
-    d.textureClasses = spec.textureClasses;
-    d.skinned = spec.skinned;
-    d.cullMode = drawListCullMode(list);
+    gpu::GraphicsPipelineDesc d = drawListPipelineDesc(spec, list);
     d.samples = samples;
     d.vertexShader = "forward.vert";
     d.fragmentShader = prefix + ".frag";

@@ -38,11 +38,7 @@ GBufferPass GBufferPass::create(gpu::Device& device, VkPipelineLayout layout, gp
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
     const std::string prefix = drawListMasked(list) ? "gbuffer_masked" : "gbuffer";
-    gpu::GraphicsPipelineDesc d;
-    d.windowed = spec.windowed;
-    d.textureClasses = spec.textureClasses;
-    d.skinned = spec.skinned;
-    d.cullMode = drawListCullMode(list);
+    gpu::GraphicsPipelineDesc d = drawListPipelineDesc(spec, list);
     d.vertexShader = "forward.vert";  // the same pulled vertex and interpolated attributes as the forward path
     d.fragmentShader = prefix + ".frag";
     d.colorFormats.assign(p.formats.color.begin(), p.formats.color.end());

@@ -14,11 +14,7 @@ void sortBackToFront(std::vector<TransparentDraw>& draws) {
 TransparentPass TransparentPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
   TransparentPass p;
   for (uint32_t list = 0; list < p.pipelines_.size(); ++list) {
-    gpu::GraphicsPipelineDesc d;
-    d.windowed = spec.windowed;
-    d.textureClasses = spec.textureClasses;
-    d.skinned = spec.skinned;
-    d.cullMode = drawListCullMode(list);
+    gpu::GraphicsPipelineDesc d = drawListPipelineDesc(spec, list);
     d.vertexShader = "forward.vert";
     d.fragmentShader = "transparent.frag";
     d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};

@@ -18,6 +18,15 @@ VkCullModeFlags drawListCullMode(uint32_t list) {
   }
 }
 
+gpu::GraphicsPipelineDesc drawListPipelineDesc(const gpu::Specialization& spec, uint32_t list) {
+  gpu::GraphicsPipelineDesc d;
+  d.windowed = spec.windowed;
+  d.textureClasses = spec.textureClasses;
+  d.skinned = spec.skinned;
+  d.cullMode = drawListCullMode(list);
+  return d;
+}
+
 VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
                                       uint32_t listMask, VkSampleCountFlagBits samples) {
   VisibilityPass p;
@@ -25,11 +34,7 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
     if (!(listMask >> list & 1u)) continue;
     const bool masked = drawListMasked(list);
     const std::string prefix = masked ? "visibility_masked" : "visibility";
-    gpu::GraphicsPipelineDesc d;
-    d.windowed = spec.windowed;
-    d.textureClasses = spec.textureClasses;
-    d.skinned = spec.skinned;
-    d.cullMode = drawListCullMode(list);
+    gpu::GraphicsPipelineDesc d = drawListPipelineDesc(spec, list);
     d.samples = samples;
     d.vertexShader = prefix + ".vert";
     const char* suffix[VariantCount] = {".frag", "_wide.frag", "_overdraw.frag", "_wide_overdraw.frag"};

@@ -19,6 +19,9 @@ namespace visbuf::passes {
 // same everywhere); DOUBLE_SIDED lists cull nothing.
 bool drawListMasked(uint32_t list);
 VkCullModeFlags drawListCullMode(uint32_t list);
+// The raster state every pass shares for draw list `list`: the frame specialisation (windows, texture classes,
+// skinning) and the list's face culling; shaders, formats and samples are the caller's.
+gpu::GraphicsPipelineDesc drawListPipelineDesc(const gpu::Specialization& spec, uint32_t list);
 
 struct VisibilityList {
   uint32_t list = DRAW_LIST_OPAQUE;
