@@ -63,6 +63,24 @@ layout(constant_id = 2) const uint VB_SKINNED = 0u;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SkinnedVertexRef { SkinnedVertex items[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SkinnedTangentRef { uint items[]; };
 
+// The position alone of meshVertex(mesh, i).position, loading only those three floats (the micro-raster's fetch:
+// on lavapipe a whole-record load costs the other five words too).
+vec3 meshPosition(uint mesh, uint i) {
+  if (VB_SKINNED != 0u) {
+    uvec2 a = uvec2(meshes[mesh].skinnedVertexLow, meshes[mesh].skinnedVertexHigh);
+    if (a != uvec2(0u)) {
+      uint k = i - meshes[mesh].vertexOffset;
+      return vec3(SkinnedVertexRef(a).items[k].px, SkinnedVertexRef(a).items[k].py, SkinnedVertexRef(a).items[k].pz);
+    }
+  }
+  if (VB_WINDOWED == 0u) return vec3(vertices0[i].px, vertices0[i].py, vertices0[i].pz);
+  uint w = i >> frame.vertexWindowShift, j = i - (w << frame.vertexWindowShift);
+  if (w == 0u) return vec3(vertices0[j].px, vertices0[j].py, vertices0[j].pz);
+  if (w == 1u) return vec3(vertices1[j].px, vertices1[j].py, vertices1[j].pz);
+  if (w == 2u) return vec3(vertices2[j].px, vertices2[j].py, vertices2[j].pz);
+  return vec3(vertices3[j].px, vertices3[j].py, vertices3[j].pz);
+}
+
 // Vertex i of the pool (a draw's vertexOffset + index) as mesh slot `mesh` has it: the rest vertex, with the
 // skinned position and normal where the slot is a skinned instance's.
 Vertex meshVertex(uint mesh, uint i) {

@@ -33,20 +33,41 @@ bool frustumVisible(vec3 c, float r) {
   return visible;
 }
 
-// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre. c: camera-relative centre.
-uint occlusionTest(vec3 c, float r) {
-  vec3 v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
-  float rr = r * (1.0 + 1e-5) + 1e-6;
-  if (-(v.z + rr) <= frame.nearPlane * 1.001) return 0u;  // touches the near plane: always visible
-  // Screen rectangle of the sphere's bounding cube: every corner is in front of the camera, so the
-  // hull of the projected corners contains the projected sphere.
-  vec2 lo = vec2(1e30), hi = vec2(-1e30);
+// Screen rectangle (NDC) of the sphere's bounding cube; false if the sphere touches the near plane. v: the centre in
+// view space, rr: the radius widened for rounding. Every corner is then in front of the camera, so the hull of the
+// projected corners contains the projected sphere.
+bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2 hi) {
+  v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
+  rr = r * (1.0 + 1e-5) + 1e-6;
+  lo = vec2(1e30);
+  hi = vec2(-1e30);
+  if (-(v.z + rr) <= frame.nearPlane * 1.001) return false;
   for (int i = 0; i < 8; ++i) {
     vec3 p = v + rr * vec3((i & 1) != 0 ? 1.0 : -1.0, (i & 2) != 0 ? 1.0 : -1.0, (i & 4) != 0 ? 1.0 : -1.0);
     vec2 ndc = vec2(frame.projX * p.x, frame.projY * p.y) / -p.z;
     lo = min(lo, ndc);
     hi = max(hi, ndc);
   }
+  return true;
+}
+
+// Software micro-raster routing: the object's screen box is at most frame.swMaxPixels per side and it lies wholly
+// beyond the near plane (sw_raster.comp needs no clipping and keeps its edge functions within 32 bits).
+bool smallOnScreen(vec3 c, float r) {
+  vec3 v;
+  float rr;
+  vec2 lo, hi;
+  if (!screenRect(c, r, v, rr, lo, hi)) return false;
+  vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
+  return max(extent.x, extent.y) <= frame.swMaxPixels;
+}
+
+// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre. c: camera-relative centre.
+uint occlusionTest(vec3 c, float r) {
+  vec3 v;
+  float rr;
+  vec2 lo, hi;
+  if (!screenRect(c, r, v, rr, lo, hi)) return 0u;  // touches the near plane: always visible
   vec2 size = frame.viewport.xy;
   // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding. MSAA: a
   // triangle can cover a sample and no centre; every sample lies within 0.5 px of its pixel's centre (per axis),
@@ -121,6 +142,15 @@ void main() {
       }
     }
   }
+  // Small objects of the lists the micro-raster may take go to sw_raster.comp (FrameData.swRaster): they fill their
+  // list's region from its end, with a count of their own.
+  bool sw = false;
+  if (draw && frame.swRaster != 0u && drawLists[list].w != 0u &&
+      meshes[meshIndex].lods[lod].indexCount / 3u <= frame.swMaxTriangles) {
+    vec4 sphere = meshes[meshIndex].boundsSphere;
+    ObjectData o = objectAt(id);
+    sw = smallOnScreen(objectToCamera(o, sphere.xyz), sphere.w * o.maxScale);
+  }
   uint culledSum = subgroupAdd(frustumCulled);
   uint occludedSum = subgroupAdd(occluded);
   uint subpixelSum = subgroupAdd(subpixel);
@@ -133,15 +163,18 @@ void main() {
   }
   uint slot = 0;
   bool pending = draw;
+  uint key = sw ? list + DRAW_LISTS : list;  // hardware draws of list l: l; micro-raster draws: DRAW_LISTS + l
   while (subgroupAny(pending)) {
-    uint current = subgroupMin(pending ? list : DRAW_LIST_NONE);
-    bool mine = pending && list == current;
+    uint current = subgroupMin(pending ? key : DRAW_LIST_NONE);
+    bool mine = pending && key == current;
     uvec4 ballot = subgroupBallot(mine);
     uint count = subgroupBallotBitCount(ballot);
     uint base = 0;
     if (subgroupElect()) {
       atomicAdd(stats[counter], count);
-      base = atomicAdd(stats[STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + current], count);
+      uint listCounter = current < DRAW_LISTS ? STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + current
+                                              : STAT_SW_DRAWS + pc.phase * DRAW_LISTS + current - DRAW_LISTS;
+      base = atomicAdd(stats[listCounter], count);
     }
     base = subgroupBroadcastFirst(base);
     if (mine) slot = base + subgroupBallotExclusiveBitCount(ballot);
@@ -155,11 +188,16 @@ void main() {
   }
   LodData l = meshes[meshIndex].lods[lod];
   uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
+  if (sw) slot = region.z - 1u - slot;
   draws[first + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
   // Counters: one atomic per subgroup (and LOD level present), not per object: on lavapipe every lane's atomic on
   // the same word is a locked operation bouncing between the cores.
   uint triangles = subgroupAdd(l.indexCount / 3u);
-  if (subgroupElect()) atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangles);
+  uint swTriangles = subgroupAdd(sw ? l.indexCount / 3u : 0u);
+  if (subgroupElect()) {
+    atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangles);
+    if (swTriangles > 0u) atomicAdd(stats[STAT_SW_TRIANGLES], swTriangles);
+  }
   bool counting = true;
   while (subgroupAny(counting)) {
     uint current = subgroupMin(counting ? lod : 0xFFFFFFFFu);

@@ -38,6 +38,8 @@ struct RenderCommand {
   int pyramidLevel = -1;        // --view pyramid: the level to show
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
   uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
+  std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
+  float swRasterPixels = 32.0f;  // its object size bound in pixels (FrameOptions::swRasterPixels)
 };
 
 void addRenderCommand(CLI::App& app, RenderCommand& cmd);

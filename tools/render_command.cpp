@@ -78,6 +78,13 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                   "tile lists, one indirect dispatch per material; MSAA frames: uber)")
       ->check(CLI::IsMember({"auto", "uber", "classified"}))
       ->capture_default_str();
+  sub->add_option("--sw-raster", c.swRaster,
+                  "software micro-raster (auto: on for CPU devices, off for GPUs, as measured): objects whose screen box is at most --sw-raster-px per side are "
+                  "rasterised in compute and merged into the same ID target (visbuf, single-sampled, opaque lists)")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
+  sub->add_option("--sw-raster-px", c.swRasterPixels, "--sw-raster: the object size bound in pixels (0, 94]")
+      ->capture_default_str();
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
                 "frame's draw lists (shows what the first camera culled)");
@@ -124,6 +131,8 @@ int runRender(const RenderCommand& c) {
   if (c.msaa > 1 && (c.view != "shaded" || !c.idsOut.empty()))
     return fail({ErrorCode::Unsupported, "--view and --ids-out show one ID per pixel: use them with --msaa 1"});
   fo.shading = parseShadingMode(c.shading);
+  fo.swRaster = parseSwRasterMode(c.swRaster);
+  fo.swRasterPixels = c.swRasterPixels;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
     std::vector<FrameStats> runs;

@@ -17,6 +17,9 @@ std::string formatStats(const FrameStats& s) {
                      s.objectsTested, s.frustumCulled, s.occlusionCulled, s.subpixelCulled, s.drawsRendered,
                      s.drawsEarly, s.drawsLate);
   out += fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
+  if (s.swRaster)
+    out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.swDraws,
+                       s.swTriangles, s.swOversize);
   if (s.transparentDraws)
     out += fmt::format("transparent   {} objects, {} triangles (sorted back to front)\n", s.transparentDraws,
                        s.transparentTriangles);
@@ -86,6 +89,7 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["drawCapacity"] = s.drawCapacity;
   j["drawOverflow"] = s.drawOverflow;
   j["trianglesDrawn"] = s.trianglesDrawn;
+  j["swRaster"] = {{"on", s.swRaster}, {"draws", s.swDraws}, {"triangles", s.swTriangles}, {"oversize", s.swOversize}};
   j["transparentDraws"] = s.transparentDraws;
   j["transparentTriangles"] = s.transparentTriangles;
   j["lodHistogram"] = s.lodHistogram;

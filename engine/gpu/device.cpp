@@ -56,6 +56,8 @@ std::vector<std::string> missingRequirements(VkPhysicalDevice pd, uint32_t* queu
   need(fc.f11.shaderDrawParameters, "shaderDrawParameters");
   need(fc.f12.drawIndirectCount, "drawIndirectCount");
   need(fc.f12.bufferDeviceAddress, "bufferDeviceAddress");
+  need(fc.f2.features.shaderInt64, "shaderInt64");
+  need(fc.f12.shaderBufferInt64Atomics, "shaderBufferInt64Atomics (the software micro-raster's depth + ID atomics)");
   need(fc.f13.dynamicRendering, "dynamicRendering");
   need(fc.f13.synchronization2, "synchronization2");
   if (props.limits.timestampPeriod <= 0.0f) missing.push_back("no timestamps");
@@ -111,7 +113,7 @@ Result<DeviceOptions> parseDeviceOption(const std::string& text, DeviceOptions b
 const char* Device::requiredFeaturesText() {
   return "Vulkan 1.3 with multiDrawIndirect, drawIndirectFirstInstance, geometryShader, "
          "fragmentStoresAndAtomics, shaderDrawParameters, drawIndirectCount, bufferDeviceAddress, dynamicRendering, "
-         "synchronization2";
+         "synchronization2, shaderInt64, shaderBufferInt64Atomics";
 }
 
 VKAPI_ATTR VkBool32 VKAPI_CALL Device::debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
@@ -235,6 +237,8 @@ Result<std::unique_ptr<Device>> Device::create(const DeviceOptions& options) {
   fc.f2.features.fragmentStoresAndAtomics = VK_TRUE;
   fc.f11.shaderDrawParameters = VK_TRUE;
   fc.f12.drawIndirectCount = VK_TRUE;
+  fc.f2.features.shaderInt64 = VK_TRUE;
+  fc.f12.shaderBufferInt64Atomics = VK_TRUE;  // sw_raster.comp: atomicMax of (depth << 32 | payload)
   fc.f12.bufferDeviceAddress = VK_TRUE;  // skinned vertices (MeshData.skinnedVertex*): one buffer past 4 windows
   fc.f13.dynamicRendering = VK_TRUE;
   fc.f13.synchronization2 = VK_TRUE;

@@ -8,6 +8,10 @@
 
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"
+#include "sw_merge.frag.h"
+#include "sw_merge.vert.h"
+#include "sw_merge_wide.frag.h"
+#include "sw_raster.comp.h"
 #include "depth_pyramid.comp.h"
 #include "forward.frag.h"
 #include "forward_ids.frag.h"
@@ -73,6 +77,10 @@ std::span<const uint32_t> findShader(const std::string& name) {
 #define VB_SHADER(file, sym) \
   if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
   VB_SHADER("cull.comp", spv_cull_comp)
+  VB_SHADER("sw_raster.comp", spv_sw_raster_comp)
+  VB_SHADER("sw_merge.vert", spv_sw_merge_vert)
+  VB_SHADER("sw_merge.frag", spv_sw_merge_frag)
+  VB_SHADER("sw_merge_wide.frag", spv_sw_merge_wide_frag)
   VB_SHADER("visibility.vert", spv_visibility_vert)
   VB_SHADER("visibility.frag", spv_visibility_frag)
   VB_SHADER("visibility_wide.frag", spv_visibility_wide_frag)

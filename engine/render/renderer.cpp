@@ -34,6 +34,7 @@
 #include "passes/light_cull_pass.h"
 #include "passes/shade_pass.h"
 #include "passes/skin_pass.h"
+#include "passes/sw_raster_pass.h"
 #include "passes/transparent_pass.h"
 #include "render/animation_state.h"
 #include "passes/visibility_pass.h"
@@ -61,6 +62,17 @@ ShadingMode defaultShading(const gpu::Device& device) {
     return ShadingMode::Uber;
   return ShadingMode::Uber;  // H100: many small per-material dispatches shade slower than one divergent dispatch
 }
+
+const char* swRasterModeName(SwRasterMode mode) {
+  return mode == SwRasterMode::Auto ? "auto" : mode == SwRasterMode::On ? "on" : "off";
+}
+SwRasterMode parseSwRasterMode(const std::string& name) {
+  return name == "on" ? SwRasterMode::On : name == "off" ? SwRasterMode::Off : SwRasterMode::Auto;
+}
+// The micro-raster per device type, as measured (docs/benchmarks.md, "Software micro-raster"): on lavapipe, whose
+// hardware-raster geometry path is serial, compute on every core wins; on a GPU the hardware raster stays until the
+// benchmark says otherwise.
+bool defaultSwRaster(const gpu::Device& device) { return device.isCpu(); }
 
 const char* skinBoundsName(SkinBounds bounds) { return bounds == SkinBounds::Gpu ? "gpu" : "joints"; }
 
@@ -109,10 +121,12 @@ std::vector<uint32_t> supportedMsaaSamples(gpu::Device& device) {
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 12;  // at most 12: setup, skin, 2 x (cull, raster), pyramid, light cull,
-                                          // classify, shade (or G-buffer lighting), transparent, readback
+constexpr uint32_t kCommandBuffers = 14;  // at most 14: setup, skin, 2 x (cull, raster, micro-raster), pyramid,
+                                          // light cull, classify, shade (or G-buffer lighting), transparent, readback
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
+// Likewise the micro-raster, after a frame in which it took no draw.
+constexpr uint32_t kSwProbeInterval = 16;
 
 }  // namespace
 
@@ -140,6 +154,7 @@ struct Renderer::Impl {
   // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (BINDING_DRAW_LISTS).
   std::array<uint32_t, DRAW_LISTS> listFirst{}, listCapacity{};
   uint32_t listMask = 0;                 // bit l: listCapacity[l] > 0
+  uint32_t swListMask = 0;               // bit l: the micro-raster may take list l's draws (opaque, uncapped)
   std::vector<uint32_t> blendObjects;    // objects with BLEND materials (the transparency pass), scene order
   gpu::Buffer drawLists;
   uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
@@ -166,6 +181,15 @@ struct Renderer::Impl {
   gpu::Specialization textured;  // specialisation of every frame pipeline (windows, texture classes)
   std::unique_ptr<AnimationState> animation;  // skinned scenes only
   passes::SkinPass skin;
+  // Software micro-raster (FrameOptions::swRaster): its pipelines (created with the renderer when some list can
+  // use it) and its 64-bit per-pixel buffer (created by the first frame that uses it, dropped by a resize; an
+  // 8-byte stand-in until then).
+  passes::SwRasterPass swRaster;
+  gpu::Buffer swVisibility;
+  bool swVisibilitySized = false;
+  bool swOn = false;           // this frame routes small objects to it (set in render())
+  bool lastSwOn = false;       // the last unfrozen frame did (a frozen frame redraws that frame's draw lists)
+  uint32_t swSkipFrames = 0;   // frames left before it is probed again after a frame in which it took nothing
   // Point lights (scenes with any): anchor-relative records and the tile lists. Empty otherwise.
   gpu::Buffer pointLights;
   passes::LightCullPass lightCull;
@@ -238,6 +262,7 @@ struct Renderer::Impl {
         {BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES, all, nullptr},
         {BINDING_VERTEX_EXTRAS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_DRAW_LISTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_SW_VISIBILITY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {BINDING_GBUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GBUFFER_TARGETS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_GBUFFER_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
@@ -258,7 +283,7 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 15 + 2 /*lights*/ + 2 /*classification*/},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 16 + 2 /*lights*/ + 2 /*classification*/},
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
@@ -321,6 +346,9 @@ struct Renderer::Impl {
     }
     idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::HostVisible);
+    swVisibility = gpu::Buffer(device, 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                               gpu::MemoryUse::DeviceLocal);
+    swVisibilitySized = false;
     if (hasPointLights()) lightCull.resize(device, width, height);
     if (classify.created()) classify.resize(device, width, height);
     config.width = width;
@@ -341,7 +369,7 @@ struct Renderer::Impl {
     const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
     const bool highUsed = objectSplit < gpuScene.objectCount;
     const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
-    VkDescriptorBufferInfo bufs[15] = {
+    VkDescriptorBufferInfo bufs[16] = {
         {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
         {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
@@ -349,14 +377,14 @@ struct Renderer::Impl {
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
         {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
-        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}};
-    const uint32_t bufBindings[15] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
+        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swVisibility.handle(), 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[16] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
                                       BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
                                       BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
                                       BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3,
-                                      BINDING_DRAW_LISTS};
+                                      BINDING_DRAW_LISTS, BINDING_SW_VISIBILITY};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 15; ++i) {
+    for (int i = 0; i < 16; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -591,7 +619,32 @@ struct Renderer::Impl {
     f.objectSplit = objectSplit;
     f.vertexWindowShift = vertexShift;
     f.msaaSamples = options.msaa;
+    f.swRaster = swOn ? 1u : 0u;
+    f.swMaxPixels = options.swRasterPixels;
+    f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
+    f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
     return f;
+  }
+
+  // This frame routes small objects to the software micro-raster: asked for, the visbuf path, single-sampled, no
+  // overdraw count (it counts hardware raster writes), a list it may take, and its buffer within one range.
+  bool swActive(const FrameOptions& options) const {
+    const bool asked = options.swRaster == SwRasterMode::Auto ? defaultSwRaster(device) : options.swRaster == SwRasterMode::On;
+    return asked && options.path == RenderPath::Visbuf && options.msaa == 1 && !options.countOverdraw &&
+           swListMask != 0 &&
+           VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange;
+  }
+  void ensureSwVisibility() {
+    if (swVisibilitySized) return;
+    swVisibility = gpu::Buffer(device, VkDeviceSize(config.width) * config.height * 8,
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                               gpu::MemoryUse::DeviceLocal);
+    swVisibilitySized = true;
+    writeDescriptors();
+  }
+  // Draws of list l in a phase that went to the micro-raster: the end of the list's region.
+  uint32_t listSwDrawn(const uint32_t* s, uint32_t phase, uint32_t list) const {
+    return (swListMask >> list & 1u) ? std::min(s[STAT_SW_DRAWS + phase * DRAW_LISTS + list], listCapacity[list]) : 0u;
   }
 
   // This frame builds tile light lists: visbuf path, tiled shading asked for, and point lights to cull.
@@ -817,21 +870,57 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
 
+  // Software micro-raster after each raster phase: the routed draws into the 64-bit buffer (cleared by the first
+  // phase), then merged into the IDs and depth that the raster left as attachments.
+  const bool sw = !deferred && swOn;
+  auto recordSw = [&](uint32_t phase, bool clear, const char* name, const char* mergeName) {
+    VkCommandBuffer cmd = cmds[used++];
+    beginCmd(cmd);
+    if (clear) {
+      vkCmdFillBuffer(cmd, swVisibility.handle(), 0, VK_WHOLE_SIZE, 0);
+    }
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                                VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    uint32_t t = timestamps->begin(cmd, name);
+    swRaster.recordRaster(cmd, pipelineLayout, set, phase, passes::SwRasterPass::workgroups(capacity));
+    timestamps->end(cmd, t);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | kDepthStages,
+                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | kDepthStages,
+                       VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | kDepthAccess);
+    t = timestamps->begin(cmd, mergeName);
+    swRaster.recordMerge(cmd, pipelineLayout, set, idTarget, depthTarget);
+    timestamps->end(cmd, t);
+    VK_CHECK(vkEndCommandBuffer(cmd));
+  };
+  auto recordRasterPhase = [&](uint32_t phase, bool clear, const char* name) {
+    recordRaster(phase, clear, name);
+    if (sw)
+      recordSw(phase, clear, phase == CULL_PHASE_LATE ? "sw raster late" : "sw raster",
+               phase == CULL_PHASE_LATE ? "sw merge late" : "sw merge");
+  };
+
   const char* rasterOnly = deferred ? "gbuffer" : "visibility";
   const char* rasterEarly = deferred ? "gbuffer early" : "raster early";
   const char* rasterLate = deferred ? "gbuffer late" : "raster late";
   if (frozen) {  // the draw lists and their counts are the frozen frame's: raster them as they are
-    recordRaster(CULL_PHASE_EARLY, true, occlusion ? rasterEarly : rasterOnly);
-    if (occlusion) recordRaster(CULL_PHASE_LATE, false, rasterLate);
+    recordRasterPhase(CULL_PHASE_EARLY, true, occlusion ? rasterEarly : rasterOnly);
+    if (occlusion) recordRasterPhase(CULL_PHASE_LATE, false, rasterLate);
   } else if (!occlusion) {
     recordCull(CULL_PHASE_EARLY, "cull");
-    recordRaster(CULL_PHASE_EARLY, true, rasterOnly);
+    recordRasterPhase(CULL_PHASE_EARLY, true, rasterOnly);
   } else {
     recordCull(CULL_PHASE_EARLY, "cull early");
-    recordRaster(CULL_PHASE_EARLY, true, rasterEarly);
+    recordRasterPhase(CULL_PHASE_EARLY, true, rasterEarly);
     if (!usePyramid) {  // the late phase runs frustum + sub-pixel tests only
       recordCull(CULL_PHASE_LATE, "cull late");
-      recordRaster(CULL_PHASE_LATE, false, rasterLate);
+      recordRasterPhase(CULL_PHASE_LATE, false, rasterLate);
     }
   }
   if (!frozen && occlusion && usePyramid) {
@@ -848,7 +937,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
     recordCull(CULL_PHASE_LATE, "cull late");
-    recordRaster(CULL_PHASE_LATE, false, rasterLate);
+    recordRasterPhase(CULL_PHASE_LATE, false, rasterLate);
   }
   if (deferred) {
     recordGBufferLighting(used, options.readAttributes);
@@ -968,6 +1057,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     return makeError(ErrorCode::InvalidArgument, "the G-buffer path writes no IDs (readIds: visbuf or forward)");
   if (options.path == RenderPath::GBuffer) ensureGBufferTargets();  // once: not part of the frame's CPU time
   if (Status s = checkMsaa(options); !s.ok()) return s.error();
+  if (options.swRaster != SwRasterMode::Off && !(options.swRasterPixels > 0.0f && options.swRasterPixels <= SW_RASTER_MAX_EXTENT - 2))
+    return makeError(ErrorCode::InvalidArgument, fmt::format("micro-raster size bound {} px outside (0, {}]",
+                                                             options.swRasterPixels, SW_RASTER_MAX_EXTENT - 2));
   prepareMsaa(options);  // once per sample count (and size)
   const bool msaa = options.msaa > 1;
   if (shadingFor(options) == ShadingMode::Classified) ensureClassify();  // likewise
@@ -977,6 +1069,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   const bool gpuCulled = options.path != RenderPath::Forward;  // visbuf and G-buffer: cull pass + draw lists
   const bool frozen = gpuCulled && options.freezeCulling && haveDraws;
   const bool occlusionFrame = gpuCulled && !frozen && options.cull == CullMode::Occlusion;
+  // The micro-raster this frame (a frozen frame redraws what its frame routed); its buffer once used.
+  swOn = frozen ? lastSwOn : swActive(options) && swSkipFrames == 0;
+  if (swOn) ensureSwVisibility();
   usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
   const bool readAttributes = options.readAttributes && gpuCulled;  // G-buffer: position and depth only
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
@@ -1227,9 +1322,22 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
     st.drawsEarly = st.drawsLate = 0;
     for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
-      st.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l);
-      st.drawsLate += listDrawn(s, CULL_PHASE_LATE, l);
+      st.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_EARLY, l);
+      st.drawsLate += listDrawn(s, CULL_PHASE_LATE, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
+      st.swDraws += listSwDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
     }
+    st.swRaster = swOn;
+    // "Skip what the scene does not need": a frame whose micro-raster took nothing routes everything to the
+    // hardware raster for a while (the cull pass then routes nothing), then probes again.
+    if (!frozen) {
+      if (swOn)
+        swSkipFrames = st.swDraws == 0 ? kSwProbeInterval : 0;
+      else if (swSkipFrames > 0)
+        --swSkipFrames;
+      lastSwOn = swOn;
+    }
+    st.swTriangles = s[STAT_SW_TRIANGLES];
+    st.swOversize = s[STAT_SW_OVERSIZE];
     st.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
     st.drawsRendered = st.drawsEarly + st.drawsLate;
     st.drawOverflow = s[STAT_DRAW_OVERFLOW];
@@ -1264,8 +1372,11 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     };
     const uint32_t* s = static_cast<const uint32_t*>(statsReadback.mapped());
     for (uint32_t phase : {CULL_PHASE_EARLY, CULL_PHASE_LATE})
-      for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+      for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
         for (uint32_t i = 0; i < listDrawn(s, phase, l); ++i) add(dr[phase * capacity + listFirst[l] + i]);
+        for (uint32_t i = 0; i < listSwDrawn(s, phase, l); ++i)
+          add(dr[phase * capacity + listFirst[l] + listCapacity[l] - 1 - i]);
+      }
   }
   if (readPyramid) {
     const float* p = static_cast<const float*>(pyramidReadback.mapped());
@@ -1306,7 +1417,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
       if (slot >= 2 * capacity) return false;
       const uint32_t phase = slot < capacity ? 0 : 1, local = slot - phase * capacity;
       for (uint32_t l = 0; l < DRAW_LISTS; ++l)
-        if (local >= listFirst[l] && local < listFirst[l] + listCapacity[l]) return local - listFirst[l] < listDrawn(s, phase, l);
+        if (local >= listFirst[l] && local < listFirst[l] + listCapacity[l])
+          return local - listFirst[l] < listDrawn(s, phase, l) ||
+                 listFirst[l] + listCapacity[l] - local <= listSwDrawn(s, phase, l);
       return false;
     };
     const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
@@ -1379,6 +1492,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
     impl->listCapacity[l] = uint32_t(c);
     impl->capacity += uint32_t(c);
     if (c) impl->listMask |= 1u << l;
+    // The micro-raster fills a list's region from its end, so only where the region holds every object of the list.
+    if (c && c == listObjects[l] && !passes::drawListMasked(l)) impl->swListMask |= 1u << l;
   }
   impl->capacity = std::max(impl->capacity, 1u);  // (a scene of only BLEND objects: no list, one unused slot)
   // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
@@ -1399,12 +1514,14 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                                      impl->gpuScene.skinned.empty() ? 0u : 1u);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
+  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->pipelineLayout, textured);
   impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   if (!impl->blendObjects.empty())
     impl->transparent = passes::TransparentPass::create(device, impl->pipelineLayout, textured);
   std::array<glm::uvec4, DRAW_LISTS> lists{};
   for (uint32_t l = 0; l < DRAW_LISTS; ++l)
-    lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l], 0u};
+    lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
+                impl->swListMask >> l & 1u};
   impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
   std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
   impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
@@ -1424,7 +1541,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::DeviceLocal);
   impl->pyramid.create(device);
-  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 12);
+  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 16);
   if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
     std::vector<gpu::PointLightData> lights;
     for (const PointLight& l : scene.pointLights)

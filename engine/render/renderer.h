@@ -59,6 +59,11 @@ struct SkinnedInstanceReadback {
   glm::vec4 bounds{0.0f};                     // the culling sphere of its mesh slot (skin space)
 };
 
+// Software micro-raster of small objects (FrameOptions::swRaster).
+enum class SwRasterMode { Auto, On, Off };
+const char* swRasterModeName(SwRasterMode mode);
+SwRasterMode parseSwRasterMode(const std::string& name);  // "on" | "off" | anything else: Auto
+
 struct FrameOptions {
   RenderPath path = RenderPath::Visbuf;
   CullMode cull = CullMode::Occlusion;
@@ -85,6 +90,12 @@ struct FrameOptions {
   // readAttributes and the forward path's readIds. The multisampled targets and pipelines are created by the
   // first frame that asks for a count.
   uint32_t msaa = 1;
+  // Software micro-raster (visbuf path): objects whose screen box is at most swRasterPixels per side (and wholly
+  // beyond the near plane) are rasterised in compute (sw_raster_pass) instead of by the hardware raster, then
+  // merged into the same ID target and depth. Not used for MSAA, countOverdraw, masked or capped draw lists.
+  // Auto: the device type's measured default (defaultSwRaster).
+  SwRasterMode swRaster = SwRasterMode::Auto;
+  float swRasterPixels = 32.0f;  // (0, SW_RASTER_MAX_EXTENT - 2]
   ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
                                             // ubershader (its attributes / MSAA variant)
 };
@@ -114,7 +125,12 @@ struct FrameStats {
   uint32_t transparentDraws = 0;      // BLEND objects drawn by the transparency pass (CPU-culled, sorted)
   uint64_t transparentTriangles = 0;  // their triangles (not in trianglesDrawn)
   uint32_t drawOverflow = 0;    // visible objects dropped for lack of capacity (reported, never silent)
-  uint64_t trianglesDrawn = 0;
+  uint64_t trianglesDrawn = 0;  // hardware and micro-raster together
+  bool swRaster = false;        // this frame routed small objects to the micro-raster
+  uint32_t swDraws = 0;         // of drawsRendered: the micro-raster's
+  uint64_t swTriangles = 0;     // of trianglesDrawn: the micro-raster's
+  uint32_t swOversize = 0;      // triangles it could not take (box over SW_RASTER_MAX_EXTENT or behind the near
+                                // plane: only a frozen frame's moved camera can cause it); reported, never silent
   std::vector<uint32_t> lodHistogram;  // draws per LOD level
   IdEncoding ids;
   bool cullingFrozen = false;   // this frame reused an earlier frame's draw lists

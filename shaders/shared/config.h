@@ -46,7 +46,14 @@
 // MSAA frames (FrameData.msaaSamples > 1): pixels whose samples carry more than one ID (or some nothing), which
 // the shading pass shades once per distinct ID (shaders/msaa_samples.glsl). Reset by the shading pass itself.
 #define STAT_PER_SAMPLE_PIXELS (STAT_LIST_DRAWS + 2 * DRAW_LISTS)
-#define STAT_COUNT (STAT_PER_SAMPLE_PIXELS + 1)
+// Software micro-raster (FrameData.swRaster): draws routed to sw_raster.comp instead of the hardware raster, per
+// phase and draw list at [p * DRAW_LISTS + l] (they fill their list's region from its end), and their triangles;
+// triangles whose box exceeded SW_RASTER_MAX_EXTENT pixels (never, while the cull pass's size bound holds:
+// counted, never silent).
+#define STAT_SW_DRAWS (STAT_PER_SAMPLE_PIXELS + 1)
+#define STAT_SW_TRIANGLES (STAT_SW_DRAWS + 2 * DRAW_LISTS)
+#define STAT_SW_OVERSIZE (STAT_SW_TRIANGLES + 1)
+#define STAT_COUNT (STAT_SW_OVERSIZE + 1)
 
 // Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
 // state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and
@@ -136,7 +143,17 @@
 #define BINDING_TEXTURE_CLASSES 18  // texture2DArray[MAX_TEXTURE_CLASSES]
 #define BINDING_VERTEX_EXTRAS 19    // VertexExtra[] (tangent, TEXCOORD_1) of meshes that have them
 #define EXTRA_NONE 0xffffffffu      // MeshData.extraOffset of a mesh without VertexExtra records
-#define BINDING_DRAW_LISTS 28  // uvec4[DRAW_LISTS]: x first slot (early phase), y first slot (late), z capacity
+#define BINDING_DRAW_LISTS 28  // uvec4[DRAW_LISTS]: x first slot (early phase), y first slot (late), z capacity,
+                               // w 1 if the software micro-raster may take this list's draws (opaque, uncapped)
+// uint64 per pixel (software micro-raster): reverse-Z depth bits << 32 | payload, atomicMax'ed; 0 = nothing.
+#define BINDING_SW_VISIBILITY 26
+// Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
+// box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
+#define SW_RASTER_WORKGROUP 64
+#define SW_RASTER_MAX_EXTENT 96
+// The most triangles of a draw it takes: one invocation rasterises a whole draw, and lavapipe's JIT stops any loop
+// after 65,535 iterations (gallivm's loop limiter): a 28,800-triangle draw lost its last ~7,000 triangles.
+#define SW_RASTER_MAX_TRIANGLES 2048u
 // G-buffer baseline (gbuffer_pass, gbuffer_lighting_pass): the raster's attribute targets, read back by the
 // lighting pass with texelFetch (constant indices only: lavapipe has no dynamic sampled-image indexing).
 #define GBUFFER_TARGETS 4       // base colour + alpha, octahedral normal, metallic/roughness/occlusion, emissive

@@ -153,6 +153,13 @@ struct FrameData {
   uint pointLightCount;    // PointLightData records in BINDING_LIGHTS (0: none bound, none read)
   uint lightTilesX;        // tiles per row of BINDING_LIGHT_TILES when this frame built them; 0: every light
   uint msaaSamples;        // raster samples per pixel of the visibility/forward targets: 1 (no MSAA), 2, 4
+  // Software micro-raster (sw_raster_pass): 0 off; else the cull pass routes a draw of a list whose drawLists.w is
+  // set to it when the object's screen box is at most swMaxPixels per side, it lies wholly beyond the near plane
+  // and its LOD has at most swMaxTriangles triangles (so that slot and triangle fit the 32-bit payload).
+  uint swRaster;
+  float swMaxPixels;
+  uint swMaxTriangles;
+  uint swTriangleBits;     // payload = (slot << swTriangleBits) | triangle (wide IDs); narrow: the encoded ID
 };
 
 // A KHR_lights_punctual point light (32 bytes): position relative to the scene anchor (like object

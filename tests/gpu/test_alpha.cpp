@@ -286,6 +286,7 @@ TEST(AlphaMask, OpaqueSceneRecordsNothingExtra) {
     FrameOptions fo;
     fo.path = path;
     fo.cull = CullMode::Frustum;
+    fo.swRaster = SwRasterMode::Off;  // (its passes are the micro-raster's tests' subject: test_sw_raster.cpp)
     auto f = (*r)->renderFrame(scene.defaultCamera, fo);
     ASSERT_TRUE(f.ok());
     EXPECT_EQ(f->stats.transparentDraws, 0u);

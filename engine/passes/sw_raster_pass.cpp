@@ -1,0 +1,48 @@
+#include "passes/sw_raster_pass.h"
+
+#include <algorithm>
+
+#include "passes/visibility_pass.h"
+#include "shared/types.h"
+
+namespace visbuf::passes {
+
+SwRasterPass SwRasterPass::create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec) {
+  SwRasterPass p;
+  p.raster = gpu::createComputePipeline(device, layout, "sw_raster.comp", spec);
+  for (int wide = 0; wide < 2; ++wide) {
+    gpu::GraphicsPipelineDesc d;
+    d.vertexShader = "sw_merge.vert";
+    d.fragmentShader = wide ? "sw_merge_wide.frag" : "sw_merge.frag";
+    d.colorFormats = {wide ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32_UINT};
+    d.cullMode = VK_CULL_MODE_NONE;
+    d.windowed = spec.windowed;
+    p.merge[wide] = gpu::createGraphicsPipeline(device, layout, d);
+  }
+  return p;
+}
+
+uint32_t SwRasterPass::workgroups(uint32_t capacity) {
+  return std::clamp((capacity + SW_RASTER_WORKGROUP - 1) / SW_RASTER_WORKGROUP, 1u, 1024u);
+}
+
+void SwRasterPass::recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
+                                uint32_t groups) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, raster.handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  gpu::PassConstants pc{phase, 0, 0, 0};
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  vkCmdDispatch(cmd, groups, 1, 1);
+}
+
+void SwRasterPass::recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+                               const gpu::Image& ids, const gpu::Image& depth) const {
+  beginRendering(cmd, ids, {}, depth, /*load=*/true);
+  const bool wide = ids.format() == VK_FORMAT_R32G32_UINT;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, merge[wide ? 1 : 0].handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdDraw(cmd, 3, 1, 0, 0);
+  vkCmdEndRendering(cmd);
+}
+
+}  // namespace visbuf::passes

@@ -1,0 +1,28 @@
+// Software micro-raster (shaders/sw_raster.comp.glsl, sw_merge.{vert,frag}.glsl): the draws that the cull pass
+// routed away from the hardware raster (small objects: FrameData.swRaster) are rasterised in compute into a 64-bit
+// buffer per pixel (reverse-Z depth << 32 | payload, atomicMax), then merged into the visibility target and its
+// depth by a full-screen pass that writes gl_FragDepth and is depth-tested GREATER like any raster fragment. Run
+// after each raster phase; the pyramid, the late phase, the shading and the transparency pass see one target.
+// Reads: frame, objects, meshes, vertices, indices, draws, draw counts (stats), draw lists. Writes: the buffer
+// (cleared by the early/only phase), ID target, depth.
+#pragma once
+
+#include "gpu/pipeline.h"
+#include "gpu/resources.h"
+
+namespace visbuf::passes {
+
+struct SwRasterPass {
+  gpu::Pipeline raster;
+  gpu::Pipeline merge[2];  // narrow (r32ui), wide (rg32ui)
+  static SwRasterPass create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec);
+  // Workgroups of the raster dispatch: each loops over the phase's routed draws (their count is on the GPU).
+  static uint32_t workgroups(uint32_t capacity);
+  void recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
+                    uint32_t groups) const;
+  // ids / depth: COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL, loaded and stored.
+  void recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& ids,
+                   const gpu::Image& depth) const;
+};
+
+}  // namespace visbuf::passes

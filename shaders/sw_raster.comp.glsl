@@ -1,0 +1,111 @@
+#version 460
+// Software micro-raster (sw_raster_pass): the draws the cull pass routed here -- small objects, whose triangles
+// cover a few pixels each -- are rasterised in compute instead of by the hardware raster (on lavapipe its
+// geometry path is serial and costs ~130 ns per triangle, while compute runs on every core). Each invocation takes
+// one draw at a time, its triangles in turn: the same clip positions as the visibility vertex shader
+// (clipPosition), the viewport transform, vertices snapped to 1/256 pixel, the draw list's face culling, pixel
+// centres tested with integer edge functions under the top-left rule, depth interpolated in screen space, and the
+// nearest fragment kept per pixel by a 64-bit atomicMax of (reverse-Z depth bits << 32 | payload). The merge
+// (sw_merge.frag) then depth-tests those against the hardware raster's depth and writes the IDs and depth, so every
+// later pass reads one visibility target.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_atomic_int64 : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#include "common.glsl"
+
+layout(local_size_x = SW_RASTER_WORKGROUP) in;
+layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
+layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
+layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
+layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
+layout(std430, set = 0, binding = BINDING_SW_VISIBILITY) buffer SwBlock { uint64_t swVisibility[]; };
+layout(push_constant) uniform Push { PassConstants pc; };
+
+// Window position in 1/256 pixel, relative to the pixel-centre grid (pixel (i, j)'s centre is (256 i, 256 j)).
+ivec2 snapToGrid(vec4 clip) {
+  precise vec2 ndc = clip.xy / clip.w;  // (as the hardware's viewport transform: a division, not 1/w)
+  precise vec2 half_ = 0.5 * frame.viewport.xy;
+  precise vec2 window = ndc * half_ + half_;
+  return ivec2(roundEven((window - 0.5) * 256.0));
+}
+
+// Edge function of u -> v at p (positive inside a triangle of positive area).
+int edge(ivec2 u, ivec2 v, ivec2 p) { return (v.x - u.x) * (p.y - u.y) - (v.y - u.y) * (p.x - u.x); }
+// Top-left rule (y down, positive area): top edges run in +x, left edges in -y; other edges exclude their pixels.
+int edgeBias(ivec2 u, ivec2 v) {
+  ivec2 d = v - u;
+  return (d.y < 0 || (d.y == 0 && d.x > 0)) ? 0 : -1;
+}
+
+// Returns 1 for a triangle it could not take (counted per draw: on lavapipe an atomic costs a loop over the lanes
+// wherever it stands in the code, taken or not), else 0.
+uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
+  uint base = d.firstIndex + 3u * t;
+  vec4 c0 = clipPosition(o, meshPosition(o.meshIndex, indices[base + 0u] + uint(d.vertexOffset)));
+  vec4 c1 = clipPosition(o, meshPosition(o.meshIndex, indices[base + 1u] + uint(d.vertexOffset)));
+  vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, indices[base + 2u] + uint(d.vertexOffset)));
+  // The cull pass routes only objects wholly beyond the near plane; a frozen frame's camera may have moved since.
+  if (!(c0.w >= frame.nearPlane && c1.w >= frame.nearPlane && c2.w >= frame.nearPlane)) return 1u;
+  ivec2 p0 = snapToGrid(c0), p1 = snapToGrid(c1), p2 = snapToGrid(c2);
+  ivec2 lo = min(p0, min(p1, p2)), hi = max(p0, max(p1, p2));
+  ivec2 pxLo = max((lo + 255) >> 8, ivec2(0));
+  ivec2 pxHi = min(hi >> 8, ivec2(frame.viewport.xy) - 1);
+  if (pxLo.x > pxHi.x || pxLo.y > pxHi.y) return 0u;  // covers no pixel centre of the frame
+  // Its edge functions could leave 32 bits: counted, never silent.
+  if (hi.x - lo.x > SW_RASTER_MAX_EXTENT * 256 || hi.y - lo.y > SW_RASTER_MAX_EXTENT * 256) return 1u;
+  // Work relative to p0 so that every product stays within 32 bits.
+  ivec2 b = p1 - p0, c = p2 - p0, a = ivec2(0);
+  int area = b.x * c.y - b.y * c.x;  // > 0: clockwise on screen (y down), a back face for VK_FRONT_FACE_CCW
+  if (area == 0) return 0u;
+  bool keep = list == DRAW_LIST_OPAQUE_DOUBLE_SIDED || (list == DRAW_LIST_OPAQUE_FLIPPED ? area > 0 : area < 0);
+  if (!keep) return 0u;
+  float z0 = c0.z / c0.w, z1 = c1.z / c1.w, z2 = c2.z / c2.w;
+  if (area < 0) {  // same winding for the coverage test
+    ivec2 s = b;
+    b = c;
+    c = s;
+    float zs = z1;
+    z1 = z2;
+    z2 = zs;
+    area = -area;
+  }
+  int bias0 = edgeBias(b, c), bias1 = edgeBias(c, a), bias2 = edgeBias(a, b);
+  float invArea = 1.0 / float(area);
+  uint payload = frame.wideIds != 0u ? (slot << frame.swTriangleBits) | t : ((slot << frame.triangleBits) | t) + 1u;
+  uint width = uint(frame.viewport.x);
+  for (int y = pxLo.y; y <= pxHi.y; ++y) {
+    for (int x = pxLo.x; x <= pxHi.x; ++x) {
+      ivec2 p = ivec2(x, y) * 256 - p0;
+      int w0 = edge(b, c, p), w1 = edge(c, a, p), w2 = edge(a, b, p);
+      if (w0 + bias0 < 0 || w1 + bias1 < 0 || w2 + bias2 < 0) continue;
+      float z = (float(w0) * z0 + float(w1) * z1 + float(w2) * z2) * invArea;
+      uint64_t packed = (uint64_t(floatBitsToUint(max(z, 0.0))) << 32) | uint64_t(payload);
+      uint i = uint(y) * width + uint(x);
+      if (packed > swVisibility[i]) atomicMax(swVisibility[i], packed);
+    }
+  }
+  return 0u;
+}
+
+void main() {
+  // This phase's routed draws of every list (each list's region filled from its end: slots
+  // [first + capacity - count, first + capacity)), one draw per invocation at a time: on lavapipe the lanes of a
+  // SIMD batch then run whole draws side by side, and the per-draw work is paid once per draw, not per triangle.
+  uint c0 = drawLists[0].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 0u], drawLists[0].z) : 0u;
+  uint c1 = drawLists[1].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 1u], drawLists[1].z) : 0u;
+  uint c2 = drawLists[2].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 2u], drawLists[2].z) : 0u;
+  uint total = c0 + c1 + c2;
+  uint stride = gl_NumWorkGroups.x * SW_RASTER_WORKGROUP;
+  for (uint k = gl_GlobalInvocationID.x; k < total; k += stride) {
+    uint list = k < c0 ? 0u : k < c0 + c1 ? 1u : 2u;
+    uint i = k - (list == 0u ? 0u : list == 1u ? c0 : c0 + c1);
+    uvec4 region = drawLists[list];
+    uint slot = (pc.phase == CULL_PHASE_LATE ? region.y : region.x) + region.z - 1u - i;
+    DrawCommand d = draws[slot];
+    ObjectData o = objectAt(d.firstInstance);
+    uint triangles = d.indexCount / 3u;
+    uint refused = 0u;
+    for (uint t = 0u; t < triangles; ++t) refused += rasterTriangle(slot, d, o, list, t);
+    if (refused > 0u) atomicAdd(stats[STAT_SW_OVERSIZE], refused);
+  }
+}
