@@ -399,14 +399,14 @@ TEST(PackReader, WrongMagicAndVersion) {
   reseal(v);
   EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
                         ErrorCode::Unsupported));
-  // Version 2 packs (before quantised vertices) are refused too: the user re-bakes.
-  EXPECT_EQ(pack::kVersion, 3u);
+  // Version 3 packs (morph weights baked, before animated morph targets) are refused too: the user re-bakes.
+  EXPECT_EQ(pack::kVersion, 4u);
   v = *bytes;
   h = headerOf(v);
-  h.version = 2;
+  h.version = 3;
   std::memcpy(v.data(), &h, sizeof(h));
   reseal(v);
-  EXPECT_TRUE(failsWith(parse(v), "pack format version 2 is not supported by this build (it reads version 3); re-bake",
+  EXPECT_TRUE(failsWith(parse(v), "pack format version 3 is not supported by this build (it reads version 4); re-bake",
                         ErrorCode::Unsupported));
   v = *bytes;
   v[0] = 'X';
