@@ -19,6 +19,7 @@
 
 #include "asset/gltf_import.h"
 #include "asset/scene_bake.h"
+#include "temp_dir_test.h"
 #include "test_assets.h"
 
 namespace visbuf {
@@ -161,6 +162,37 @@ TEST(GltfAssetReference, SimpleMorphSceneKeepsItsDeltas) {
     for (size_t t = 0; t < deltas.size(); ++t) expected += weights[t] * deltas[t][match];
     EXPECT_LE(glm::length(m.position - expected), 1e-12);
   }
+}
+
+// The other side of the rule: SimpleMorph without its animation (a copy of the .gltf with "animations" removed,
+// the .bin files beside it) has no weights channel, so its default weights are baked into the vertices as
+// before: no morph targets kept, no skin made up, no skinned object (so the renderer records no skinning).
+class GltfAssetReferenceFiles : public test::TempDirTest {};
+TEST_F(GltfAssetReferenceFiles, SimpleMorphWithoutAnimationIsBakedAndStatic) {
+  const fs::path file = test::assetPath("SimpleMorph/glTF/SimpleMorph.gltf");
+  REQUIRE_ASSET(file);
+  std::ifstream in(file);
+  nlohmann::json doc = nlohmann::json::parse(in);
+  ASSERT_TRUE(doc.contains("animations"));
+  doc.erase("animations");
+  for (const auto& entry : fs::directory_iterator(file.parent_path()))
+    if (entry.path().extension() == ".bin") fs::copy_file(entry.path(), dir_ / entry.path().filename());
+  const fs::path copy = dir_ / "SimpleMorphStill.gltf";
+  std::ofstream(copy) << doc.dump();
+  auto imported = importGltfScene(copy.string());
+  ASSERT_TRUE(imported.ok()) << imported.error().message;
+  ASSERT_EQ(imported->meshes.size(), 1u);
+  EXPECT_TRUE(imported->meshes[0].source.morphTargets.empty());
+  EXPECT_TRUE(imported->meshes[0].source.joints.empty());
+  EXPECT_TRUE(imported->skins.empty());
+  EXPECT_FALSE(imported->instances[0].morphed);
+  auto mesh = importGltfMesh(file.string());  // the baked positions (checked against the .bin above)
+  ASSERT_TRUE(mesh.ok());
+  EXPECT_EQ(imported->meshes[0].source.positions, mesh->positions);
+  auto scene = buildImportedScene(*imported);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  EXPECT_TRUE(scene->skinnedObjects.empty());
+  EXPECT_EQ(scene->meshes[0].morphTargetCount, 0u);
 }
 
 // KHR_mesh_quantization on a real file: the quantised copy of AnimatedMorphCube, dequantised by its node
