@@ -184,11 +184,12 @@ TEST(Skinning, MorphTargetsMatchCpuMorphedForwardReference) {
 
 // GPU-morphed vertices read back against the CPU's double-precision morph (morphVertex), then skinning (the
 // one-joint skin of these morph-only meshes, i.e. their node transform), for the three morph assets, 3
-// instances each at their own phase (makeAnimatedField), at 5 times. AnimatedMorphCube also gets a tangent on
-// every vertex and tangent deltas (its file's are zero and its tangents are dropped for want of a normal map),
-// so the tangent morph is checked too. Bounds: positions 1e-5 of the rest radius, normals and tangents 2e-4 (as
-// TangentsMatchCpuDoubleSkinning; the radius scaled by the pose's largest joint scale). The weights must move the mesh: some vertex at some time at least 1 % of the
-// radius away from the unmorphed base, or the comparison could not tell morphing from no morphing.
+// instances each at their own phase (makeAnimatedField), at 5 times. AnimatedMorphCube's tangents are replaced
+// by ones perpendicular to each normal, with both handednesses, and given tangent deltas (the file's tangents
+// are axis-aligned and its tangent deltas zero, which would check the tangent morph only trivially). Bounds:
+// positions 1e-5 of the rest radius scaled by the pose's largest joint scale, normals and tangents 2e-4 (as
+// TangentsMatchCpuDoubleSkinning). The weights must move the mesh: some vertex at some time at least 1 % of
+// that radius away from the unmorphed base, or the comparison could not tell morphing from no morphing.
 TEST(Skinning, MorphTargetsMatchCpuDoubleReference) {
   if (!std::filesystem::exists(assetPath(kMorphAssets[0]))) GTEST_SKIP() << "shared assets not present";
   gpu::Device& dev = test::testDevice();
