@@ -5,6 +5,9 @@
 // its mesh slot addresses by buffer device address (MeshData.skinnedVertex*, skinnedTangent*): the raster, the
 // shading pass and the forward path read it through meshVertex() in common.glsl. Uv, colour and the tangent's
 // handedness stay the rest vertex's, so they are not copied per instance.
+// Morph targets (si.morphTargets > 0) come first, as glTF orders them: the base position, normal and tangent
+// plus the weighted deltas of every target with a non-zero weight (normal and tangent renormalised), then the
+// skinning above; a morph-only mesh has a one-joint skin whose joint is its node.
 // Thread 0 of each instance writes the instance's LOD errors scaled by the pose, and with joint-reach bounds
 // the CPU's sphere (animation.h). With GPU bounds (pc.material & SKIN_MODE_GPU_BOUNDS) every subgroup reduces its
 // skinned positions to an AABB and merges it into the instance's bounds record with 6 atomicMin; the
@@ -89,6 +92,7 @@ layout(std430, set = 0, binding = SKIN_BINDING_VERTICES_3) readonly buffer Verte
 layout(std430, set = 0, binding = SKIN_BINDING_SKIN_VERTICES) readonly buffer SkinBlock { SkinVertexData skin[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_JOINTS) readonly buffer JointBlock { vec4 jointRows[]; };
 layout(std430, set = 0, binding = SKIN_BINDING_EXTRAS) readonly buffer ExtraBlock { VertexExtra vertexExtras[]; };
+layout(std430, set = 0, binding = SKIN_BINDING_MORPH_DELTAS) readonly buffer MorphBlock { MorphDelta morphDeltas[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer SkinnedVertexRef { SkinnedVertex items[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer SkinnedTangentRef { uint items[]; };
 
@@ -137,10 +141,33 @@ void main() {
     r2 += w[i] * jointRows[base + 2u];
   }
   vec4 p = vec4(rest.px, rest.py, rest.pz, 1.0);
+  vec3 n = octDecode(rest.normal);
+  uvec2 tangents = uvec2(meshes[si.meshSlot].skinnedTangentLow, meshes[si.meshSlot].skinnedTangentHigh);
+  VertexExtra e;
+  e.tangentW = 0.0;
+  if (tangents != uvec2(0u)) e = vertexExtras[si.sourceExtra + v];
+  vec3 restTangent = e.tangentW != 0.0 ? octDecode(e.tangent) : vec3(0.0);
+  if (si.morphTargets > 0u) {
+    vec3 dp = vec3(0.0), dn = vec3(0.0), dt = vec3(0.0);
+    for (uint t = 0u; t < si.morphTargets; ++t) {
+      float mw = jointRows[si.morphWeightRow + t / 4u][t % 4u];
+      if (mw == 0.0) continue;
+      MorphDelta d = morphDeltas[si.firstMorphDelta + t * si.vertexCount + v];
+      dp += mw * vec3(d.px, d.py, d.pz);
+      dn += mw * vec3(d.nx, d.ny, d.nz);
+      dt += mw * vec3(d.tx, d.ty, d.tz);
+    }
+    p.xyz += dp;
+    vec3 mn = n + dn;
+    n = dot(mn, mn) > 0.0 ? normalize(mn) : n;  // a delta cancelling the normal: keep the base one
+    if (e.tangentW != 0.0) {
+      vec3 mt = restTangent + dt;
+      restTangent = dot(mt, mt) > 0.0 ? normalize(mt) : restTangent;
+    }
+  }
   // Normal: the cofactor of the blended 3x3 (inverse transpose up to scale), signed by its determinant.
   vec3 a = r0.xyz, b = r1.xyz, c = r2.xyz;
   vec3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
-  vec3 n = octDecode(rest.normal);
   vec3 sn = (dot(a, bc) < 0.0 ? -1.0 : 1.0) * vec3(dot(bc, n), dot(ca, n), dot(ab, n));
   SkinnedVertex o;
   o.px = dot(r0, p);
@@ -151,12 +178,10 @@ void main() {
   // Tangent: a direction on the surface, so the blended 3x3 itself (like a position difference); w (the
   // bitangent's handedness) is the rest vertex's, read from its VertexExtra by every reader. (A blend with a
   // negative determinant -- a mirroring joint scale, in none of our assets -- would need w * sign(det).)
-  uvec2 tangents = uvec2(meshes[si.meshSlot].skinnedTangentLow, meshes[si.meshSlot].skinnedTangentHigh);
   if (tangents != uvec2(0u)) {
-    VertexExtra e = vertexExtras[si.sourceExtra + v];
     uint t = 0u;
     if (e.tangentW != 0.0) {
-      vec3 rt = octDecode(e.tangent);
+      vec3 rt = restTangent;
       t = octEncode(normalize(vec3(dot(a, rt), dot(b, rt), dot(c, rt))));
     }
     SkinnedTangentRef(tangents).items[v] = t;

@@ -31,6 +31,27 @@ execute_process(COMMAND ${VISBUF} render --scene ${OUT}/helmet_q.vbp --size 160x
 if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet_q.png)
   message(FATAL_ERROR "render of the quantised pack failed (${rc}):\n${out3}\n${err3}")
 endif()
+# Animated morph targets through a pack (version 4 morph sections): --skin-check reads the morphed instance back
+# against the CPU's double-precision morph + skinning; at t = 1 s AnimatedMorphCube's weights are non-zero.
+file(REMOVE ${OUT}/morph.vbp ${OUT}/morph.json)
+execute_process(COMMAND ${VISBUF} bake ${ASSETS}/AnimatedMorphCube/glTF/AnimatedMorphCube.gltf -o ${OUT}/morph.vbp
+                RESULT_VARIABLE rc OUTPUT_VARIABLE outm ERROR_VARIABLE errm)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/morph.vbp)
+  message(FATAL_ERROR "bake of AnimatedMorphCube failed (${rc}):\n${outm}\n${errm}")
+endif()
+execute_process(COMMAND ${VISBUF} render --scene ${OUT}/morph.vbp --size 160x120 --validation --time 1
+                        --skin-check 1 --json ${OUT}/morph.json -o ${OUT}/morph.png
+                RESULT_VARIABLE rc OUTPUT_VARIABLE outm ERROR_VARIABLE errm)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/morph.json)
+  message(FATAL_ERROR "render of the morph pack failed (${rc}):\n${outm}\n${errm}")
+endif()
+file(READ ${OUT}/morph.json jm)
+string(JSON minstances GET "${jm}" skinCheck instances)
+string(JSON moutside GET "${jm}" skinCheck outside)
+string(JSON mpos GET "${jm}" skinCheck maxPositionError)
+if(NOT minstances EQUAL 1 OR NOT moutside EQUAL 0 OR mpos GREATER 1e-4)
+  message(FATAL_ERROR "morph skin check: ${minstances} instances, ${moutside} outside, position error ${mpos}")
+endif()
 execute_process(COMMAND ${VISBUF} bake ${OUT}/missing.glb -o ${OUT}/missing.vbp RESULT_VARIABLE rc ERROR_VARIABLE e OUTPUT_QUIET)
 if(NOT rc EQUAL 1 OR EXISTS ${OUT}/missing.vbp)
   message(FATAL_ERROR "a missing input must exit 1 and write nothing (got ${rc}): ${e}")

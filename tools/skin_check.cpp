@@ -19,19 +19,21 @@ SkinCheck checkSkinning(const Renderer& renderer, const Scene& scene, double tim
     const SkinnedObject& so = scene.skinnedObjects[i];
     const Mesh& mesh = scene.meshes[scene.objects[so.object].mesh];
     const std::vector<glm::dmat4> joints = skinnedObjectJoints(scene, so, time);
+    const std::vector<double> weights = so.morphNode >= 0 ? skinnedObjectMorphWeights(scene, so, time)
+                                                          : std::vector<double>();
     const glm::dvec3 centre(back->bounds);
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
     for (size_t v = 0; v < back->vertices.size(); ++v) {
       const gpu::SkinnedVertex& s = back->vertices[v];
-      const gpu::Vertex& rest = mesh.vertices[v];
+      const MorphedVertex rest = morphVertex(mesh, uint32_t(v), weights);  // glTF: morph, then skin
       const SkinVertex& w = mesh.skinVertices[v];
       const glm::dvec3 p(s.px, s.py, s.pz);
-      const glm::dvec3 want = skinPosition(glm::dvec3(rest.px, rest.py, rest.pz), w, joints);
+      const glm::dvec3 want = skinPosition(rest.position, w, joints);
       c.maxPositionError = std::max(c.maxPositionError, glm::length(p - want) / mesh.boundsSphere.w);
-      const glm::dvec3 n = skinNormal(glm::dvec3(octDecode(rest.normal)), w, joints);
+      const glm::dvec3 n = skinNormal(rest.normal, w, joints);
       c.maxNormalError = std::max(c.maxNormalError, glm::length(glm::dvec3(octDecode(s.normal)) - n));
       if (!back->tangents.empty() && mesh.tangents[v].w != 0.0f) {
-        const glm::dvec3 t = skinTangent(glm::dvec3(mesh.tangents[v]), w, joints);
+        const glm::dvec3 t = skinTangent(rest.tangent, w, joints);
         c.maxTangentError = std::max(c.maxTangentError, glm::length(glm::dvec3(octDecode(back->tangents[v])) - t));
       }
       c.outside += !(glm::length(p - centre) <= double(back->bounds.w));

@@ -286,6 +286,7 @@ struct DecodedPrimitive {
   // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
   std::vector<std::vector<glm::vec3>> positionDeltas;
   std::vector<std::vector<glm::vec3>> normalDeltas;
+  std::vector<std::vector<glm::vec3>> tangentDeltas;  // TANGENT (xyz): kept only for animated morph targets
   std::vector<uint32_t> triangles;  // 3 local indices per triangle, counter-clockwise
 };
 
@@ -347,7 +348,10 @@ class Importer {
   Status emitNodeLight(int node, const glm::dmat4& world, ImportedScene* scene);
 
   // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights).
-  using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>>;
+  // The last member marks a mesh that keeps its morph targets (its node's weights are animated).
+  using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>, bool>;
+  std::set<int> morphAnimatedNodes_;        // nodes targeted by a weights channel of any clip
+  std::map<int, int32_t> morphSkins_;       // unskinned morph-animated node -> its one-joint skin
   std::map<SceneMeshKey, uint32_t> sceneMeshes_;  // -> ImportedScene::meshes index, UINT32_MAX: no triangles
   std::optional<uint32_t> defaultMaterial_;
 
@@ -790,12 +794,14 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
   }
   if (Status s = decodeSkinAttributes(prim, where, &out); !s) return s.error();
 
-  // Morph targets (only POSITION and NORMAL matter for a static mesh; TANGENT is ignored).
+  // Morph targets (only POSITION and NORMAL matter for a baked mesh; TANGENT too for an animated one).
   for (size_t t = 0; t < prim.targets.size(); ++t) {
     std::vector<glm::vec3> positionDelta;
     std::vector<glm::vec3> normalDelta;
+    std::vector<glm::vec3> tangentDelta;
     const std::string target = " target " + str(uint64_t{t});
-    for (auto [semantic, dst] : {std::pair{"POSITION", &positionDelta}, std::pair{"NORMAL", &normalDelta}}) {
+    for (auto [semantic, dst] : {std::pair{"POSITION", &positionDelta}, std::pair{"NORMAL", &normalDelta},
+                                 std::pair{"TANGENT", &tangentDelta}}) {
       auto it = prim.targets[t].find(semantic);
       if (it == prim.targets[t].end()) continue;
       const std::string w = where + target + " accessor " + str(it->second) + " (" + semantic + ")";
@@ -807,6 +813,7 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     }
     out.positionDeltas.push_back(std::move(positionDelta));
     out.normalDeltas.push_back(std::move(normalDelta));
+    out.tangentDeltas.push_back(std::move(tangentDelta));
   }
 
   // Indices: explicit or sequential; then convert the topology to a triangle list.
@@ -1215,6 +1222,26 @@ void appendSkinStreams(const DecodedPrimitive& prim, size_t base, MeshSource* ou
   out->weights.resize(end, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
 }
 
+// Appends a primitive's morph deltas (its vertices start at `base` in `out`) for the mesh's `targetCount`
+// targets: a stream that some primitive has is zero for the vertices of those that lack it.
+void appendMorphStreams(const DecodedPrimitive& prim, size_t base, size_t targetCount, MeshSource* out) {
+  out->morphTargets.resize(targetCount);
+  const size_t end = out->positions.size();
+  for (size_t t = 0; t < targetCount; ++t) {
+    MeshSource::MorphTarget& dst = out->morphTargets[t];
+    auto put = [&](std::vector<glm::vec3>& stream, const std::vector<std::vector<glm::vec3>>& deltas) {
+      const bool has = t < deltas.size() && !deltas[t].empty();
+      if (!has && stream.empty()) return;
+      stream.resize(base, glm::vec3(0.0f));
+      if (has) stream.insert(stream.end(), deltas[t].begin(), deltas[t].end());
+      stream.resize(end, glm::vec3(0.0f));
+    };
+    put(dst.positions, prim.positionDeltas);
+    put(dst.normals, prim.normalDeltas);
+    put(dst.tangents, prim.tangentDeltas);
+  }
+}
+
 // Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
 // KHR_lights_punctual: a node's {"extensions": {"KHR_lights_punctual": {"light": i}}} places model.lights[i].
 Status Importer::emitNodeLight(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
@@ -1266,6 +1293,12 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
   if (node.skin >= 0) {
     if (Status s = checkSkinnedNode(nodeIndex, **prims, nodeWhere); !s) return s;
   }
+  // Morph targets stay deltas (not baked) when a clip animates this node's weights.
+  size_t morphTargets = 0;
+  for (const DecodedPrimitive& prim : **prims)
+    if (!prim.skipped) morphTargets = std::max(morphTargets, prim.positionDeltas.size());
+  const bool morphed = morphTargets > 0 && morphAnimatedNodes_.count(nodeIndex) > 0;
+  static const std::vector<double> kUnmorphed;
 
   // Material groups in order of first appearance among the primitives.
   std::vector<int> groups;
@@ -1278,7 +1311,7 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
   }
 
   for (const int gltfMaterial : groups) {
-    SceneMeshKey key{node.mesh, gltfMaterial, mirrored, weights};
+    SceneMeshKey key{node.mesh, gltfMaterial, mirrored, weights, morphed};
     auto found = sceneMeshes_.find(key);
     uint32_t meshIndex = 0;
     uint32_t groupPrimitives = 0;
@@ -1310,10 +1343,24 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
         const std::string where =
             nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " + str(uint64_t{p});
         const size_t base = im.source.positions.size();
-        if (Status s = emitPrimitive(prim, glm::dmat4(1.0), weights, where, &im.source); !s) return s;
+        if (Status s = emitPrimitive(prim, glm::dmat4(1.0), morphed ? kUnmorphed : weights, where, &im.source); !s)
+          return s;
         appendSkinStreams(prim, base, &im.source);
+        if (morphed) appendMorphStreams(prim, base, morphTargets, &im.source);
       }
       appendSkinStreams(DecodedPrimitive{}, im.source.positions.size(), &im.source);  // pad to the end
+      if (morphed) {
+        if (weights.size() != morphTargets)
+          warn(nodeWhere + ": " + str(uint64_t{weights.size()}) + " morph weights for " + str(uint64_t{morphTargets}) +
+               " targets; missing ones are 0");
+        im.source.morphWeights.assign(morphTargets, 0.0f);
+        for (size_t t = 0; t < morphTargets && t < weights.size(); ++t)
+          im.source.morphWeights[t] = static_cast<float>(weights[t]);
+        if (node.skin < 0) {  // morph only: every vertex follows joint 0 of the node's one-joint skin
+          im.source.joints.assign(im.source.positions.size(), glm::u16vec4(0));
+          im.source.weights.assign(im.source.positions.size(), glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+        }
+      }
       padOptionalStreams(&im.source);
       if (mirrored) {
         for (size_t i = 0; i + 2 < im.source.indices.size(); i += 3)
@@ -1344,6 +1391,18 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
     inst.transform = world;
     inst.node = nodeIndex;
     inst.skin = node.skin >= 0 ? node.skin : -1;
+    inst.morphed = morphed;
+    if (morphed && node.skin < 0) {  // glTF applies the node's world matrix: a joint at the node does the same
+      auto [it, added] = morphSkins_.emplace(nodeIndex, int32_t(scene->skins.size()));
+      if (added) {
+        Skin skin;
+        skin.name = "morph " + (node.name.empty() ? "node " + str(nodeIndex) : node.name);
+        skin.joints = {static_cast<uint32_t>(nodeIndex)};
+        skin.inverseBindMatrices = {glm::dmat4(1.0)};
+        scene->skins.push_back(std::move(skin));
+      }
+      inst.skin = it->second;
+    }
     scene->instances.push_back(inst);
   }
   return {};
@@ -1360,6 +1419,9 @@ Result<ImportedScene> Importer::runScene() {
     return readFloats(accessor, AttributeKind::Unchecked, where, out, &n);
   };
   if (Status s = importAnimationData(model_, path_, read, warnFn, &scene); !s) return s.error();
+  for (const AnimationClip& clip : scene.animations)
+    for (const AnimationChannel& c : clip.channels)
+      if (c.path == AnimationPath::Weights) morphAnimatedNodes_.insert(static_cast<int>(c.node));
   std::string sceneLabel;
   Status walked = walkScene(
       [&](int nodeIndex, const glm::dmat4& world) { return emitSceneNode(nodeIndex, world, &scene); },

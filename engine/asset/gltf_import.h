@@ -51,8 +51,8 @@
 // Nothing in the file's contents can make the importer assert or crash.
 //
 // Not supported: KHR_draco_mesh_compression and EXT_mesh_gpu_instancing (Unsupported when required; when only
-// used, the plain nodes are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas (the base
-// tangents are kept), JOINTS_1 / WEIGHTS_1 (more than 4 influences per vertex: ignored with a warning),
+// used, the plain nodes are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas of baked
+// targets (the base tangents are kept; animated targets keep them, see importGltfScene), JOINTS_1 / WEIGHTS_1 (more than 4 influences per vertex: ignored with a warning),
 // KHR_animation_pointer channels (ignored with a warning). KHR_texture_transform is read into each TextureRef
 // (scene import), never applied to the vertex uvs (quantized uvs that rely on it come out in their raw integer
 // range).
@@ -106,6 +106,13 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     M * tangent, and under a mirroring M that cross product flips, so the variant carries the flip.
 //   - Morph weights: a node whose weights differ from the mesh's gets its own mesh variant (weights are baked
 //     into the vertices, as importGltfMesh does).
+//   - Animated morph targets: a node whose weights a clip animates (a "weights" channel) keeps its mesh's
+//     targets instead: MeshSource::morphTargets holds the POSITION, NORMAL and TANGENT deltas (object space,
+//     zero for primitives without a target or an attribute), the vertices are the base shape (weights 0) and
+//     MeshSource::morphWeights the node's (else the mesh's) default weights, padded with 0 to the target count
+//     (warning on a mismatch). Its instances have `morphed` set. An unskinned one becomes skinned by a skin of
+//     its own appended to ImportedScene::skins ("morph <node name>": one joint, the node itself, identity
+//     inverse bind) with every vertex on joint 0, weight 1: skinning by global(node) is the node transform.
 //   - Zero-determinant (degenerate, |det| < 1e-30 as validateScene() has it) instances are skipped with a
 //     warning (they cover no pixels).
 //   - Materials: every glTF material, in file order (so glTF material i is materials[i]): base colour factor
@@ -161,6 +168,7 @@ struct ImportedInstance {
   int32_t node = -1;          // source glTF node index
   int32_t skin = -1;          // into ImportedScene::skins when the node is skinned (then `transform` is not
                               // applied to the skinned vertices), -1 otherwise
+  bool morphed = false;       // the mesh keeps its morph targets, driven by `node`'s animated weights
 };
 
 // A glTF image as found in the file, not decoded.

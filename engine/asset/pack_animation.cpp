@@ -122,6 +122,33 @@ void writeSkinnedMeshes(const Scene& scene, Writer& w) {
             std::move(objects));
 }
 
+void writeMorphTargets(const Scene& scene, Writer& w) {
+  std::vector<uint8_t> meshes, deltas, weights, objects;
+  uint64_t meshCount = 0, deltaTotal = 0, weightTotal = 0, objectCount = 0;
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    const Mesh& mesh = scene.meshes[m];
+    if (mesh.morphTargetCount == 0) continue;
+    append(meshes, MorphMeshRecord{uint32_t(m), mesh.morphTargetCount, deltaTotal, weightTotal});
+    appendArray(deltas, mesh.morphDeltas.data(), mesh.morphDeltas.size());
+    std::vector<float> defaults(mesh.morphTargetCount, 0.0f);
+    std::copy_n(mesh.morphWeights.begin(), std::min<size_t>(defaults.size(), mesh.morphWeights.size()),
+                defaults.begin());
+    appendArray(weights, defaults.data(), defaults.size());
+    ++meshCount;
+    deltaTotal += mesh.morphDeltas.size();
+    weightTotal += defaults.size();
+  }
+  for (size_t i = 0; i < scene.skinnedObjects.size(); ++i) {
+    if (scene.skinnedObjects[i].morphNode < 0) continue;
+    append(objects, MorphObjectRecord{uint32_t(i), uint32_t(scene.skinnedObjects[i].morphNode)});
+    ++objectCount;
+  }
+  w.section(kMorphMeshesSection, sizeof(MorphMeshRecord), meshCount, std::move(meshes));
+  w.section(kMorphDeltasSection, sizeof(gpu::MorphDelta), deltaTotal, std::move(deltas));
+  w.section(kMorphWeightsSection, sizeof(float), weightTotal, std::move(weights));
+  w.section(kMorphObjectsSection, sizeof(MorphObjectRecord), objectCount, std::move(objects));
+}
+
 Status writeAnimations(const Scene& scene, Writer& w) {
   std::vector<uint8_t> clips, samplers, channels, times, values;
   uint64_t samplerTotal = 0, channelTotal = 0, timeTotal = 0, valueTotal = 0;
@@ -164,6 +191,7 @@ class Reader {
   Status readSkins();
   Status readSkinnedMeshes();
   Status readSkinnedObjects();
+  Status readMorphTargets();
   Status readAnimations();
 
  private:
@@ -299,6 +327,68 @@ Status Reader::readSkinnedObjects() {
   return {};
 }
 
+Status Reader::readMorphTargets() {
+  const SectionBytes s = find_(kMorphMeshesSection);
+  const SectionBytes deltas = find_(kMorphDeltasSection), weights = find_(kMorphWeightsSection);
+  uint64_t deltasUsed = 0, weightsUsed = 0;  // no amplification: every record range is counted once
+  for (uint64_t i = 0; i < s.count; ++i) {
+    const auto r = record<MorphMeshRecord>(s, i);
+    const std::string where = fmt::format("section 'morphMeshes' record {}", i);
+    if (r.mesh >= scene_.meshes.size())
+      return fail(fmt::format("{}: field 'mesh' {} out of range ({} meshes)", where, r.mesh, scene_.meshes.size()));
+    Mesh& mesh = scene_.meshes[r.mesh];
+    if (mesh.morphTargetCount != 0) return fail(fmt::format("{}: mesh {} is listed twice", where, r.mesh));
+    if (r.targetCount == 0 || r.targetCount > 65536)
+      return fail(fmt::format("{}: field 'targetCount' is {} (1..65536)", where, r.targetCount));
+    const uint64_t count = uint64_t(r.targetCount) * mesh.vertices.size();  // < 2^16 x 2^32: no overflow
+    if (Status st = checkRange(where, "firstDelta", r.firstDelta, "targetCount x vertexCount", count,
+                               kMorphDeltasSection);
+        !st)
+      return st;
+    if (Status st =
+            checkRange(where, "firstWeight", r.firstWeight, "targetCount", r.targetCount, kMorphWeightsSection);
+        !st)
+      return st;
+    deltasUsed += count;
+    weightsUsed += r.targetCount;
+    if (deltasUsed > deltas.count || weightsUsed > weights.count)
+      return fail(where + ": meshes reference more deltas or weights than sections 'morphDeltas' / 'morphWeights' hold");
+    mesh.morphTargetCount = r.targetCount;
+    mesh.morphDeltas.resize(count);
+    std::memcpy(mesh.morphDeltas.data(), deltas.data + r.firstDelta * sizeof(gpu::MorphDelta),
+                count * sizeof(gpu::MorphDelta));
+    mesh.morphWeights.resize(r.targetCount);
+    std::memcpy(mesh.morphWeights.data(), weights.data + r.firstWeight * sizeof(float), r.targetCount * sizeof(float));
+    for (uint64_t d = 0; d < count; ++d) {
+      const gpu::MorphDelta& m = mesh.morphDeltas[d];
+      for (float f : {m.px, m.py, m.pz, m.nx, m.ny, m.nz, m.tx, m.ty, m.tz})
+        if (!std::isfinite(f))
+          return fail(fmt::format("{}: delta {} (section 'morphDeltas' record {}) is not finite", where, d,
+                                  r.firstDelta + d));
+    }
+    for (uint32_t t = 0; t < r.targetCount; ++t)
+      if (!std::isfinite(mesh.morphWeights[t]))
+        return fail(fmt::format("{}: default weight {} (section 'morphWeights' record {}) is not finite", where, t,
+                                r.firstWeight + t));
+  }
+  const SectionBytes objects = find_(kMorphObjectsSection);
+  for (uint64_t i = 0; i < objects.count; ++i) {
+    const auto r = record<MorphObjectRecord>(objects, i);
+    const std::string where = fmt::format("section 'morphObjects' record {}", i);
+    if (r.skinnedObject >= scene_.skinnedObjects.size() || r.node >= scene_.nodes.size())
+      return fail(fmt::format("{}: field 'skinnedObject' {} / 'node' {} out of range ({} skinned objects, {} nodes)",
+                              where, r.skinnedObject, r.node, scene_.skinnedObjects.size(), scene_.nodes.size()));
+    SkinnedObject& so = scene_.skinnedObjects[r.skinnedObject];
+    if (so.morphNode >= 0)
+      return fail(fmt::format("{}: skinned object {} is listed twice", where, r.skinnedObject));
+    if (scene_.meshes[scene_.objects[so.object].mesh].morphTargetCount == 0)
+      return fail(fmt::format("{}: skinned object {} draws mesh {}, which has no 'morphMeshes' record", where,
+                              r.skinnedObject, scene_.objects[so.object].mesh));
+    so.morphNode = int32_t(r.node);
+  }
+  return {};
+}
+
 Status Reader::readSampler(const AnimSamplerRecord& r, const std::string& where, AnimationSampler* out) {
   if (r.interpolation > uint32_t(Interpolation::CubicSpline))
     return fail(fmt::format("{}: field 'interpolation' is {} (0 linear, 1 step, 2 cubic spline)", where,
@@ -390,6 +480,10 @@ uint32_t animationSectionElementSize(const std::string& name) {
       {kSkinnedMeshesSection, sizeof(SkinnedMeshRecord)},
       {kSkinVerticesSection, sizeof(SkinVertex)},
       {kSkinnedObjectsSection, sizeof(SkinnedObjectRecord)},
+      {kMorphMeshesSection, sizeof(MorphMeshRecord)},
+      {kMorphDeltasSection, sizeof(gpu::MorphDelta)},
+      {kMorphWeightsSection, sizeof(float)},
+      {kMorphObjectsSection, sizeof(MorphObjectRecord)},
       {kAnimationsSection, sizeof(AnimationRecord)},
       {kAnimSamplersSection, sizeof(AnimSamplerRecord)},
       {kAnimChannelsSection, sizeof(AnimChannelRecord)},
@@ -405,6 +499,7 @@ Result<std::vector<SectionData>> serializeAnimationSections(const Scene& scene, 
   if (Status s = writeNodes(scene, w); !s) return s.error();
   if (Status s = writeSkins(scene, w); !s) return s.error();
   writeSkinnedMeshes(scene, w);
+  writeMorphTargets(scene, w);
   if (Status s = writeAnimations(scene, w); !s) return s.error();
   return std::move(w.sections);
 }
@@ -416,6 +511,7 @@ Status readAnimationSections(const FindSection& find, const ReadString& readStri
   if (Status s = r.readSkins(); !s) return s;
   if (Status s = r.readSkinnedMeshes(); !s) return s;
   if (Status s = r.readSkinnedObjects(); !s) return s;
+  if (Status s = r.readMorphTargets(); !s) return s;
   return r.readAnimations();
 }
 

@@ -1,5 +1,6 @@
 // Optional pack sections for skeletal animation (docs/pack-format.md, "Animation sections"): the node
-// hierarchy, skins, per-vertex skin data of skinned meshes, which objects are skinned, and animation clips.
+// hierarchy, skins, per-vertex skin data of skinned meshes, which objects are skinned, animated morph targets,
+// and animation clips.
 // Same rules as pack_format.h (plain little-endian records copied with memcpy, sizes pinned below). A
 // section that is absent means "none"; a static scene has none of them, and a reader that does not know
 // them skips them (it then draws the rest pose). All "first*" ranges of one kind are disjoint and, summed
@@ -65,6 +66,33 @@ struct SkinnedObjectRecord {
 };
 static_assert(sizeof(SkinnedObjectRecord) == 8);
 
+// Section "morphMeshes": meshes with animated morph targets (Mesh::morphTargetCount > 0), at most one record
+// per mesh: deltas morphDeltas[firstDelta, + targetCount x the mesh's vertexCount), target-major
+// (delta of target t, vertex v at firstDelta + t * vertexCount + v), default weights
+// morphWeights[firstWeight, + targetCount).
+struct MorphMeshRecord {
+  uint32_t mesh;         // < mesh count
+  uint32_t targetCount;  // 1..65536
+  uint64_t firstDelta;   // into "morphDeltas"
+  uint64_t firstWeight;  // into "morphWeights"
+};
+static_assert(sizeof(MorphMeshRecord) == 24);
+
+// Section "morphDeltas": gpu::MorphDelta records (shared/types.h): position, normal, tangent xyz deltas, f32
+// x 9, finite.
+static_assert(sizeof(gpu::MorphDelta) == 36 && offsetof(gpu::MorphDelta, nx) == 12 &&
+              offsetof(gpu::MorphDelta, tx) == 24);
+
+// Section "morphWeights": f32 default weights, finite.
+
+// Section "morphObjects": the morph node of skinned objects whose mesh has morph targets
+// (SkinnedObject::morphNode), at most one record per skinned object.
+struct MorphObjectRecord {
+  uint32_t skinnedObject;  // < "skinnedObjects" count; its object's mesh has a "morphMeshes" record
+  uint32_t node;           // < node count: whose animated weights drive the targets
+};
+static_assert(sizeof(MorphObjectRecord) == 8);
+
 // Section "animations": one record per clip; samplers animSamplers[firstSampler, + samplerCount), channels
 // animChannels[firstChannel, + channelCount).
 struct AnimationRecord {
@@ -106,6 +134,10 @@ inline constexpr const char* kSkinJointsSection = "skinJoints";
 inline constexpr const char* kSkinnedMeshesSection = "skinnedMeshes";
 inline constexpr const char* kSkinVerticesSection = "skinVertices";
 inline constexpr const char* kSkinnedObjectsSection = "skinnedObjects";
+inline constexpr const char* kMorphMeshesSection = "morphMeshes";
+inline constexpr const char* kMorphDeltasSection = "morphDeltas";
+inline constexpr const char* kMorphWeightsSection = "morphWeights";
+inline constexpr const char* kMorphObjectsSection = "morphObjects";
 inline constexpr const char* kAnimationsSection = "animations";
 inline constexpr const char* kAnimSamplersSection = "animSamplers";
 inline constexpr const char* kAnimChannelsSection = "animChannels";

@@ -32,8 +32,10 @@ static_assert(std::endian::native == std::endian::little, "packs are little-endi
 
 inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
 // 2: full materials, textures, tangent / uv1 streams. 3: quantised vertices ("qvertices" + "quantization" instead
-// of "vertices"; exactly one of the two vertex sections is present).
-inline constexpr uint32_t kVersion = 3;
+// of "vertices"; exactly one of the two vertex sections is present). 4: animated morph targets (the "morph*"
+// sections of pack_animation_format.h): a mesh with targets stores its base shape, which a version-3 reader
+// would draw without the node's default weights.
+inline constexpr uint32_t kVersion = 4;
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
 inline constexpr size_t kSectionNameSize = 16;

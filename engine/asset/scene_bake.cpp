@@ -30,8 +30,11 @@ Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildO
   }
   scene.objects.reserve(imported.instances.size());
   for (const ImportedInstance& inst : imported.instances) {
-    if (inst.skin >= 0)
-      scene.skinnedObjects.push_back({uint32_t(scene.objects.size()), uint32_t(inst.skin)});
+    if (inst.skin >= 0) {
+      SkinnedObject so{uint32_t(scene.objects.size()), uint32_t(inst.skin)};
+      if (inst.morphed) so.morphNode = inst.node;
+      scene.skinnedObjects.push_back(so);
+    }
     scene.objects.push_back({inst.transform, inst.mesh, inst.material});
   }
   scene.nodes = imported.nodes;

@@ -21,16 +21,16 @@ void SkinPass::create(gpu::Device& device, const SkinInputs& in, uint32_t vertex
   bounds_ = in.bounds;
   gpuBounds_ = in.gpuBounds;
   VkDevice dev = device.device();
-  constexpr size_t kBindings = 10;
+  constexpr size_t kBindings = 11;
   const std::array<uint32_t, kBindings> bindings = {
       SKIN_BINDING_VERTICES,   SKIN_BINDING_MESHES,     SKIN_BINDING_SKIN_VERTICES, SKIN_BINDING_JOINTS,
       SKIN_BINDING_INSTANCES,  SKIN_BINDING_VERTICES_1, SKIN_BINDING_VERTICES_2,    SKIN_BINDING_VERTICES_3,
-      SKIN_BINDING_EXTRAS,     SKIN_BINDING_BOUNDS};
+      SKIN_BINDING_EXTRAS,     SKIN_BINDING_BOUNDS,     SKIN_BINDING_MORPH_DELTAS};
   auto whole = [](VkBuffer b) { return VkDescriptorBufferInfo{b, 0, VK_WHOLE_SIZE}; };
   const std::array<VkDescriptorBufferInfo, kBindings> buffers = {
       in.vertexWindows[0],     whole(in.meshes),        whole(in.skinVertices),     whole(in.joints),
       whole(in.instances),     in.vertexWindows[1],     in.vertexWindows[2],        in.vertexWindows[3],
-      whole(in.vertexExtras),  whole(in.bounds)};
+      whole(in.vertexExtras),  whole(in.bounds),        whole(in.morphDeltas)};
   std::array<VkDescriptorSetLayoutBinding, kBindings> b{};
   for (size_t i = 0; i < b.size(); ++i)
     b[i] = {bindings[i], VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};

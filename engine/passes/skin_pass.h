@@ -3,7 +3,7 @@
 // errors in its mesh slot. Bounds: the CPU's joint-reach sphere, or (gpuBounds) an AABB reduced from the skinned
 // vertices with atomics, whose centre and the largest distance of the vertices from it make the sphere (three
 // more dispatches of the skin_bounds variant).
-// Reads: rest vertices and tangents, skin vertices, joint rows, instance records. Writes: skinned regions,
+// Reads: rest vertices and tangents, skin vertices, morph deltas, joint rows (and morph weights), instance records. Writes: skinned regions,
 // mesh slots, the bounds records.
 // It has its own descriptor set (the frame's set never sees the skinning inputs); created only for scenes
 // with skinned objects.
@@ -25,6 +25,7 @@ struct SkinInputs {
   VkBuffer instances = VK_NULL_HANDLE;     // gpu::SkinInstance[]
   VkBuffer vertexExtras = VK_NULL_HANDLE;  // gpu::VertexExtra[] (rest tangents)
   VkBuffer bounds = VK_NULL_HANDLE;        // SKIN_BOUNDS_UINTS per instance (gpuBounds), else any 16 bytes
+  VkBuffer morphDeltas = VK_NULL_HANDLE;   // MorphDelta[] (scenes with morph targets), else any buffer
   bool gpuBounds = false;                  // bounds from the skinned vertices instead of the joints' reach
 };
 

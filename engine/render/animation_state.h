@@ -1,7 +1,8 @@
 // The CPU half of skinning: every frame, each skinned instance's pose is evaluated in double precision
 // (scene/animation.h: clip sampling, node hierarchy, joint matrices), its conservative bounding sphere taken
 // from the joints' reach (skinnedBoundsSphere), and the joint rows and instance records written to the
-// host-visible buffers the skinning pass (passes/skin_pass.h) reads. Exists only for scenes with skinned
+// host-visible buffers the skinning pass (passes/skin_pass.h) reads, with the morph weights of instances whose
+// mesh has morph targets (after all joint rows; the joint-reach bound widened by the weighted delta reach). Exists only for scenes with skinned
 // objects; a frame at the same animation time as the last one changes nothing (a paused animation is not
 // re-skinned).
 #pragma once
@@ -55,6 +56,8 @@ class AnimationState {
   std::vector<uint32_t> firstJoint_;                    // per region
   std::map<std::pair<uint32_t, uint32_t>, std::vector<glm::dvec4>> spheres_;  // (mesh, skin) -> per joint
   std::vector<const std::vector<glm::dvec4>*> regionSpheres_;
+  std::map<uint32_t, std::vector<double>> morphMaxDelta_;  // mesh -> per target: largest |position delta|
+  std::vector<uint32_t> morphWeightRow_;                   // per region: first row of its morph weights
   Pose rest_;
   std::vector<int32_t> regionOfObject_;
   std::vector<glm::dvec4> worldBounds_;

@@ -1559,7 +1559,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                       {vertexWindows(impl->gpuScene.vertices, impl->vertexShift), impl->gpuScene.meshes.handle(),
                        impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
                        impl->animation->instances().handle(), impl->gpuScene.vertexExtras.handle(),
-                       impl->animation->bounds().handle(), gpuBounds},
+                       impl->animation->bounds().handle(),
+                       impl->gpuScene.morphDeltas ? impl->gpuScene.morphDeltas.handle() : impl->animation->joints().handle(),
+                       gpuBounds},
                       impl->vertexShift);
   return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }

@@ -125,6 +125,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   // each source mesh once.
   std::vector<SkinVertex> skinVertices;
   std::vector<int64_t> skinVertexStart(scene.meshes.size(), -1);
+  std::vector<gpu::MorphDelta> morphDeltas;
+  std::vector<int64_t> morphDeltaStart(scene.meshes.size(), -1);
   for (const SkinnedObject& so : scene.skinnedObjects) {
     const Object& o = scene.objects[so.object];
     const Mesh& mesh = scene.meshes[o.mesh];
@@ -141,6 +143,16 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     r.sourceExtra = g.meshTable[o.mesh].extraOffset;
     r.vertexCount = uint32_t(mesh.vertices.size());
     r.hasTangents = !mesh.tangents.empty();
+    if (so.morphNode >= 0 && mesh.morphTargetCount > 0) {
+      if (morphDeltaStart[o.mesh] < 0) {
+        morphDeltaStart[o.mesh] = int64_t(morphDeltas.size());
+        morphDeltas.insert(morphDeltas.end(), mesh.morphDeltas.begin(), mesh.morphDeltas.end());
+      }
+      if (morphDeltas.size() > UINT32_MAX)
+        return makeError(ErrorCode::CapacityExceeded, "more than 2^32-1 morph deltas in the skinned meshes");
+      r.morphTargets = mesh.morphTargetCount;
+      r.firstMorphDelta = uint32_t(morphDeltaStart[o.mesh]);
+    }
     g.meshTable.push_back(g.meshTable[o.mesh]);  // addresses once the buffers exist
     objects[so.object] = packSkinnedObject(o, so.placement, scene);
     objects[so.object].meshIndex = r.meshSlot;
@@ -224,6 +236,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.objects = gpu::uploadVector(device, objects, ssbo);
   g.materials = gpu::uploadVector(device, materials, ssbo);
   if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
+  if (!morphDeltas.empty()) g.morphDeltas = gpu::uploadVector(device, morphDeltas, ssbo);
   g.vertexExtras = gpu::uploadVector(device, extras, ssbo);  // at least 16 bytes: always bindable
   uint64_t textureBytes = 0;
   for (const TextureClass& c : scene.textureClasses) {
@@ -238,7 +251,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.placeholderTexture = uploadTextureClass(device, white);
   g.objectCount = uint32_t(objects.size());
   g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
-            (g.skinVertices ? g.skinVertices.size() : 0) + skinnedBytes + g.vertexExtras.size() +
+            (g.skinVertices ? g.skinVertices.size() : 0) + (g.morphDeltas ? g.morphDeltas.size() : 0) + skinnedBytes + g.vertexExtras.size() +
             textureBytes;
   return g;
 }

@@ -40,9 +40,14 @@ struct GpuScene {
     uint32_t block = 0;         // skinnedVertices[block] holds the region
     uint64_t vertexBytes = 0;   // byte offset of the instance's SkinnedVertex[vertexCount] in that block
     uint64_t tangentBytes = 0;  // byte offset of its uint[vertexCount] skinned tangents; 0: the mesh has none
+    uint32_t morphTargets = 0;     // the mesh's morph targets (0: none)
+    uint32_t firstMorphDelta = 0;  // its first MorphDelta in morphDeltas
   };
   std::vector<SkinnedRegion> skinned;
   gpu::Buffer skinVertices;     // SkinVertex[] of the meshes skinned objects use (24 bytes each)
+  // MorphDelta[] of the meshes skinned objects with morph targets use (36 bytes per vertex and target); null
+  // when none has targets.
+  gpu::Buffer morphDeltas;
   // The instances' regions (device addresses), 16 (+ 4 with tangents) bytes per vertex, in blocks of at most
   // one buffer's size (maxBufferSize, maxMemoryAllocationSize: 2 GiB on lavapipe, about 89,000 Foxes each).
   std::vector<gpu::Buffer> skinnedVertices;

@@ -25,6 +25,16 @@ struct MeshSource {
   // Skinning streams (glTF JOINTS_0 / WEIGHTS_0): both empty, or both the same count as positions.
   std::vector<glm::u16vec4> joints;  // indices into the skin's joint list; slots with weight 0 hold 0
   std::vector<glm::vec4> weights;    // each >= 0, finite, summing to 1
+  // Morph targets (glTF mesh.primitives[].targets) kept for animation, not baked: each stream of a target is
+  // empty (the target does not move that attribute) or the same count as positions, finite. Tangent deltas
+  // move the tangent's xyz only. Every target of a mesh has the same streams present.
+  struct MorphTarget {
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;
+    std::vector<glm::vec3> tangents;
+  };
+  std::vector<MorphTarget> morphTargets;
+  std::vector<float> morphWeights;  // default weights (node's, else mesh's), one per target: empty = all 0
 };
 
 }  // namespace visbuf

@@ -110,6 +110,35 @@ Result<std::vector<SkinVertex>> skinVerticesOf(const MeshSource& source) {
   return out;
 }
 
+// The source's morph targets as one MorphDelta stream per target (vertexCount each, absent attributes 0).
+Result<std::vector<std::vector<gpu::MorphDelta>>> morphStreamsOf(const MeshSource& source) {
+  const size_t n = source.positions.size();
+  std::vector<std::vector<gpu::MorphDelta>> out(source.morphTargets.size());
+  if (!source.morphWeights.empty() && source.morphWeights.size() != source.morphTargets.size())
+    return makeError(ErrorCode::MalformedInput, fmt::format("mesh '{}': {} morph weights for {} targets", source.name,
+                                                            source.morphWeights.size(), source.morphTargets.size()));
+  for (size_t t = 0; t < out.size(); ++t) {
+    const MeshSource::MorphTarget& target = source.morphTargets[t];
+    for (const std::vector<glm::vec3>* stream : {&target.positions, &target.normals, &target.tangents})
+      if (!stream->empty() && stream->size() != n)
+        return makeError(ErrorCode::MalformedInput,
+                         fmt::format("mesh '{}': morph target {} has {} deltas for {} vertices", source.name, t,
+                                     stream->size(), n));
+    out[t].assign(n, gpu::MorphDelta{});
+    for (size_t v = 0; v < n; ++v) {
+      gpu::MorphDelta& d = out[t][v];
+      if (!target.positions.empty()) d.px = target.positions[v].x, d.py = target.positions[v].y, d.pz = target.positions[v].z;
+      if (!target.normals.empty()) d.nx = target.normals[v].x, d.ny = target.normals[v].y, d.nz = target.normals[v].z;
+      if (!target.tangents.empty()) d.tx = target.tangents[v].x, d.ty = target.tangents[v].y, d.tz = target.tangents[v].z;
+      for (float f : {d.px, d.py, d.pz, d.nx, d.ny, d.nz, d.tx, d.ty, d.tz})
+        if (!std::isfinite(f))
+          return makeError(ErrorCode::MalformedInput,
+                           fmt::format("mesh '{}': morph target {} vertex {} has a non-finite delta", source.name, t, v));
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options) {
@@ -164,13 +193,33 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   Result<std::vector<SkinVertex>> rawSkin = skinVerticesOf(source);
   if (!rawSkin) return rawSkin.error();
   const bool skinned = !rawSkin->empty();
-  // Deduplicate: two vertices merge only when the GPU vertex and the skin data are both identical.
+  Result<std::vector<std::vector<gpu::MorphDelta>>> rawMorph = morphStreamsOf(source);
+  if (!rawMorph) return rawMorph.error();
+  // Deduplicate: two vertices merge only when the GPU vertex, the skin data and every morph delta are identical
+  // (vertices that share a rest position but move apart under a target must stay two).
   const size_t indexCount = source.indices.size();
   std::vector<uint32_t> remap(vertexCount);
   std::vector<meshopt_Stream> streams = {{raw.data(), sizeof(gpu::Vertex), sizeof(gpu::Vertex)}};
   if (!source.tangents.empty()) streams.push_back({source.tangents.data(), sizeof(glm::vec4), sizeof(glm::vec4)});
   if (!source.uvs1.empty()) streams.push_back({source.uvs1.data(), sizeof(glm::vec2), sizeof(glm::vec2)});
   if (skinned) streams.push_back({rawSkin->data(), sizeof(SkinVertex), sizeof(SkinVertex)});
+  // meshopt_generateVertexRemapMulti takes at most 16 streams: targets beyond that are compared as one key.
+  std::vector<uint64_t> morphKey;
+  if (rawMorph->size() > 12) {
+    morphKey.resize(vertexCount);
+    for (size_t v = 0; v < vertexCount; ++v) {
+      uint64_t h = 1469598103934665603ull;  // FNV-1a over every delta of the vertex
+      for (const auto& target : *rawMorph) {
+        const auto* b = reinterpret_cast<const uint8_t*>(&target[v]);
+        for (size_t i = 0; i < sizeof(gpu::MorphDelta); ++i) h = (h ^ b[i]) * 1099511628211ull;
+      }
+      morphKey[v] = h;
+    }
+    streams.push_back({morphKey.data(), sizeof(uint64_t), sizeof(uint64_t)});
+  } else {
+    for (const auto& target : *rawMorph)
+      streams.push_back({target.data(), sizeof(gpu::MorphDelta), sizeof(gpu::MorphDelta)});
+  }
   size_t unique = meshopt_generateVertexRemapMulti(remap.data(), source.indices.data(), indexCount, vertexCount,
                                                    streams.data(), streams.size());
   Mesh mesh;
@@ -179,6 +228,8 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   mesh.tangents = remapStream(source.tangents, remap, unique);
   mesh.uvs1 = remapStream(source.uvs1, remap, unique);
   mesh.skinVertices = remapStream(*rawSkin, remap, unique);
+  std::vector<std::vector<gpu::MorphDelta>> morph(rawMorph->size());
+  for (size_t t = 0; t < morph.size(); ++t) morph[t] = remapStream((*rawMorph)[t], remap, unique);
   std::vector<uint32_t> lod0(indexCount);
   meshopt_remapIndexBuffer(lod0.data(), source.indices.data(), indexCount, remap.data());
 
@@ -196,6 +247,15 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   mesh.tangents = remapStream(mesh.tangents, fetch, unique);
   mesh.uvs1 = remapStream(mesh.uvs1, fetch, unique);
   mesh.skinVertices = remapStream(mesh.skinVertices, fetch, unique);
+  // Morph deltas follow the same remaps; the LOD levels below only re-index these vertices, so they share them.
+  mesh.morphTargetCount = uint32_t(morph.size());
+  mesh.morphDeltas.reserve(morph.size() * unique);
+  for (auto& target : morph) {
+    target = remapStream(target, fetch, unique);
+    mesh.morphDeltas.insert(mesh.morphDeltas.end(), target.begin(), target.end());
+  }
+  mesh.morphWeights = source.morphWeights;
+  if (mesh.morphWeights.empty()) mesh.morphWeights.assign(morph.size(), 0.0f);
   pos = &mesh.vertices[0].px;
 
   mesh.indices = lod0;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,14 @@ struct Mesh {
   std::vector<uint32_t> indices;  // every LOD, concatenated; indices are mesh-local
   std::vector<Lod> lods;          // lods[0] = full mesh; error non-decreasing
   std::vector<SkinVertex> skinVertices;  // empty, or parallel to vertices (a skinned mesh)
+  // Morph targets (empty: none): morphTargetCount x vertices.size() deltas, target-major
+  // (morphDeltas[t * vertices.size() + v]), parallel to `vertices` like the streams above; the LOD levels index
+  // the same vertices, so they share them. Only meshes whose node has an animated weights channel keep their
+  // targets (every other mesh has its weights baked into `vertices` by the importer); `vertices` is then the
+  // base shape (all weights 0) and an animated object of it is a SkinnedObject with morphNode set.
+  uint32_t morphTargetCount = 0;
+  std::vector<gpu::MorphDelta> morphDeltas;
+  std::vector<float> morphWeights;  // default weights (one per target), used where no channel sets the node's
   glm::vec4 boundsSphere{0.0f};   // contains every vertex
   uint32_t triangleCount(size_t lod = 0) const { return lods[lod].indexCount / 3; }
   glm::vec3 position(uint32_t vertex) const {
@@ -109,6 +118,11 @@ struct SkinnedObject {
   int32_t clip = 0;            // Scene::animations index played (looping); no such clip: the rest pose
   double timeOffset = 0.0;     // seconds added to the frame's animation time: each instance its own phase
   glm::dmat4 placement{1.0};   // world placement of the skinned result (identity for a file's own instances)
+  // Morph targets: the node whose animated weights (Pose::weights) drive the mesh's morph targets (the mesh's
+  // default morphWeights where no channel sets them), -1 for a mesh without targets. A morph-only mesh (no
+  // glTF skin) is skinned with a one-joint skin whose joint is this node (identity inverse bind): its global
+  // matrix is exactly the node transform glTF applies to an unskinned mesh.
+  int32_t morphNode = -1;
   bool operator==(const SkinnedObject&) const = default;
 };
 
@@ -144,6 +158,17 @@ Status validateSceneAnimation(const Scene& scene);
 // The joint matrices (double precision, skin space) of skinned object `so` at animation time `time` (plus its
 // timeOffset, its clip looping; the rest pose without a clip): the pose the skinning pass skins with.
 std::vector<glm::dmat4> skinnedObjectJoints(const Scene& scene, const SkinnedObject& so, double time);
+// Its morph weights at that time (one per target of its mesh, none without targets): the morph node's
+// animated weights where the clip sets them (a channel with fewer values leaves the rest at the default),
+// else the mesh's default morphWeights (0 where it has none).
+std::vector<double> skinnedObjectMorphWeights(const Scene& scene, const SkinnedObject& so, double time);
+// Reference morphing (double precision, glTF): vertex v of `mesh` under `weights` (weights[t] for target t;
+// missing ones 0): position p + sum w_t dp_t; normal normalize(n + sum w_t dn_t) (n the stored, decoded normal;
+// the base normal where the sum is zero); tangent xyz likewise from Mesh::tangents ((0,0,0) without).
+struct MorphedVertex {
+  glm::dvec3 position, normal, tangent;
+};
+MorphedVertex morphVertex(const Mesh& mesh, uint32_t v, std::span<const double> weights);
 
 // World-space bounding sphere of an object (double precision, conservative: uses the largest
 // column norm of the 3x3 part as the scale).

@@ -39,6 +39,27 @@ Status checkSkinVertices(const Mesh& mesh, size_t meshIndex, int64_t* maxJoint) 
   return {};
 }
 
+// Deltas: morphTargetCount x vertices, finite; default weights: none or one per target, finite.
+Status checkMorphTargets(const Mesh& mesh, size_t meshIndex) {
+  const uint64_t expected = uint64_t(mesh.morphTargetCount) * mesh.vertices.size();
+  if (mesh.morphDeltas.size() != expected)
+    return malformed(fmt::format("mesh {} '{}': {} morph deltas for {} targets x {} vertices", meshIndex,
+                                 mesh.name, mesh.morphDeltas.size(), mesh.morphTargetCount, mesh.vertices.size()));
+  if (!mesh.morphWeights.empty() && mesh.morphWeights.size() != mesh.morphTargetCount)
+    return malformed(fmt::format("mesh {} '{}': {} default morph weights for {} targets", meshIndex, mesh.name,
+                                 mesh.morphWeights.size(), mesh.morphTargetCount));
+  for (float w : mesh.morphWeights)
+    if (!std::isfinite(w)) return malformed(fmt::format("mesh {} '{}': non-finite morph weight", meshIndex, mesh.name));
+  for (size_t i = 0; i < mesh.morphDeltas.size(); ++i) {
+    const gpu::MorphDelta& d = mesh.morphDeltas[i];
+    for (float f : {d.px, d.py, d.pz, d.nx, d.ny, d.nz, d.tx, d.ty, d.tz})
+      if (!std::isfinite(f))
+        return malformed(fmt::format("mesh {} '{}': morph delta {} (target {}, vertex {}) is not finite", meshIndex,
+                                     mesh.name, i, i / mesh.vertices.size(), i % mesh.vertices.size()));
+  }
+  return {};
+}
+
 }  // namespace
 
 Status validateSceneAnimation(const Scene& scene) {
@@ -52,8 +73,10 @@ Status validateSceneAnimation(const Scene& scene) {
     if (Status s = validateClip(scene.animations[i], scene.nodes, where); !s) return s;
   }
   std::vector<int64_t> maxJoint(scene.meshes.size(), -1);
-  for (size_t m = 0; m < scene.meshes.size(); ++m)
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
     if (Status s = checkSkinVertices(scene.meshes[m], m, &maxJoint[m]); !s) return s;
+    if (Status s = checkMorphTargets(scene.meshes[m], m); !s) return s;
+  }
   std::vector<uint8_t> seen(scene.objects.size(), 0);
   for (size_t i = 0; i < scene.skinnedObjects.size(); ++i) {
     const SkinnedObject& so = scene.skinnedObjects[i];
@@ -66,6 +89,12 @@ Status validateSceneAnimation(const Scene& scene) {
     if (scene.meshes[mesh].skinVertices.empty())
       return malformed(
           fmt::format("{}: mesh {} '{}' has no skin vertices", where, mesh, scene.meshes[mesh].name));
+    if (so.morphNode < -1 || (so.morphNode >= 0 && size_t(so.morphNode) >= scene.nodes.size()))
+      return malformed(fmt::format("{}: morph node {} out of range ({} nodes)", where, so.morphNode,
+                                   scene.nodes.size()));
+    if (so.morphNode >= 0 && scene.meshes[mesh].morphTargetCount == 0)
+      return malformed(fmt::format("{}: morph node {} set, but mesh {} '{}' has no morph targets", where,
+                                   so.morphNode, mesh, scene.meshes[mesh].name));
     const size_t joints = scene.skins[so.skin].joints.size();
     if (maxJoint[mesh] >= 0 && static_cast<size_t>(maxJoint[mesh]) >= joints)
       return malformed(fmt::format("{}: mesh {} '{}' uses joint index {}, skin {} has {} joints", where, mesh,
@@ -79,6 +108,39 @@ std::vector<glm::dmat4> skinnedObjectJoints(const Scene& scene, const SkinnedObj
   if (so.clip >= 0 && size_t(so.clip) < scene.animations.size())
     sampleClip(scene.animations[size_t(so.clip)], time + so.timeOffset, true, pose);
   return jointMatrices(scene.skins[so.skin], globalMatrices(scene.nodes, pose));
+}
+
+std::vector<double> skinnedObjectMorphWeights(const Scene& scene, const SkinnedObject& so, double time) {
+  const Mesh& mesh = scene.meshes[scene.objects[so.object].mesh];
+  std::vector<double> weights(mesh.morphTargetCount, 0.0);
+  for (size_t t = 0; t < mesh.morphWeights.size() && t < weights.size(); ++t) weights[t] = mesh.morphWeights[t];
+  if (so.morphNode < 0) return weights;
+  Pose pose = restPose(scene.nodes);
+  if (so.clip >= 0 && size_t(so.clip) < scene.animations.size())
+    sampleClip(scene.animations[size_t(so.clip)], time + so.timeOffset, true, pose);
+  const std::vector<double>& animated = pose.weights[size_t(so.morphNode)];
+  for (size_t t = 0; t < animated.size() && t < weights.size(); ++t) weights[t] = animated[t];
+  return weights;
+}
+
+MorphedVertex morphVertex(const Mesh& mesh, uint32_t v, std::span<const double> weights) {
+  const gpu::Vertex& base = mesh.vertices[v];
+  MorphedVertex out{glm::dvec3(base.px, base.py, base.pz), glm::dvec3(octDecode(base.normal)), glm::dvec3(0.0)};
+  const bool tangent = !mesh.tangents.empty() && mesh.tangents[v].w != 0.0f;
+  if (tangent) out.tangent = glm::dvec3(glm::vec3(mesh.tangents[v]));
+  glm::dvec3 dn(0.0), dt(0.0);
+  for (size_t t = 0; t < mesh.morphTargetCount && t < weights.size(); ++t) {
+    if (weights[t] == 0.0) continue;
+    const gpu::MorphDelta& d = mesh.morphDeltas[t * mesh.vertices.size() + v];
+    out.position += weights[t] * glm::dvec3(d.px, d.py, d.pz);
+    dn += weights[t] * glm::dvec3(d.nx, d.ny, d.nz);
+    dt += weights[t] * glm::dvec3(d.tx, d.ty, d.tz);
+  }
+  const glm::dvec3 n = out.normal + dn;
+  if (glm::dot(n, n) > 0.0) out.normal = glm::normalize(n);
+  const glm::dvec3 tt = out.tangent + dt;
+  if (tangent && glm::dot(tt, tt) > 0.0) out.tangent = glm::normalize(tt);
+  return out;
 }
 
 }  // namespace visbuf

@@ -81,6 +81,7 @@
 #define SKIN_BINDING_VERTICES_3 7
 #define SKIN_BINDING_EXTRAS 8        // VertexExtra[] (rest tangents)
 #define SKIN_BINDING_BOUNDS 9        // uint[SKIN_BOUNDS_UINTS] per instance (GPU bounds only; else a placeholder)
+#define SKIN_BINDING_MORPH_DELTAS 10 // MorphDelta[] of the morph-target meshes (else a placeholder)
 // GPU-computed skinned bounds (RendererConfig::skinBounds = Gpu): per instance the ordered-float encodings
 // (orderedFloat in skin.comp.glsl) of min x, y, z and of min -x, -y, -z over its skinned vertices, then of
 // min -|p - centre|, reduced with atomicMin only (so one fill of 0xffffffff resets them); the skin_bounds

@@ -53,6 +53,15 @@ struct MeshData {
   LodData lods[MAX_LODS];
 };
 
+// One vertex's morph target delta (36 bytes, float-only so std430 packs it with a stride of 36): position,
+// normal and tangent (xyz) offsets added with the target's weight before skinning (glTF: morph, then skin).
+// Stored target-major per mesh: deltas[firstMorphDelta + target * vertexCount + vertex].
+struct MorphDelta {
+  float px, py, pz;
+  float nx, ny, nz;
+  float tx, ty, tz;
+};
+
 // What skinning changes in a vertex (16 bytes): the skinned position and normal of one instance's vertex.
 struct SkinnedVertex {
   float px, py, pz;  // skin-space position
@@ -170,7 +179,7 @@ struct PointLightData {
   vec4 colorIntensity;
 };
 
-// One animated instance of the skinning pass (48 bytes), written by the CPU every pose.
+// One animated instance of the skinning pass (64 bytes), written by the CPU every pose.
 struct SkinInstance {
   uint sourceVertex;  // first rest vertex (pool index)
   uint skinVertex;    // first SkinVertex
@@ -181,6 +190,12 @@ struct SkinInstance {
   uint sourceMesh;    // the rest-pose mesh's MeshData (its LOD errors)
   float lodScale;     // largest joint scale of the pose: multiplies the LOD errors
   vec4 bounds;        // skin space: xyz centre, w radius, contains every skinned vertex of the pose
+  // Morph targets (morphTargets 0: none): deltas MorphDelta[firstMorphDelta + t * vertexCount + v]; target t's
+  // weight is component t % 4 of joint row morphWeightRow + t / 4 (the rows after the instance's joint rows).
+  uint firstMorphDelta;
+  uint morphTargets;
+  uint morphWeightRow;
+  uint morphPad;
 };
 
 // Material classification: one record per material (32 bytes; config.h BINDING_MATERIAL_TILES). The first three

@@ -24,9 +24,9 @@ Result<Scene> loadAsset(const std::string& rel) {
   return buildImportedScene(*imported);
 }
 
-// The scene at `time` with every skinned object replaced by a static copy of its mesh, skinned on the CPU in
-// double precision (animation.h), placed by its placement; no animation data left. Shares no code with the
-// GPU path beyond the pose evaluation (clip sampling and joint matrices).
+// The scene at `time` with every skinned object replaced by a static copy of its mesh, morphed (morphVertex) and
+// skinned on the CPU in double precision (animation.h), placed by its placement; no animation data left. Shares
+// no code with the GPU path beyond the pose evaluation (clip sampling, joint matrices and morph weights).
 Scene cpuSkinned(const Scene& animated, double time) {
   Scene s = animated;
   s.nodes.clear();
@@ -35,25 +35,31 @@ Scene cpuSkinned(const Scene& animated, double time) {
   s.skinnedObjects.clear();
   for (const SkinnedObject& so : animated.skinnedObjects) {
     const std::vector<glm::dmat4> joints = skinnedObjectJoints(animated, so, time);
+    const std::vector<double> weights =
+        so.morphNode >= 0 ? skinnedObjectMorphWeights(animated, so, time) : std::vector<double>();
     const Object& o = animated.objects[so.object];
     Mesh m = animated.meshes[o.mesh];
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
     for (size_t v = 0; v < m.vertices.size(); ++v) {
       gpu::Vertex& vert = m.vertices[v];
-      const glm::dvec3 p = skinPosition(glm::dvec3(vert.px, vert.py, vert.pz), m.skinVertices[v], joints);
-      const glm::dvec3 n = skinNormal(glm::dvec3(octDecode(vert.normal)), m.skinVertices[v], joints);
+      const MorphedVertex morphed = morphVertex(animated.meshes[o.mesh], uint32_t(v), weights);
+      const glm::dvec3 p = skinPosition(morphed.position, m.skinVertices[v], joints);
+      const glm::dvec3 n = skinNormal(morphed.normal, m.skinVertices[v], joints);
       vert.px = float(p.x);
       vert.py = float(p.y);
       vert.pz = float(p.z);
       vert.normal = octEncode(glm::vec3(n));
       if (!m.tangents.empty() && m.tangents[v].w != 0.0f) {
-        const glm::dvec3 t = skinTangent(glm::dvec3(m.tangents[v]), m.skinVertices[v], joints);
+        const glm::dvec3 t = skinTangent(morphed.tangent, m.skinVertices[v], joints);
         m.tangents[v] = glm::vec4(glm::vec3(t), m.tangents[v].w);
       }
       lo = glm::min(lo, p);
       hi = glm::max(hi, p);
     }
     m.skinVertices.clear();
+    m.morphTargetCount = 0;
+    m.morphDeltas.clear();
+    m.morphWeights.clear();
     m.boundsSphere = glm::vec4(glm::vec3(0.5 * (lo + hi)), float(0.5 * glm::length(hi - lo)) * 1.0001f);
     s.objects[so.object].mesh = uint32_t(s.meshes.size());
     s.objects[so.object].transform = so.placement;
@@ -75,24 +81,21 @@ Scene cpuSkinned(const Scene& animated, double time) {
 //    that fails three Shading tests there -- while GPU-skinned visbuf is within 0.0005 of CPU-skinned visbuf.)
 //  - against visbuf drawing the CPU-skinned meshes: the same path, so only the skinning differs: the same
 //    triangle bound, and max 2e-3.
-TEST(Skinning, MatchesCpuSkinnedForwardReference) {
-  const std::vector<std::string> assets = {"CesiumMan/glTF/CesiumMan.gltf", "Fox/glTF-Binary/Fox.glb",
-                                           "RiggedFigure/glTF/RiggedFigure.gltf"};
-  if (!std::filesystem::exists(assetPath(assets[0]))) GTEST_SKIP() << "shared assets not present";
+namespace {
+
+// The body of the test below for one scene (`a` names it in messages) at `times`.
+void expectMatchesCpuSkinned(const std::string& a, const Scene* scene, std::initializer_list<double> times) {
   gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
   auto differentTriangles = [](const FrameResult& x, const FrameResult& y) {
     size_t n = 0;
     for (size_t i = 0; i < x.ids.size(); i += 2) n += x.ids[i] != y.ids[i] || x.ids[i + 1] != y.ids[i + 1];
     return n;
   };
-  for (const std::string& a : assets) {
-    auto scene = loadAsset(a);
-    ASSERT_TRUE(scene.ok()) << a << ": " << scene.error().message;
+  {
     ASSERT_FALSE(scene->skinnedObjects.empty()) << a;
     auto r = Renderer::create(dev, *scene, {.width = 256, .height = 256});
     ASSERT_TRUE(r.ok()) << r.error().message;
-    for (double t : {0.0, 0.37, 1.1}) {
+    for (double t : times) {
       FrameOptions fo;
       fo.lodErrorPixels = 0.0f;
       fo.readIds = true;
@@ -131,6 +134,130 @@ TEST(Skinning, MatchesCpuSkinnedForwardReference) {
         EXPECT_LE(samePath.maxAbs, 2e-3) << a << " t " << t;
       }
     }
+  }
+}
+
+// The morph-target assets, with SparseMorphTargets' clip (one key, weight 0: the file never moves it) replaced
+// by a ramp from 0 to 1 over a second, so that its sparse target shows.
+Result<Scene> loadMorphAsset(const std::string& rel) {
+  auto scene = loadAsset(rel);
+  if (scene && rel.starts_with("SparseMorphTargets")) {
+    AnimationClip& clip = scene->animations.at(0);
+    clip.samplers.at(0) = {Interpolation::Linear, 1, {0.0f, 1.0f}, {0.0f, 1.0f}};
+    clip.duration = 1.0;
+  }
+  return scene;
+}
+const std::vector<std::string> kMorphAssets = {"AnimatedMorphCube/glTF/AnimatedMorphCube.gltf",
+                                               "SimpleMorph/glTF/SimpleMorph.gltf",
+                                               "SparseMorphTargets/singleBlendshapeCube_sparse.glb"};
+
+}  // namespace
+
+TEST(Skinning, MatchesCpuSkinnedForwardReference) {
+  const std::vector<std::string> assets = {"CesiumMan/glTF/CesiumMan.gltf", "Fox/glTF-Binary/Fox.glb",
+                                           "RiggedFigure/glTF/RiggedFigure.gltf"};
+  if (!std::filesystem::exists(assetPath(assets[0]))) GTEST_SKIP() << "shared assets not present";
+  const uint32_t before = test::testDevice().validationMessages();
+  for (const std::string& a : assets) {
+    auto scene = loadAsset(a);
+    ASSERT_TRUE(scene.ok()) << a << ": " << scene.error().message;
+    expectMatchesCpuSkinned(a, &*scene, {0.0, 0.37, 1.1});
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// Morph targets drawn: the same comparison for AnimatedMorphCube, SimpleMorph and SparseMorphTargets (morph-only
+// meshes, skinned by their one-joint skin): GPU-morphed visbuf against the CPU-morphed meshes (double precision)
+// on the forward path and on visbuf, same bounds as above.
+TEST(Skinning, MorphTargetsMatchCpuMorphedForwardReference) {
+  if (!std::filesystem::exists(assetPath(kMorphAssets[0]))) GTEST_SKIP() << "shared assets not present";
+  const uint32_t before = test::testDevice().validationMessages();
+  for (const std::string& a : kMorphAssets) {
+    auto scene = loadMorphAsset(a);
+    ASSERT_TRUE(scene.ok()) << a << ": " << scene.error().message;
+    ASSERT_GE(scene->skinnedObjects.at(0).morphNode, 0) << a;
+    expectMatchesCpuSkinned(a, &*scene, {0.0, 0.6, 1.45});
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
+// GPU-morphed vertices read back against the CPU's double-precision morph (morphVertex), then skinning (the
+// one-joint skin of these morph-only meshes, i.e. their node transform), for the three morph assets, 3
+// instances each at their own phase (makeAnimatedField), at 5 times. AnimatedMorphCube's tangents are replaced
+// by ones perpendicular to each normal, with both handednesses, and given tangent deltas (the file's tangents
+// are axis-aligned and its tangent deltas zero, which would check the tangent morph only trivially). Bounds:
+// positions 1e-5 of the rest radius scaled by the pose's largest joint scale, normals and tangents 2e-4 (as
+// TangentsMatchCpuDoubleSkinning). The weights must move the mesh: some vertex at some time at least 1 % of
+// that radius away from the unmorphed base, or the comparison could not tell morphing from no morphing.
+TEST(Skinning, MorphTargetsMatchCpuDoubleReference) {
+  if (!std::filesystem::exists(assetPath(kMorphAssets[0]))) GTEST_SKIP() << "shared assets not present";
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  for (const std::string& a : kMorphAssets) {
+    auto asset = loadMorphAsset(a);
+    ASSERT_TRUE(asset.ok()) << a << ": " << asset.error().message;
+    if (a.starts_with("AnimatedMorphCube")) {
+      Mesh& m = asset->meshes[asset->objects[asset->skinnedObjects[0].object].mesh];
+      m.tangents.resize(m.vertices.size());
+      for (size_t v = 0; v < m.vertices.size(); ++v) {
+        const glm::dvec3 n = glm::dvec3(octDecode(m.vertices[v].normal));
+        const glm::dvec3 axis = std::abs(n.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
+        m.tangents[v] = glm::vec4(glm::vec3(glm::normalize(glm::cross(axis, n))), v % 2 ? -1.0f : 1.0f);
+      }
+      for (gpu::MorphDelta& d : m.morphDeltas) d.tx = 3.0f * d.py, d.ty = 3.0f * d.pz, d.tz = 3.0f * d.px;
+    }
+    auto field = makeAnimatedField(*asset, {.instances = 3, .seed = 13, .spacing = 2.0});
+    ASSERT_TRUE(field.ok()) << field.error().message;
+    auto r = Renderer::create(dev, *field, {.width = 64, .height = 64});
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    double maxPosition = 0.0, maxNormal = 0.0, maxTangent = 0.0, moved = 0.0;
+    size_t checked = 0, tangents = 0;
+    for (double t : {0.0, 0.3, 0.77, 1.6, 2.9}) {
+      FrameOptions fo;
+      fo.animationTime = t;
+      fo.readColor = false;
+      ASSERT_TRUE((*r)->renderFrame(field->defaultCamera, fo).ok());
+      for (uint32_t i = 0; i < field->skinnedObjects.size(); ++i) {
+        const SkinnedObject& so = field->skinnedObjects[i];
+        const Mesh& mesh = field->meshes[field->objects[so.object].mesh];
+        ASSERT_GT(mesh.morphTargetCount, 0u) << a;
+        auto back = (*r)->readSkinnedInstance(i);
+        ASSERT_TRUE(back.ok()) << back.error().message;
+        ASSERT_EQ(back->vertices.size(), mesh.vertices.size());
+        const std::vector<glm::dmat4> joints = skinnedObjectJoints(*field, so, t);
+        const std::vector<double> weights = skinnedObjectMorphWeights(*field, so, t);
+        double scale = 0.0;  // the rest radius in the skinned (world) units: AnimatedMorphCube's node scales by 100
+        for (const glm::dmat4& j : joints) scale = std::max(scale, maxScaleOf(j));
+        const double radius = mesh.boundsSphere.w * scale;
+        for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
+          const MorphedVertex m = morphVertex(mesh, v, weights);
+          const SkinVertex& sv = mesh.skinVertices[v];
+          const gpu::SkinnedVertex& s = back->vertices[v];
+          const glm::dvec3 p = skinPosition(m.position, sv, joints);
+          maxPosition = std::max(maxPosition, glm::length(glm::dvec3(s.px, s.py, s.pz) - p) / radius);
+          const glm::dvec3 n = skinNormal(m.normal, sv, joints);
+          maxNormal = std::max(maxNormal, glm::length(glm::dvec3(octDecode(s.normal)) - n));
+          const gpu::Vertex& base = mesh.vertices[v];
+          moved = std::max(moved, glm::length(skinPosition(glm::dvec3(base.px, base.py, base.pz), sv, joints) - p) / radius);
+          if (!mesh.tangents.empty()) {
+            ASSERT_EQ(back->tangents.size(), mesh.vertices.size());
+            const glm::dvec3 want = skinTangent(m.tangent, sv, joints);
+            maxTangent = std::max(maxTangent, glm::length(glm::dvec3(octDecode(back->tangents[v])) - want));
+            ++tangents;
+          }
+          ++checked;
+        }
+      }
+    }
+    std::printf("%s: %zu vertices (%zu tangents) vs CPU double morph + skin: position %.2e of the radius, normal "
+                "%.2e, tangent %.2e; largest morph displacement %.3f of the radius\n",
+                a.c_str(), checked, tangents, maxPosition, maxNormal, maxTangent, moved);
+    EXPECT_LE(maxPosition, 1e-5) << a;
+    EXPECT_LE(maxNormal, 2e-4) << a;
+    EXPECT_LE(maxTangent, 2e-4) << a;
+    EXPECT_GE(moved, 0.01) << a;
+    EXPECT_EQ(tangents > 0, a.starts_with("AnimatedMorphCube")) << a;
   }
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
@@ -327,20 +454,21 @@ TEST(Skinning, TangentsMatchCpuDoubleSkinning) {
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
-// Culling bounds of skinned instances contain every skinned vertex, for both kinds: the joints' reach (CPU)
-// and the GPU's AABB reduction. Every vertex the skinning pass wrote is read back with its instance's sphere
-// and tested in double precision (|p - c| <= r, no tolerance), for 24 Foxes, CesiumMan and RiggedFigure at 5
-// times each. Also prints how tight each kind is: the mean of radius / (the largest distance of the instance's
+// Culling bounds of skinned instances contain every skinned vertex, for both kinds: the joints' reach (CPU;
+// for morph targets widened by sum |w| max |delta|) and the GPU's AABB reduction. Every vertex the skinning pass
+// wrote is read back with its instance's sphere and tested in double precision (|p - c| <= r, no tolerance),
+// for 24 Foxes, CesiumMan, RiggedFigure, 24 AnimatedMorphCubes and 24 SparseMorphTargets cubes at 5 times each. Also prints how tight each kind is: the mean of radius / (the largest distance of the instance's
 // vertices from their AABB centre), which is 1 for the tightest sphere about that centre.
 TEST(Skinning, BoundsContainEverySkinnedVertex) {
   if (!std::filesystem::exists(assetPath("Fox/glTF-Binary/Fox.glb"))) GTEST_SKIP() << "shared assets not present";
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   std::vector<std::pair<std::string, Scene>> scenes;
-  for (const char* a : {"Fox/glTF-Binary/Fox.glb", "CesiumMan/glTF/CesiumMan.gltf", "RiggedFigure/glTF/RiggedFigure.gltf"}) {
-    auto s = loadAsset(a);
+  for (const char* a : {"Fox/glTF-Binary/Fox.glb", "CesiumMan/glTF/CesiumMan.gltf", "RiggedFigure/glTF/RiggedFigure.gltf",
+                        "AnimatedMorphCube/glTF/AnimatedMorphCube.gltf", "SparseMorphTargets/singleBlendshapeCube_sparse.glb"}) {
+    auto s = loadMorphAsset(a);
     ASSERT_TRUE(s.ok()) << a;
-    if (std::string(a).starts_with("Fox")) {
+    if (std::string(a).starts_with("Fox") || s->meshes[0].morphTargetCount > 0) {  // morph cubes: 24 vertices each
       auto field = makeAnimatedField(*s, {.instances = 24, .seed = 11, .spacing = 1.6});
       ASSERT_TRUE(field.ok());
       s = std::move(field);

@@ -14,7 +14,8 @@ namespace visbuf::test {
 
 // Adds 4 nodes (one with a matrix), a 2-joint skin whose bind pose is the rest pose, skin vertices for mesh
 // `mesh` (x < -0.3: joint 0, x > 0.3: joint 1, a 50/50 blend between), `object` as a skinned object, and two
-// clips covering every interpolation and path.
+// clips covering every interpolation and path. The mesh also gets two morph targets (distinct deltas per vertex
+// and field, default weights 0.25 and -0.5) driven by node 3, whose weights the second clip animates.
 inline void addTestAnimation(Scene& scene, uint32_t mesh, uint32_t object) {
   SceneNode root{
       "root", -1, {{0.0, 1.0, 0.0}, glm::dquat(1.0, 0.0, 0.0, 0.0), {1.0, 1.0, 1.0}}, false, glm::dmat4(1.0)};
@@ -45,6 +46,14 @@ inline void addTestAnimation(Scene& scene, uint32_t mesh, uint32_t object) {
     if (x >= -0.3f && x <= 0.3f) s = SkinVertex{{0, 1, 0, 0}, {0.5f, 0.5f, 0.0f, 0.0f}};
   }
   scene.skinnedObjects = {{object, 0}};
+  scene.skinnedObjects[0].morphNode = 3;
+  m.morphTargetCount = 2;
+  m.morphDeltas.resize(2 * m.vertices.size());
+  for (size_t i = 0; i < m.morphDeltas.size(); ++i) {
+    const float f = 0.01f * float(i + 1);
+    m.morphDeltas[i] = gpu::MorphDelta{f, -f, 0.5f * f, 0.0f, f, 0.0f, -f, 0.0f, 0.25f};
+  }
+  m.morphWeights = {0.25f, -0.5f};
 
   AnimationClip walk;
   walk.name = "walk";
@@ -79,6 +88,14 @@ inline void expectAnimationEqual(const Scene& a, const Scene& b) {
     ASSERT_EQ(x.size(), y.size()) << "mesh " << i;
     if (!x.empty()) {
       EXPECT_EQ(std::memcmp(x.data(), y.data(), x.size() * sizeof(SkinVertex)), 0) << "mesh " << i;
+    }
+    EXPECT_EQ(a.meshes[i].morphTargetCount, b.meshes[i].morphTargetCount) << "mesh " << i;
+    EXPECT_EQ(a.meshes[i].morphWeights, b.meshes[i].morphWeights) << "mesh " << i;
+    const auto& dx = a.meshes[i].morphDeltas;
+    const auto& dy = b.meshes[i].morphDeltas;
+    ASSERT_EQ(dx.size(), dy.size()) << "mesh " << i;
+    if (!dx.empty()) {
+      EXPECT_EQ(std::memcmp(dx.data(), dy.data(), dx.size() * sizeof(gpu::MorphDelta)), 0) << "mesh " << i;
     }
   }
 }

@@ -40,6 +40,53 @@ void expectNear(const std::vector<double>& actual, const std::vector<double>& ex
 
 // --- interpolation -----------------------------------------------------------------------------------------
 
+// Welding with morph targets: two triangles of a quad listed with 6 vertices, the shared edge's two vertices
+// duplicated exactly. buildMesh merges the duplicates only while their deltas agree too; after welding and the
+// fetch reorder every built vertex, found by its base position and normal, carries its own source deltas.
+// Checked with 1 target and with 13 (past meshoptimizer's 16 remap streams, where the deltas are compared as a
+// key).
+TEST(MorphTargets, WeldingKeepsVerticesThatMoveApart) {
+  for (const size_t targets : {size_t{1}, size_t{13}}) {
+    for (const bool split : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << targets << " targets, " << (split ? "split" : "shared") << " edge");
+      MeshSource src;
+      src.name = "quad";
+      src.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+      src.normals.assign(6, glm::vec3(0, 0, 1));
+      src.indices = {0, 1, 2, 3, 4, 5};
+      for (size_t t = 0; t < targets; ++t) {
+        MeshSource::MorphTarget target;
+        for (size_t v = 0; v < 6; ++v) target.positions.push_back(glm::vec3(0.0f, 0.0f, 0.125f * float(t + 1)));
+        target.normals.assign(6, glm::vec3(0.0f, 0.25f, 0.0f));
+        if (split && t + 1 == targets) target.positions[3].z = -1.0f;  // vertex 3 leaves vertex 0 in the last target
+        src.morphTargets.push_back(target);
+      }
+      src.morphWeights.assign(targets, 0.5f);
+      auto mesh = buildMesh(src);
+      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+      EXPECT_EQ(mesh->vertices.size(), split ? 5u : 4u);
+      ASSERT_EQ(mesh->morphTargetCount, targets);
+      ASSERT_EQ(mesh->morphDeltas.size(), targets * mesh->vertices.size());
+      EXPECT_EQ(mesh->morphWeights, std::vector<float>(targets, 0.5f));
+      // Every source triangle corner's morphed position must be a corner of the built LOD 0.
+      std::vector<double> weights(targets, 1.0);
+      for (size_t i = 0; i < src.indices.size(); ++i) {
+        glm::dvec3 want(src.positions[src.indices[i]]);
+        for (size_t t = 0; t < targets; ++t) want += glm::dvec3(src.morphTargets[t].positions[src.indices[i]]);
+        double best = INFINITY;
+        for (uint32_t k = 0; k < mesh->lods[0].indexCount; ++k) {
+          const MorphedVertex m = morphVertex(*mesh, mesh->indices[mesh->lods[0].firstIndex + k], weights);
+          best = std::min(best, glm::length(m.position - want));
+        }
+        EXPECT_EQ(best, 0.0) << "source corner " << i;
+      }
+      // Normal deltas follow too: n + sum dn, renormalised.
+      const MorphedVertex m0 = morphVertex(*mesh, 0, weights);
+      EXPECT_NEAR(glm::length(m0.normal - glm::normalize(glm::dvec3(0.0, 0.25 * double(targets), 1.0))), 0.0, 1e-4);
+    }
+  }
+}
+
 TEST(AnimationSampling, LinearClampsOutsideTheKeys) {
   const AnimationSampler s{Interpolation::Linear, 3, {1.0f, 3.0f}, {0, 0, 0, 2, 4, -6}};
   expectNear(sample(s, AnimationPath::Translation, 1.5), {0.5, 1.0, -1.5});  // u = 0.25

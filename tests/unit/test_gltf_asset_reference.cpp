@@ -1,7 +1,8 @@
 // Shared assets imported by the engine against an independent reading of the same files: the test's own
 // accessor reader (plain float VEC3 data, nlohmann::json + the .bin bytes) and its own arithmetic, or the same
 // model stored another way (the glTF-Quantized copy against the float one).
-//   - SimpleMorph: the mesh's default morph weights (0.5, 0.5) applied to POSITION;
+//   - SimpleMorph: the mesh's default morph weights (0.5, 0.5) applied to POSITION; and, as a scene whose weights a
+//     clip animates, its base shape and both targets' deltas kept (import, then welding and the LOD chain);
 //   - AnimatedMorphCube glTF-Quantized (KHR_mesh_quantization: uint16 positions, int8 normals, dequantised by
 //     the node transform) against the float copy.
 #include <gtest/gtest.h>
@@ -17,6 +18,8 @@
 #include <glm/glm.hpp>
 
 #include "asset/gltf_import.h"
+#include "asset/scene_bake.h"
+#include "temp_dir_test.h"
 #include "test_assets.h"
 
 namespace visbuf {
@@ -88,6 +91,108 @@ TEST(GltfAssetReference, SimpleMorphDefaultWeightsApplied) {
         << "vertex " << v << ": (" << mesh->positions[v].x << ", " << mesh->positions[v].y << ", "
         << mesh->positions[v].z << ") vs (" << expected[v].x << ", " << expected[v].y << ", " << expected[v].z << ")";
   }
+}
+
+// SimpleMorph as a scene: its node's weights are animated, so the importer keeps the targets instead of baking
+// them. The base positions and both targets' POSITION deltas, read independently from simpleMorphGeometry.bin,
+// must come out exactly (float data copied, no arithmetic), the default weights beside them; after buildMesh
+// (welding, fetch reordering, LOD chain) every vertex must still carry its own deltas: each built vertex is
+// matched to the file vertex at the same base position and its deltas compared.
+TEST(GltfAssetReference, SimpleMorphSceneKeepsItsDeltas) {
+  const fs::path file = test::assetPath("SimpleMorph/glTF/SimpleMorph.gltf");
+  REQUIRE_ASSET(file);
+  std::ifstream in(file);
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  const auto& prim = doc["meshes"][0]["primitives"][0];
+  ASSERT_EQ(doc["animations"][0]["channels"][0]["target"]["path"].get<std::string>(), "weights");
+  const std::vector<double> weights = doc["meshes"][0]["weights"].get<std::vector<double>>();
+  const std::vector<glm::dvec3> base = readFloatVec3(file, doc, prim["attributes"]["POSITION"].get<int>());
+  std::vector<std::vector<glm::dvec3>> deltas;
+  for (size_t t = 0; t < prim["targets"].size(); ++t)
+    deltas.push_back(readFloatVec3(file, doc, prim["targets"][t]["POSITION"].get<int>()));
+  ASSERT_EQ(deltas.size(), 2u);
+  double largest = 0.0;  // the deltas must move something, or matching them could not fail
+  for (const auto& d : deltas)
+    for (const glm::dvec3& x : d) largest = std::max(largest, glm::length(x));
+  ASSERT_GT(largest, 0.5);
+
+  auto imported = importGltfScene(file.string());
+  ASSERT_TRUE(imported.ok()) << imported.error().message;
+  ASSERT_EQ(imported->meshes.size(), 1u);
+  ASSERT_EQ(imported->instances.size(), 1u);
+  const MeshSource& src = imported->meshes[0].source;
+  EXPECT_TRUE(imported->instances[0].morphed);
+  ASSERT_EQ(src.positions.size(), base.size());
+  ASSERT_EQ(src.morphTargets.size(), deltas.size());
+  ASSERT_EQ(src.morphWeights.size(), weights.size());
+  for (size_t t = 0; t < weights.size(); ++t) EXPECT_EQ(double(src.morphWeights[t]), double(float(weights[t])));
+  for (size_t v = 0; v < base.size(); ++v) {
+    EXPECT_EQ(glm::dvec3(src.positions[v]), base[v]) << "vertex " << v << ": weights baked into the base shape?";
+    for (size_t t = 0; t < deltas.size(); ++t) {
+      ASSERT_EQ(src.morphTargets[t].positions.size(), base.size());
+      EXPECT_EQ(glm::dvec3(src.morphTargets[t].positions[v]), deltas[t][v]) << "target " << t << " vertex " << v;
+      EXPECT_TRUE(src.morphTargets[t].tangents.empty());  // the file has no TANGENT targets
+    }
+  }
+  // The morph-only node is skinned by a one-joint skin at the node itself.
+  ASSERT_EQ(imported->instances[0].skin, 0);
+  ASSERT_EQ(imported->skins.size(), 1u);
+  EXPECT_EQ(imported->skins[0].joints, std::vector<uint32_t>{uint32_t(imported->instances[0].node)});
+  EXPECT_EQ(imported->skins[0].inverseBindMatrices[0], glm::dmat4(1.0));
+
+  auto scene = buildImportedScene(*imported, MeshBuildOptions{});
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  ASSERT_EQ(scene->skinnedObjects.size(), 1u);
+  EXPECT_EQ(scene->skinnedObjects[0].morphNode, imported->instances[0].node);
+  const Mesh& mesh = scene->meshes[0];
+  ASSERT_EQ(mesh.morphTargetCount, deltas.size());
+  ASSERT_EQ(mesh.morphDeltas.size(), deltas.size() * mesh.vertices.size());
+  for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
+    size_t match = base.size();
+    for (size_t w = 0; w < base.size(); ++w)
+      if (glm::dvec3(mesh.position(v)) == base[w]) match = w;
+    ASSERT_LT(match, base.size()) << "built vertex " << v << " is at no file position";
+    for (size_t t = 0; t < deltas.size(); ++t) {
+      const gpu::MorphDelta& d = mesh.morphDeltas[t * mesh.vertices.size() + v];
+      EXPECT_EQ(glm::dvec3(d.px, d.py, d.pz), deltas[t][match]) << "target " << t << " built vertex " << v;
+    }
+    // And the reference morph at the default weights is the baked import's position.
+    const MorphedVertex m = morphVertex(mesh, v, weights);
+    glm::dvec3 expected = base[match];
+    for (size_t t = 0; t < deltas.size(); ++t) expected += weights[t] * deltas[t][match];
+    EXPECT_LE(glm::length(m.position - expected), 1e-12);
+  }
+}
+
+// The other side of the rule: SimpleMorph without its animation (a copy of the .gltf with "animations" removed,
+// the .bin files beside it) has no weights channel, so its default weights are baked into the vertices as
+// before: no morph targets kept, no skin made up, no skinned object (so the renderer records no skinning).
+class GltfAssetReferenceFiles : public test::TempDirTest {};
+TEST_F(GltfAssetReferenceFiles, SimpleMorphWithoutAnimationIsBakedAndStatic) {
+  const fs::path file = test::assetPath("SimpleMorph/glTF/SimpleMorph.gltf");
+  REQUIRE_ASSET(file);
+  std::ifstream in(file);
+  nlohmann::json doc = nlohmann::json::parse(in);
+  ASSERT_TRUE(doc.contains("animations"));
+  doc.erase("animations");
+  for (const auto& entry : fs::directory_iterator(file.parent_path()))
+    if (entry.path().extension() == ".bin") fs::copy_file(entry.path(), dir_ / entry.path().filename());
+  const fs::path copy = dir_ / "SimpleMorphStill.gltf";
+  std::ofstream(copy) << doc.dump();
+  auto imported = importGltfScene(copy.string());
+  ASSERT_TRUE(imported.ok()) << imported.error().message;
+  ASSERT_EQ(imported->meshes.size(), 1u);
+  EXPECT_TRUE(imported->meshes[0].source.morphTargets.empty());
+  EXPECT_TRUE(imported->meshes[0].source.joints.empty());
+  EXPECT_TRUE(imported->skins.empty());
+  EXPECT_FALSE(imported->instances[0].morphed);
+  auto mesh = importGltfMesh(file.string());  // the baked positions (checked against the .bin above)
+  ASSERT_TRUE(mesh.ok());
+  EXPECT_EQ(imported->meshes[0].source.positions, mesh->positions);
+  auto scene = buildImportedScene(*imported);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  EXPECT_TRUE(scene->skinnedObjects.empty());
+  EXPECT_EQ(scene->meshes[0].morphTargetCount, 0u);
 }
 
 // KHR_mesh_quantization on a real file: the quantised copy of AnimatedMorphCube, dequantised by its node

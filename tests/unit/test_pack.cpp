@@ -281,7 +281,7 @@ TEST(PackRoundTrip, TexturedSceneInMemory) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(scene, &report);
   ASSERT_TRUE(bytes) << bytes.error().message;
-  EXPECT_EQ(report.sections.size(), 14u + 11u);  // 8 required, meshStreams, tangents, uvs1, 3 texture, 11 animation
+  EXPECT_EQ(report.sections.size(), 14u + 15u);  // 8 required, meshStreams, tangents, uvs1, 3 texture, 15 animation
   Result<Scene> back = parse(*bytes);
   ASSERT_TRUE(back) << back.error().message;
   expectScenesEqual(scene, *back);
@@ -361,7 +361,7 @@ TEST(PackReader, FlippedByteInEachSectionIsAChecksumError) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene(), &report);
   ASSERT_TRUE(bytes);
-  ASSERT_EQ(report.sections.size(), 8u + 11u);  // required + animation sections
+  ASSERT_EQ(report.sections.size(), 8u + 15u);  // required + animation sections (4 of them morph targets)
   PackWriteReport texturedReport;
   Result<std::vector<uint8_t>> textured = serializePack(makeTexturedTestScene(), &texturedReport);
   ASSERT_TRUE(textured);
@@ -399,14 +399,14 @@ TEST(PackReader, WrongMagicAndVersion) {
   reseal(v);
   EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
                         ErrorCode::Unsupported));
-  // Version 2 packs (before quantised vertices) are refused too: the user re-bakes.
-  EXPECT_EQ(pack::kVersion, 3u);
+  // Version 3 packs (morph weights baked, before animated morph targets) are refused too: the user re-bakes.
+  EXPECT_EQ(pack::kVersion, 4u);
   v = *bytes;
   h = headerOf(v);
-  h.version = 2;
+  h.version = 3;
   std::memcpy(v.data(), &h, sizeof(h));
   reseal(v);
-  EXPECT_TRUE(failsWith(parse(v), "pack format version 2 is not supported by this build (it reads version 3); re-bake",
+  EXPECT_TRUE(failsWith(parse(v), "pack format version 3 is not supported by this build (it reads version 4); re-bake",
                         ErrorCode::Unsupported));
   v = *bytes;
   v[0] = 'X';
@@ -570,6 +570,8 @@ TEST(PackReader, BadTexturesAndStreams) {
   }
 }
 
+bool hasSection(const std::vector<uint8_t>& bytes, const std::string& name);
+
 TEST(PackReader, BadReferencesInAnimationSections) {
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene());
   ASSERT_TRUE(bytes);
@@ -587,8 +589,22 @@ TEST(PackReader, BadReferencesInAnimationSections) {
   EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 8, uint64_t{5}), "fields 'firstSkinVertex' 5"));
   EXPECT_TRUE(failsWith(edit("skinVertices", 3, 0, uint16_t{2}), "uses joint index 2, skin 0 has 2 joints"));
   EXPECT_TRUE(failsWith(edit("skinVertices", 3, 8, 0.75f), "weights sum to"));
-  EXPECT_TRUE(failsWith(edit("skinnedObjects", 0, 0, uint32_t{0}), "skinned object 0: mesh 0 'torus-knot' has no skin vertices"));
+  // (its morph record is checked first: the knot has neither skin vertices nor morph targets)
+  EXPECT_TRUE(failsWith(edit("skinnedObjects", 0, 0, uint32_t{0}),
+                        "section 'morphObjects' record 0: skinned object 0 draws mesh 0, which has no 'morphMeshes' record"));
   EXPECT_TRUE(failsWith(edit("skinnedObjects", 0, 4, uint32_t{1}), "field 'object' 1 / 'skin' 1 out of range"));
+  // Morph targets (the box, mesh 1: 2 targets; skinned object 0 driven by node 3).
+  EXPECT_TRUE(hasSection(*bytes, "morphMeshes") && hasSection(*bytes, "morphDeltas") &&
+              hasSection(*bytes, "morphWeights") && hasSection(*bytes, "morphObjects"));
+  EXPECT_TRUE(failsWith(edit("morphMeshes", 0, 0, uint32_t{9}), "section 'morphMeshes' record 0: field 'mesh' 9 out of range"));
+  EXPECT_TRUE(failsWith(edit("morphMeshes", 0, 4, uint32_t{0}), "section 'morphMeshes' record 0: field 'targetCount' is 0"));
+  EXPECT_TRUE(failsWith(edit("morphMeshes", 0, 4, uint32_t{3}), "fields 'firstDelta' 0 + 'targetCount x vertexCount'"));
+  EXPECT_TRUE(failsWith(edit("morphMeshes", 0, 8, uint64_t{1} << 62), "fields 'firstDelta' 4611686018427387904"));
+  EXPECT_TRUE(failsWith(edit("morphMeshes", 0, 16, uint64_t{1}), "fields 'firstWeight' 1 + 'targetCount' 2 run past the 2 records of section 'morphWeights'"));
+  EXPECT_TRUE(failsWith(edit("morphDeltas", 5, 16, float(NAN)), "section 'morphMeshes' record 0: delta 5 (section 'morphDeltas' record 5) is not finite"));
+  EXPECT_TRUE(failsWith(edit("morphWeights", 1, 0, INFINITY), "default weight 1 (section 'morphWeights' record 1) is not finite"));
+  EXPECT_TRUE(failsWith(edit("morphObjects", 0, 0, uint32_t{1}), "section 'morphObjects' record 0: field 'skinnedObject' 1 / 'node' 3 out of range"));
+  EXPECT_TRUE(failsWith(edit("morphObjects", 0, 4, uint32_t{4}), "field 'skinnedObject' 0 / 'node' 4 out of range (1 skinned objects, 4 nodes)"));
   EXPECT_TRUE(failsWith(edit("animations", 0, 24, uint32_t{1} << 31), "fields 'firstChannel' 2147483648"));
   EXPECT_TRUE(failsWith(edit("animations", 1, 8, 7.0), "duration 7 differs from the last key time 0.5"));
   EXPECT_TRUE(failsWith(edit("animSamplers", 2, 0, uint32_t{3}), "field 'interpolation' is 3"));
