@@ -51,15 +51,17 @@ bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2
   return true;
 }
 
-// Software micro-raster routing: the object's screen box is at most frame.swMaxPixels per side and it lies wholly
-// beyond the near plane (sw_raster.comp needs no clipping and keeps its edge functions within 32 bits).
-bool smallOnScreen(vec3 c, float r) {
+// Software micro-raster routing: the object's screen box is at most frame.swMaxPixels per side, its triangles are
+// small (SW_RASTER_MAX_AREA_PER_TRIANGLE) and it lies wholly beyond the near plane (sw_raster.comp needs no
+// clipping and keeps its edge functions within 32 bits).
+bool smallOnScreen(vec3 c, float r, uint triangles) {
   vec3 v;
   float rr;
   vec2 lo, hi;
   if (!screenRect(c, r, v, rr, lo, hi)) return false;
   vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
-  return max(extent.x, extent.y) <= frame.swMaxPixels;
+  return max(extent.x, extent.y) <= frame.swMaxPixels &&
+         extent.x * extent.y <= SW_RASTER_MAX_AREA_PER_TRIANGLE * float(triangles);
 }
 
 // 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre. c: camera-relative centre.
@@ -145,11 +147,11 @@ void main() {
   // Small objects of the lists the micro-raster may take go to sw_raster.comp (FrameData.swRaster): they fill their
   // list's region from its end, with a count of their own.
   bool sw = false;
-  if (draw && frame.swRaster != 0u && drawLists[list].w != 0u &&
-      meshes[meshIndex].lods[lod].indexCount / 3u <= frame.swMaxTriangles) {
+  uint lodTriangles = meshes[meshIndex].lods[lod].indexCount / 3u;
+  if (draw && frame.swRaster != 0u && drawLists[list].w != 0u && lodTriangles <= frame.swMaxTriangles) {
     vec4 sphere = meshes[meshIndex].boundsSphere;
     ObjectData o = objectAt(id);
-    sw = smallOnScreen(objectToCamera(o, sphere.xyz), sphere.w * o.maxScale);
+    sw = smallOnScreen(objectToCamera(o, sphere.xyz), sphere.w * o.maxScale, lodTriangles);
   }
   uint culledSum = subgroupAdd(frustumCulled);
   uint occludedSum = subgroupAdd(occluded);

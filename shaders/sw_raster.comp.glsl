@@ -1,8 +1,8 @@
 #version 460
 // Software micro-raster (sw_raster_pass): the draws the cull pass routed here -- small objects, whose triangles
 // cover a few pixels each -- are rasterised in compute instead of by the hardware raster (on lavapipe its
-// geometry path is serial and costs ~130 ns per triangle, while compute runs on every core). Each invocation takes
-// one draw at a time, its triangles in turn: the same clip positions as the visibility vertex shader
+// geometry path is serial and costs ~130 ns per triangle, while compute runs on every core). Each subgroup takes
+// one draw at a time, each lane a triangle: the same clip positions as the visibility vertex shader
 // (clipPosition), the viewport transform, vertices snapped to 1/256 pixel, the draw list's face culling, pixel
 // centres tested with integer edge functions under the top-left rule, depth interpolated in screen space, and the
 // nearest fragment kept per pixel by a 64-bit atomicMax of (reverse-Z depth bits << 32 | payload). The merge
@@ -11,6 +11,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
 #include "common.glsl"
 
 layout(local_size_x = SW_RASTER_WORKGROUP) in;
@@ -89,14 +90,15 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
 
 void main() {
   // This phase's routed draws of every list (each list's region filled from its end: slots
-  // [first + capacity - count, first + capacity)), one draw per invocation at a time: on lavapipe the lanes of a
-  // SIMD batch then run whole draws side by side, and the per-draw work is paid once per draw, not per triangle.
+  // [first + capacity - count, first + capacity)), one draw per subgroup at a time, its triangles spread over the
+  // subgroup's lanes: on lavapipe a subgroup is one SIMD batch that pays for its longest lane, so one draw per lane
+  // made batches wait on their largest LOD (measured: 1.31 s against 1.07 s for this split, 200,000 kittens).
   uint c0 = drawLists[0].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 0u], drawLists[0].z) : 0u;
   uint c1 = drawLists[1].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 1u], drawLists[1].z) : 0u;
   uint c2 = drawLists[2].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 2u], drawLists[2].z) : 0u;
   uint total = c0 + c1 + c2;
-  uint stride = gl_NumWorkGroups.x * SW_RASTER_WORKGROUP;
-  for (uint k = gl_GlobalInvocationID.x; k < total; k += stride) {
+  uint stride = gl_NumWorkGroups.x * gl_NumSubgroups;
+  for (uint k = gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID; k < total; k += stride) {
     uint list = k < c0 ? 0u : k < c0 + c1 ? 1u : 2u;
     uint i = k - (list == 0u ? 0u : list == 1u ? c0 : c0 + c1);
     uvec4 region = drawLists[list];
@@ -105,7 +107,8 @@ void main() {
     ObjectData o = objectAt(d.firstInstance);
     uint triangles = d.indexCount / 3u;
     uint refused = 0u;
-    for (uint t = 0u; t < triangles; ++t) refused += rasterTriangle(slot, d, o, list, t);
+    for (uint t = gl_SubgroupInvocationID; t < triangles; t += gl_SubgroupSize)
+      refused += rasterTriangle(slot, d, o, list, t);
     if (refused > 0u) atomicAdd(stats[STAT_SW_OVERSIZE], refused);
   }
 }

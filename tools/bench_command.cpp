@@ -75,6 +75,11 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
                   "tile lists and dispatches)")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "uber", "classified"}));
+  sub->add_option("--sw-raster", c.swRaster,
+                  "visbuf software micro-raster of small objects: auto (the device type's default), on, off (the "
+                  "references always use the hardware raster)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"auto", "on", "off"}));
   sub->add_option("--materials", c.materials, "field, city, foliage: N generated PBR materials (3 of 4 textured)");
   sub->add_option("--vertices", c.vertices, "vertex precision: float, quantized (as bake --quantize stores them)")
       ->delimiter(',')
@@ -180,6 +185,7 @@ struct Config {
   bool quantized = false;  // vertices quantised as `bake --quantize` stores them (pack round trip in memory)
   uint32_t msaa = 1;       // samples per pixel (FrameOptions::msaa); its reference renders at the same count
   ShadingMode shading = ShadingMode::Auto;  // visbuf only
+  SwRasterMode swRaster = SwRasterMode::Auto;  // visbuf only
 };
 
 // "visbuf", or "visbuf 4x" with MSAA (tables).
@@ -205,6 +211,7 @@ struct Row {
   std::string reference;
   std::string idBits;  // "32" / "64": bits per pixel of the visbuf ID target; "-": forward (none)
   std::string shading = "-";  // visbuf: the shading mode used (uber / classified); "-": other paths
+  std::string raster = "hw";  // visbuf: "hw+sw" where the last measured frame used the software micro-raster
   double materialsPresent = 0, classifiedTiles = 0;  // classified: medians over the measured frames
   bool pareto = false;
 };
@@ -276,12 +283,14 @@ int runBench(const BenchCommand& c) {
         for (float l : lods)
           for (const std::string& ids : c.ids)
             for (const std::string& v : c.vertices)
-              for (const std::string& sh : c.shading) {
-                if (path != RenderPath::Visbuf && (ids != c.ids.front() || sh != c.shading.front()))
-                  continue;  // no ID target or shading pass to vary
-                configs.push_back({path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide",
-                                   v == "quantized", m, parseShadingMode(sh)});
-              }
+              for (const std::string& sh : c.shading)
+                for (const std::string& sw : c.swRaster) {
+                  if (path != RenderPath::Visbuf &&
+                      (ids != c.ids.front() || sh != c.shading.front() || sw != c.swRaster.front()))
+                    continue;  // no ID target, shading pass or micro-raster to vary
+                  configs.push_back({path, cull, l, lodText(l), path == RenderPath::Visbuf && ids == "wide",
+                                     v == "quantized", m, parseShadingMode(sh), parseSwRasterMode(sw)});
+                }
     }
   if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
 
@@ -382,6 +391,7 @@ int runBench(const BenchCommand& c) {
         ro.cull = CullMode::None;
         ro.lodErrorPixels = 0.0f;
         ro.tiledLights = false;
+        ro.swRaster = SwRasterMode::Off;  // the exact reference: hardware raster only
         ro.msaa = m;
         auto frame = r.renderFrame(path[c.warmup + f], ro);
         if (!frame) return fail(frame.error());
@@ -397,6 +407,7 @@ int runBench(const BenchCommand& c) {
       ro.cull = CullMode::None;
       ro.lodErrorPixels = 0.0f;
       ro.tiledLights = false;  // every point light at every pixel
+      ro.swRaster = SwRasterMode::Off;  // hardware raster only
       ro.readColor = true;
       ro.readIds = !forwardRef && needFullIds;
       auto frame = r.renderFrame(cam, ro);
@@ -433,6 +444,7 @@ int runBench(const BenchCommand& c) {
         fo.readColor = measure;
         fo.readIds = measure && idComparable;
         fo.shading = k.shading;
+        fo.swRaster = k.swRaster;
         auto frame = rk.renderFrame(path[i], fo);
         if (!frame) return fail(frame.error());
         if (!measure) continue;
@@ -460,7 +472,10 @@ int runBench(const BenchCommand& c) {
       row.config = k;
       row.reference = info.reference;
       row.idBits = k.path != RenderPath::Visbuf ? "-" : rk.idEncoding().wide ? "64" : "32";
-      if (k.path == RenderPath::Visbuf) row.shading = shadingModeName(measured.back().shading);
+      if (k.path == RenderPath::Visbuf) {
+        row.shading = shadingModeName(measured.back().shading);
+        row.raster = measured.back().swRaster ? "hw+sw" : "hw";
+      }
       std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
       std::vector<std::string> passNames;
       for (const FrameStats& s : measured) {
@@ -518,8 +533,8 @@ int runBench(const BenchCommand& c) {
         row.idMismatches = mismatches;
         row.idPixels = uint64_t(pixels) * measured.size();
       }
-      std::printf("  %-10s %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
-                  pathLabel(k).c_str(), row.shading.c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
+      std::printf("  %-10s %-5s %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+                  pathLabel(k).c_str(), row.raster.c_str(), row.shading.c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
                   row.idBits.c_str(), k.quantized ? "q16" : "float", row.frameMedian, row.frameP95,
                   row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
                   row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
@@ -595,6 +610,7 @@ int runBench(const BenchCommand& c) {
     x["lodErrorPixels"] = row.config.lod;
     x["idBits"] = row.idBits;
     x["shading"] = row.shading;
+    x["raster"] = row.raster;
     if (row.shading == "classified") {
       x["materialsPresent"] = row.materialsPresent;
       x["tileMaterialPairs"] = row.classifiedTiles;
@@ -642,7 +658,7 @@ int runBench(const BenchCommand& c) {
     std::replace(n.begin(), n.end(), ' ', '_');
     csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
   }
-  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels,shading\n";  // appended: earlier columns fixed
+  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels,shading,raster\n";  // appended: earlier columns fixed
   for (const Row& row : rows) {
     csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
@@ -657,8 +673,8 @@ int runBench(const BenchCommand& c) {
       const auto* p = passOf(row, n);
       csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
     }
-    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f},{}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
-                       row.config.msaa, row.perSamplePixels, row.shading);
+    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f},{},{}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
+                       row.config.msaa, row.perSamplePixels, row.shading, row.raster);
   }
 
   // bench.md
@@ -683,7 +699,7 @@ int runBench(const BenchCommand& c) {
                       "{:.4f} | {:.3f}% | {} | {} |\n",
                       objectsLabel(row.objects),
                       row.shading == "-" ? pathLabel(row.config)
-                                         : fmt::format("{} ({})", pathLabel(row.config), row.shading),
+                                         : fmt::format("{} ({}, {})", pathLabel(row.config), row.shading, row.raster),
                       cullModeName(row.config.cull), row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
                       row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, row.bytesWrittenPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,

@@ -39,7 +39,7 @@ struct RenderCommand {
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
   uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
   std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
-  float swRasterPixels = 32.0f;  // its object size bound in pixels (FrameOptions::swRasterPixels)
+  float swRasterPixels = 64.0f;  // its object size bound in pixels (FrameOptions::swRasterPixels)
 };
 
 void addRenderCommand(CLI::App& app, RenderCommand& cmd);
@@ -79,6 +79,7 @@ struct BenchCommand {
   std::vector<uint32_t> msaa{1};                       // samples per pixel (FrameOptions::msaa)
   std::vector<std::string> ids{"auto"};
   std::vector<std::string> shading{"auto"};           // visbuf shading: auto, uber, classified
+  std::vector<std::string> swRaster{"auto"};          // visbuf software micro-raster: auto, on, off
   uint32_t materials = 0;                              // generated layouts: N generated materials (--materials)
   std::vector<std::string> vertices{"float"};          // vertex precision: float, quantized                // visbuf ID target: auto (32 bits where they fit), wide
   std::string reference = "auto";                      // auto | forward | visbuf-full

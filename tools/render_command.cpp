@@ -79,7 +79,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::IsMember({"auto", "uber", "classified"}))
       ->capture_default_str();
   sub->add_option("--sw-raster", c.swRaster,
-                  "software micro-raster (auto: on for CPU devices, off for GPUs, as measured): objects whose screen box is at most --sw-raster-px per side are "
+                  "software micro-raster (auto: on; on a GPU only while it takes >= 262,144 triangles, as measured): objects whose screen box is at most --sw-raster-px per side are "
                   "rasterised in compute and merged into the same ID target (visbuf, single-sampled, opaque lists)")
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();

@@ -23,7 +23,7 @@ SwRasterPass SwRasterPass::create(gpu::Device& device, VkPipelineLayout layout, 
 }
 
 uint32_t SwRasterPass::workgroups(uint32_t capacity) {
-  return std::clamp((capacity + SW_RASTER_WORKGROUP - 1) / SW_RASTER_WORKGROUP, 1u, 1024u);
+  return std::clamp((capacity + 7) / 8, 1u, 1024u);  // (a draw per subgroup: lavapipe has 8 lanes)
 }
 
 void SwRasterPass::recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,

@@ -93,9 +93,10 @@ struct FrameOptions {
   // Software micro-raster (visbuf path): objects whose screen box is at most swRasterPixels per side (and wholly
   // beyond the near plane) are rasterised in compute (sw_raster_pass) instead of by the hardware raster, then
   // merged into the same ID target and depth. Not used for MSAA, countOverdraw, masked or capped draw lists.
-  // Auto: the device type's measured default (defaultSwRaster).
+  // Auto: on, and on a GPU only while it takes enough triangles to pay for its merges (renderer.cpp,
+  // defaultSwRaster); On: whenever it takes anything. A frame in which it did not pay skips it for 16 frames.
   SwRasterMode swRaster = SwRasterMode::Auto;
-  float swRasterPixels = 32.0f;  // (0, SW_RASTER_MAX_EXTENT - 2]
+  float swRasterPixels = 64.0f;  // (0, SW_RASTER_MAX_EXTENT - 2]
   ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
                                             // ubershader (its attributes / MSAA variant)
 };

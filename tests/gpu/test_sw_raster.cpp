@@ -202,6 +202,7 @@ TEST(SwRaster, UselessMicroRasterIsSkippedAndProbedAgain) {
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
   FrameOptions on;
   on.swRaster = SwRasterMode::On;
+  on.swRasterPixels = 4.0f;  // no object is that small here
   on.readIds = true;
   std::vector<bool> recorded;
   std::vector<uint32_t> firstIds;
