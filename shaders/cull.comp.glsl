@@ -104,6 +104,7 @@ void main() {
   uint meshIndex = 0;
   uint list = DRAW_LIST_NONE;
   uint frustumCulled = 0, occluded = 0, subpixel = 0;
+  bool sw = false;  // routed to the software micro-raster
   // The early phase draws only objects of the history: the rest (most of a heavily occluded scene) cost one
   // load here instead of an object, a mesh and a frustum test each.
   if (valid && pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION && history[id] == 0u) valid = false;
@@ -143,15 +144,12 @@ void main() {
         }
       }
     }
-  }
-  // Small objects of the lists the micro-raster may take go to sw_raster.comp (FrameData.swRaster): they fill their
-  // list's region from its end, with a count of their own.
-  bool sw = false;
-  uint lodTriangles = meshes[meshIndex].lods[lod].indexCount / 3u;
-  if (draw && frame.swRaster != 0u && drawLists[list].w != 0u && lodTriangles <= frame.swMaxTriangles) {
-    vec4 sphere = meshes[meshIndex].boundsSphere;
-    ObjectData o = objectAt(id);
-    sw = smallOnScreen(objectToCamera(o, sphere.xyz), sphere.w * o.maxScale, lodTriangles);
+    // Small objects of the lists the micro-raster may take go to sw_raster.comp (FrameData.swRaster): they fill their
+    // list's region from its end, with a count of their own.
+    if (draw && frame.swRaster != 0u && drawLists[list].w != 0u) {
+      uint lodTriangles = meshes[meshIndex].lods[lod].indexCount / 3u;
+      sw = lodTriangles <= frame.swMaxTriangles && smallOnScreen(c, r, lodTriangles);
+    }
   }
   uint culledSum = subgroupAdd(frustumCulled);
   uint occludedSum = subgroupAdd(occluded);

@@ -22,6 +22,21 @@ SwRasterPass SwRasterPass::create(gpu::Device& device, VkPipelineLayout layout, 
   return p;
 }
 
+void SwRasterPass::resetBuffer(gpu::Device& device) {
+  buffer = gpu::Buffer(device, 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                       gpu::MemoryUse::DeviceLocal);
+  sized_ = false;
+}
+
+bool SwRasterPass::ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height) {
+  if (sized_) return false;
+  buffer = gpu::Buffer(device, VkDeviceSize(width) * height * 8,
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                       gpu::MemoryUse::DeviceLocal);
+  sized_ = true;
+  return true;
+}
+
 uint32_t SwRasterPass::workgroups(uint32_t capacity) {
   return std::clamp((capacity + 7) / 8, 1u, 1024u);  // (a draw per subgroup: lavapipe has 8 lanes)
 }

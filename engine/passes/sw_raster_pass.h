@@ -15,6 +15,11 @@ namespace visbuf::passes {
 struct SwRasterPass {
   gpu::Pipeline raster;
   gpu::Pipeline merge[2];  // narrow (r32ui), wide (rg32ui)
+  // The 64-bit per-pixel buffer (BINDING_SW_VISIBILITY): an 8-byte stand-in after resetBuffer (creation, resize),
+  // the frame's size once ensureBuffer ran; ensureBuffer returns true when it allocated (descriptors to rewrite).
+  gpu::Buffer buffer;
+  void resetBuffer(gpu::Device& device);
+  bool ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height);
   static SwRasterPass create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec);
   // Workgroups of the raster dispatch: each loops over the phase's routed draws (their count is on the GPU).
   static uint32_t workgroups(uint32_t capacity);
@@ -23,6 +28,9 @@ struct SwRasterPass {
   // ids / depth: COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL, loaded and stored.
   void recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& ids,
                    const gpu::Image& depth) const;
+
+ private:
+  bool sized_ = false;
 };
 
 }  // namespace visbuf::passes

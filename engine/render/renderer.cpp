@@ -185,11 +185,8 @@ struct Renderer::Impl {
   std::unique_ptr<AnimationState> animation;  // skinned scenes only
   passes::SkinPass skin;
   // Software micro-raster (FrameOptions::swRaster): its pipelines (created with the renderer when some list can
-  // use it) and its 64-bit per-pixel buffer (created by the first frame that uses it, dropped by a resize; an
-  // 8-byte stand-in until then).
+  // use it) and its 64-bit per-pixel buffer (created by the first frame that uses it, dropped by a resize).
   passes::SwRasterPass swRaster;
-  gpu::Buffer swVisibility;
-  bool swVisibilitySized = false;
   bool swOn = false;           // this frame routes small objects to it (set in render())
   bool lastSwOn = false;       // the last unfrozen frame did (a frozen frame redraws that frame's draw lists)
   uint32_t swSkipFrames = 0;   // frames left before it is probed again after a frame in which it took nothing
@@ -349,9 +346,7 @@ struct Renderer::Impl {
     }
     idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::HostVisible);
-    swVisibility = gpu::Buffer(device, 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                               gpu::MemoryUse::DeviceLocal);
-    swVisibilitySized = false;
+    swRaster.resetBuffer(device);
     if (hasPointLights()) lightCull.resize(device, width, height);
     if (classify.created()) classify.resize(device, width, height);
     config.width = width;
@@ -380,7 +375,7 @@ struct Renderer::Impl {
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
         {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
-        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swVisibility.handle(), 0, VK_WHOLE_SIZE}};
+        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swRaster.buffer.handle(), 0, VK_WHOLE_SIZE}};
     const uint32_t bufBindings[16] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
                                       BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
                                       BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
@@ -637,14 +632,6 @@ struct Renderer::Impl {
            swListMask != 0 &&
            VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange;
   }
-  void ensureSwVisibility() {
-    if (swVisibilitySized) return;
-    swVisibility = gpu::Buffer(device, VkDeviceSize(config.width) * config.height * 8,
-                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                               gpu::MemoryUse::DeviceLocal);
-    swVisibilitySized = true;
-    writeDescriptors();
-  }
   // Draws of list l in a phase that went to the micro-raster: the end of the list's region.
   uint32_t listSwDrawn(const uint32_t* s, uint32_t phase, uint32_t list) const {
     return (swListMask >> list & 1u) ? std::min(s[STAT_SW_DRAWS + phase * DRAW_LISTS + list], listCapacity[list]) : 0u;
@@ -880,7 +867,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
     if (clear) {
-      vkCmdFillBuffer(cmd, swVisibility.handle(), 0, VK_WHOLE_SIZE, 0);
+      vkCmdFillBuffer(cmd, swRaster.buffer.handle(), 0, VK_WHOLE_SIZE, 0);
     }
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
                                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
@@ -1074,7 +1061,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   const bool occlusionFrame = gpuCulled && !frozen && options.cull == CullMode::Occlusion;
   // The micro-raster this frame (a frozen frame redraws what its frame routed); its buffer once used.
   swOn = frozen ? lastSwOn : swActive(options) && swSkipFrames == 0;
-  if (swOn) ensureSwVisibility();
+  if (swOn && swRaster.ensureBuffer(device, config.width, config.height)) writeDescriptors();
   usePyramid = occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
   const bool readAttributes = options.readAttributes && gpuCulled;  // G-buffer: position and depth only
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
