@@ -12,12 +12,29 @@ layout(set = 0, binding = BINDING_FRAME) uniform FrameBlock { FrameData frame; }
 // 1: object records and vertices are read through their descriptor windows; 0 (a scene that fits one range
 // each): directly, with no per-fetch branch. Set per renderer (gpu::createComputePipeline).
 layout(constant_id = 0) const uint VB_WINDOWED = 1u;
+// 1: object records, vertices and indices are read through uniform texel buffer views (GpuScene::texels; only for
+// scenes that need no descriptor windows). On lavapipe a texel is one vector load, while a storage-buffer read is
+// a bounds-checked scalar load per lane and word: the cull, micro-raster and shading passes fetch per object,
+// triangle or pixel. Set per renderer (gpu::Specialization::texels).
+layout(constant_id = 3) const uint VB_TEXELS = 0u;
+layout(set = 0, binding = BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
+layout(set = 0, binding = BINDING_INDEX_TEXELS) uniform usamplerBuffer indexTexels;
+layout(set = 0, binding = BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData
+layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
+// Index i of the unified index pool.
+uint indexAt(uint i) { return VB_TEXELS != 0u ? texelFetch(indexTexels, int(i)).x : indices[i]; }
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_OBJECTS_HIGH) readonly buffer ObjectBlockHigh { ObjectData objectsHigh[]; };
 
 // Object records live in one buffer seen through two descriptor windows (each at most maxStorageBufferRange).
 // (if/else, not ?: -- glslang emits an invalid store for a ternary over two blocks' structs.)
 ObjectData objectAt(uint i) {
+  if (VB_TEXELS != 0u) {
+    int t = int(i) * 4;
+    uvec4 w = texelFetch(objectTexels, t + 3);
+    return ObjectData(uintBitsToFloat(texelFetch(objectTexels, t)), uintBitsToFloat(texelFetch(objectTexels, t + 1)),
+                      uintBitsToFloat(texelFetch(objectTexels, t + 2)), w.x, w.y, uintBitsToFloat(w.z), w.w);
+  }
   if (VB_WINDOWED == 0u || i < frame.objectSplit) {
     ObjectData o = objects[i];
     return o;
@@ -34,6 +51,11 @@ layout(std430, set = 0, binding = BINDING_VERTICES_3) readonly buffer VertexBloc
 // The vertex pool through its descriptor windows (each at most maxStorageBufferRange; skinned instances'
 // regions make pools larger than one window).
 Vertex vertexAt(uint i) {
+  if (VB_TEXELS != 0u) {
+    uvec4 a = texelFetch(vertexTexels, int(2u * i)), b = texelFetch(vertexTexels, int(2u * i + 1u));
+    return Vertex(uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z), a.w, uintBitsToFloat(b.x),
+                  uintBitsToFloat(b.y), b.z, b.w);
+  }
   if (VB_WINDOWED == 0u) {
     Vertex v = vertices0[i];
     return v;
@@ -73,6 +95,7 @@ vec3 meshPosition(uint mesh, uint i) {
       return vec3(SkinnedVertexRef(a).items[k].px, SkinnedVertexRef(a).items[k].py, SkinnedVertexRef(a).items[k].pz);
     }
   }
+  if (VB_TEXELS != 0u) return uintBitsToFloat(texelFetch(vertexTexels, int(2u * i)).xyz);
   if (VB_WINDOWED == 0u) return vec3(vertices0[i].px, vertices0[i].py, vertices0[i].pz);
   uint w = i >> frame.vertexWindowShift, j = i - (w << frame.vertexWindowShift);
   if (w == 0u) return vec3(vertices0[j].px, vertices0[j].py, vertices0[j].pz);

@@ -4,7 +4,8 @@
 // allocated with one atomic per subgroup (ballot + prefix count).
 //
 // Occlusion mode runs this twice per frame (Hill & Collin's two-phase scheme as used by niagara):
-//   early: objects visible at the end of last frame (history) -> frustum + LOD -> drawn first;
+//   early: objects visible at the end of last frame (history, dispatched over its list) -> frustum + LOD -> drawn
+//          first;
 //   late:  every object -> frustum -> sub-pixel and depth-pyramid tests (pyramid of the early depth)
 //          -> drawn if visible and not already drawn early; history := visible.
 // The early depth is a subset of the final depth, so the late test never hides a visible object,
@@ -19,6 +20,7 @@ layout(local_size_x = CULL_WORKGROUP_SIZE) in;
 layout(std430, set = 0, binding = BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
 layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
 layout(std430, set = 0, binding = BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
+layout(std430, set = 0, binding = BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
 layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
 layout(set = 0, binding = BINDING_PYRAMID) uniform sampler2D pyramid;
 layout(push_constant) uniform Push { PassConstants pc; };
@@ -97,17 +99,19 @@ uint occlusionTest(vec3 c, float r) {
 }
 
 void main() {
+  // The early phase of occlusion culling runs over last frame's visible list (indirect dispatch, one thread per
+  // listed object): a heavily occluded scene pays for the few it drew, not for every object it holds.
+  const bool listed = pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION;
   uint id = gl_GlobalInvocationID.x;
-  bool valid = id < frame.objectCount;
+  bool valid = id < (listed ? min(visibleList[0], frame.objectCount) : frame.objectCount);
+  if (listed) id = valid ? visibleList[VISIBLE_LIST_HEADER + id] : 0u;
   bool draw = false;
   uint lod = 0;
   uint meshIndex = 0;
   uint list = DRAW_LIST_NONE;
   uint frustumCulled = 0, occluded = 0, subpixel = 0;
   bool sw = false;  // routed to the software micro-raster
-  // The early phase draws only objects of the history: the rest (most of a heavily occluded scene) cost one
-  // load here instead of an object, a mesh and a frustum test each.
-  if (valid && pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION && history[id] == 0u) valid = false;
+  bool visibleNow = false;  // late phase: listed for the next frame's early phase
   if (valid) {
     // Only the fields needed are loaded: copying the whole 224-byte MeshData per thread made the pass
     // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
@@ -131,6 +135,7 @@ void main() {
       subpixel = test == 2u ? 1u : 0u;
       history[id] = test == 0u ? 1u : 0u;
       draw = test == 0u && !drawnEarly && list != DRAW_LIST_NONE;
+      visibleNow = test == 0u;
     }
     if (draw && frame.lodErrorPixels > 0.0) {
       // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist.
@@ -150,6 +155,18 @@ void main() {
       uint lodTriangles = meshes[meshIndex].lods[lod].indexCount / 3u;
       sw = lodTriangles <= frame.swMaxTriangles && smallOnScreen(c, r, lodTriangles);
     }
+  }
+  // The next frame's visible list: one atomic per subgroup for the slots, one for the dispatch size.
+  uvec4 visibleBallot = subgroupBallot(visibleNow);
+  uint visibleCount = subgroupBallotBitCount(visibleBallot);
+  if (visibleCount > 0u) {
+    uint first = 0u;
+    if (subgroupElect()) {
+      first = atomicAdd(visibleList[0], visibleCount);
+      atomicMax(visibleList[1], (first + visibleCount + CULL_WORKGROUP_SIZE - 1u) / CULL_WORKGROUP_SIZE);
+    }
+    first = subgroupBroadcastFirst(first);
+    if (visibleNow) visibleList[VISIBLE_LIST_HEADER + first + subgroupBallotExclusiveBitCount(visibleBallot)] = id;
   }
   uint culledSum = subgroupAdd(frustumCulled);
   uint occludedSum = subgroupAdd(occluded);

@@ -15,7 +15,6 @@
 #include "common.glsl"
 
 layout(local_size_x = SW_RASTER_WORKGROUP) in;
-layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
 layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
 layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
 layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
@@ -42,9 +41,9 @@ int edgeBias(ivec2 u, ivec2 v) {
 // wherever it stands in the code, taken or not), else 0.
 uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   uint base = d.firstIndex + 3u * t;
-  vec4 c0 = clipPosition(o, meshPosition(o.meshIndex, indices[base + 0u] + uint(d.vertexOffset)));
-  vec4 c1 = clipPosition(o, meshPosition(o.meshIndex, indices[base + 1u] + uint(d.vertexOffset)));
-  vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, indices[base + 2u] + uint(d.vertexOffset)));
+  vec4 c0 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 0u) + uint(d.vertexOffset)));
+  vec4 c1 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 1u) + uint(d.vertexOffset)));
+  vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 2u) + uint(d.vertexOffset)));
   // The cull pass routes only objects wholly beyond the near plane; a frozen frame's camera may have moved since.
   if (!(c0.w >= frame.nearPlane && c1.w >= frame.nearPlane && c2.w >= frame.nearPlane)) return 1u;
   ivec2 p0 = snapToGrid(c0), p1 = snapToGrid(c1), p2 = snapToGrid(c2);
@@ -74,16 +73,24 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   float invArea = 1.0 / float(area);
   uint payload = frame.wideIds != 0u ? (slot << frame.swTriangleBits) | t : ((slot << frame.triangleBits) | t) + 1u;
   uint width = uint(frame.viewport.x);
-  for (int y = pxLo.y; y <= pxHi.y; ++y) {
-    for (int x = pxLo.x; x <= pxHi.x; ++x) {
-      ivec2 p = ivec2(x, y) * 256 - p0;
-      int w0 = edge(b, c, p), w1 = edge(c, a, p), w2 = edge(a, b, p);
-      if (w0 + bias0 < 0 || w1 + bias1 < 0 || w2 + bias2 < 0) continue;
+  // The box's pixel centres as one loop (on lavapipe a loop runs as often as its longest lane needs: one loop over
+  // w * h candidates instead of rows times columns).
+  int columns = pxHi.x - pxLo.x + 1, candidates = columns * (pxHi.y - pxLo.y + 1);
+  ivec2 px = pxLo;
+  for (int k = 0; k < candidates; ++k) {
+    ivec2 p = px * 256 - p0;
+    int w0 = edge(b, c, p), w1 = edge(c, a, p), w2 = edge(a, b, p);
+    if (w0 + bias0 >= 0 && w1 + bias1 >= 0 && w2 + bias2 >= 0) {
       float z = (float(w0) * z0 + float(w1) * z1 + float(w2) * z2) * invArea;
       uint64_t packed = (uint64_t(floatBitsToUint(max(z, 0.0))) << 32) | uint64_t(payload);
-      uint i = uint(y) * width + uint(x);
-      if (packed > swVisibility[i]) atomicMax(swVisibility[i], packed);
+      uint i = uint(px.y) * width + uint(px.x);
+#if SW_PRECHECK
+      if (packed > swVisibility[i]) atomicMax(swVisibility[i], packed);  // (a GPU's atomics cost more than a load)
+#else
+      atomicMax(swVisibility[i], packed);  // (lavapipe: the load is another per-lane loop, the atomic one anyway)
+#endif
     }
+    px = px.x == pxHi.x ? ivec2(pxLo.x, px.y + 1) : ivec2(px.x + 1, px.y);
   }
   return 0u;
 }

@@ -12,6 +12,7 @@
 #include "sw_merge.vert.h"
 #include "sw_merge_wide.frag.h"
 #include "sw_raster.comp.h"
+#include "sw_raster_cpu.comp.h"
 #include "depth_pyramid.comp.h"
 #include "forward.frag.h"
 #include "forward_ids.frag.h"
@@ -78,6 +79,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
   VB_SHADER("cull.comp", spv_cull_comp)
   VB_SHADER("sw_raster.comp", spv_sw_raster_comp)
+  VB_SHADER("sw_raster_cpu.comp", spv_sw_raster_cpu_comp)
   VB_SHADER("sw_merge.vert", spv_sw_merge_vert)
   VB_SHADER("sw_merge.frag", spv_sw_merge_frag)
   VB_SHADER("sw_merge_wide.frag", spv_sw_merge_wide_frag)
@@ -182,15 +184,18 @@ void Pipeline::reset() {
 }
 
 namespace {
-const VkSpecializationMapEntry kEntries[3] = {
-    {0, 0, sizeof(uint32_t)}, {1, sizeof(uint32_t), sizeof(uint32_t)}, {2, 2 * sizeof(uint32_t), sizeof(uint32_t)}};
-VkSpecializationInfo specializationInfo(const uint32_t (&values)[3]) { return {3, kEntries, sizeof(values), values}; }
+const VkSpecializationMapEntry kEntries[4] = {{0, 0, sizeof(uint32_t)},
+                                              {1, sizeof(uint32_t), sizeof(uint32_t)},
+                                              {2, 2 * sizeof(uint32_t), sizeof(uint32_t)},
+                                              {3, 3 * sizeof(uint32_t), sizeof(uint32_t)}};
+VkSpecializationInfo specializationInfo(const uint32_t (&values)[4]) { return {4, kEntries, sizeof(values), values}; }
 }  // namespace
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization specialization) {
   VkShaderModule module = createModule(device, shader, specialization.textureClasses > 0);
-  const uint32_t values[3] = {specialization.windowed, specialization.textureClasses, specialization.skinned};
+  const uint32_t values[4] = {specialization.windowed, specialization.textureClasses, specialization.skinned,
+                              specialization.texels};
   const VkSpecializationInfo spec = specializationInfo(values);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -216,7 +221,7 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
-  const uint32_t values[3] = {desc.windowed, desc.textureClasses, desc.skinned};
+  const uint32_t values[4] = {desc.windowed, desc.textureClasses, desc.skinned, desc.texels};
   const VkSpecializationInfo spec = specializationInfo(values);
   stages[0].pSpecializationInfo = stages[1].pSpecializationInfo = &spec;
 

@@ -48,13 +48,16 @@ class Pipeline {
 // Specialisation constant 2 (common.glsl VB_SKINNED): 1 when the scene has skinned instances, whose mesh slots
 // address skinned vertices (meshVertex()); 0 removes that per-vertex test, so static scenes run the code they
 // ran before skinning existed.
+// Specialisation constant 3 (common.glsl VB_TEXELS): 1 to read object records, vertex positions and indices through
+// uniform texel buffers (GpuScene::texels) in the passes that fetch them per object, triangle or pixel.
 struct Specialization {
   Specialization(uint32_t windowedValue = 1, uint32_t textureClassCount = 0,  // NOLINT: implicit from `windowed`
-                 uint32_t skinnedValue = 0)
-      : windowed(windowedValue), textureClasses(textureClassCount), skinned(skinnedValue) {}
+                 uint32_t skinnedValue = 0, uint32_t texelsValue = 0)
+      : windowed(windowedValue), textureClasses(textureClassCount), skinned(skinnedValue), texels(texelsValue) {}
   uint32_t windowed;
   uint32_t textureClasses;
   uint32_t skinned;
+  uint32_t texels;
 };
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization spec = {});
@@ -72,6 +75,7 @@ struct GraphicsPipelineDesc {
   uint32_t windowed = 1;  // specialisation constant 0 of both stages (see createComputePipeline)
   uint32_t textureClasses = 0;  // specialisation constant 1 of both stages (see Specialization)
   uint32_t skinned = 0;         // specialisation constant 2 of both stages (see Specialization)
+  uint32_t texels = 0;          // specialisation constant 3 of both stages (see Specialization)
 };
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
 

@@ -73,6 +73,31 @@ void Buffer::reset() {
   size_ = 0;
 }
 
+BufferView::BufferView(Device& device, const Buffer& buffer, VkFormat format, VkDeviceSize offset,
+                       VkDeviceSize range)
+    : device_(device.device()) {
+  VkBufferViewCreateInfo ci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  ci.buffer = buffer.handle();
+  ci.format = format;
+  ci.offset = offset;
+  ci.range = range;
+  VK_CHECK(vkCreateBufferView(device_, &ci, nullptr, &view_));
+}
+
+BufferView& BufferView::operator=(BufferView&& o) noexcept {
+  if (this != &o) {
+    reset();
+    device_ = std::exchange(o.device_, VK_NULL_HANDLE);
+    view_ = std::exchange(o.view_, VK_NULL_HANDLE);
+  }
+  return *this;
+}
+
+void BufferView::reset() {
+  if (view_) vkDestroyBufferView(device_, view_, nullptr);
+  view_ = VK_NULL_HANDLE;
+}
+
 Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, VkImageUsageFlags usage,
              VkImageAspectFlags aspect, uint32_t mipLevels, uint32_t arrayLayers, VkSampleCountFlagBits samples)
     : device_(device.device()),

@@ -41,6 +41,27 @@ class Buffer {
   VkDeviceAddress address_ = 0;
 };
 
+// A typed view of a buffer range (a uniform texel buffer): lavapipe fetches texels as whole vector loads, where its
+// storage-buffer reads cost a bounds-checked scalar load per lane and word.
+class BufferView {
+ public:
+  BufferView() = default;
+  BufferView(Device& device, const Buffer& buffer, VkFormat format, VkDeviceSize offset, VkDeviceSize range);
+  ~BufferView() { reset(); }
+  BufferView(BufferView&& o) noexcept { *this = std::move(o); }
+  BufferView& operator=(BufferView&& o) noexcept;
+  BufferView(const BufferView&) = delete;
+  BufferView& operator=(const BufferView&) = delete;
+
+  void reset();
+  VkBufferView handle() const { return view_; }
+  explicit operator bool() const { return view_ != VK_NULL_HANDLE; }
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkBufferView view_ = VK_NULL_HANDLE;
+};
+
 class Image {
  public:
   Image() = default;

@@ -4,8 +4,8 @@
 
 namespace visbuf::passes {
 
-CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
-  return CullPass{gpu::createComputePipeline(device, layout, "cull.comp", windowed)};
+CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec) {
+  return CullPass{gpu::createComputePipeline(device, layout, "cull.comp", spec)};
 }
 
 void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
@@ -15,6 +15,15 @@ void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptor
   gpu::PassConstants pc{phase, 0, 0, 0};  // (drawBase: the visibility pass's; lists come from BINDING_DRAW_LISTS)
   vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
+}
+
+void CullPass::recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+                            const gpu::Buffer& visibleList) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  gpu::PassConstants pc{CULL_PHASE_EARLY, 0, 0, 0};
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  vkCmdDispatchIndirect(cmd, visibleList.handle(), sizeof(uint32_t));  // header words 1..3
 }
 
 }  // namespace visbuf::passes

@@ -4,16 +4,21 @@
 #pragma once
 
 #include "gpu/pipeline.h"
+#include "gpu/resources.h"
 
 namespace visbuf::passes {
 
 struct CullPass {
   gpu::Pipeline pipeline;
-  static CullPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
+  static CullPass create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec);
   // phase: CULL_PHASE_EARLY/LATE. Occlusion mode also reads the depth pyramid and reads/writes the per-object
   // history.
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
               uint32_t phase) const;
+  // The early phase of occlusion culling: one thread per object of last frame's visible list, whose header holds
+  // the dispatch size (config.h BINDING_VISIBLE_LIST).
+  void recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+                    const gpu::Buffer& visibleList) const;
 };
 
 }  // namespace visbuf::passes

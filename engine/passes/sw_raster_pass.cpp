@@ -9,7 +9,8 @@ namespace visbuf::passes {
 
 SwRasterPass SwRasterPass::create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec) {
   SwRasterPass p;
-  p.raster = gpu::createComputePipeline(device, layout, "sw_raster.comp", spec);
+  // lavapipe: no load before each atomic (sw_raster.comp.glsl SW_PRECHECK)
+  p.raster = gpu::createComputePipeline(device, layout, device.isCpu() ? "sw_raster_cpu.comp" : "sw_raster.comp", spec);
   for (int wide = 0; wide < 2; ++wide) {
     gpu::GraphicsPipelineDesc d;
     d.vertexShader = "sw_merge.vert";

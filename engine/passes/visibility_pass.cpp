@@ -23,6 +23,7 @@ gpu::GraphicsPipelineDesc drawListPipelineDesc(const gpu::Specialization& spec, 
   d.windowed = spec.windowed;
   d.textureClasses = spec.textureClasses;
   d.skinned = spec.skinned;
+  d.texels = spec.texels;
   d.cullMode = drawListCullMode(list);
   return d;
 }

@@ -195,6 +195,7 @@ struct Renderer::Impl {
   passes::LightCullPass lightCull;
   bool hasPointLights() const { return !scene.pointLights.empty(); }
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
+  gpu::Buffer visibleList;  // the same set listed (config.h BINDING_VISIBLE_LIST): the early cull's threads
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
   bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
   CullMode lastCull = CullMode::Frustum;
@@ -253,6 +254,7 @@ struct Renderer::Impl {
         {BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_VISIBLE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
         {BINDING_ATTRIBUTES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_OBJECTS_HIGH, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
@@ -270,6 +272,9 @@ struct Renderer::Impl {
         {BINDING_LIGHT_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_MATERIAL_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_TILE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_VERTEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+        {BINDING_INDEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+        {BINDING_OBJECT_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -283,13 +288,14 @@ struct Renderer::Impl {
     pci.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
     VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 16 + 2 /*lights*/ + 2 /*classification*/},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 17 + 2 /*lights*/ + 2 /*classification*/},
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
-                                    {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2}};
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
+                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 3}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
-    dpci.poolSizeCount = 4;
+    dpci.poolSizeCount = uint32_t(std::size(sizes));
     dpci.pPoolSizes = sizes;
     VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
     VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
@@ -354,6 +360,12 @@ struct Renderer::Impl {
     writeDescriptors();
   }
 
+  // An empty visible list (no thread in the next early cull) with its dispatch arguments (0, 1, 1).
+  void resetVisibleList(VkCommandBuffer cmd) const {
+    const uint32_t header[VISIBLE_LIST_HEADER] = {0, 0, 1, 1};
+    vkCmdUpdateBuffer(cmd, visibleList.handle(), 0, sizeof(header), header);
+  }
+
   // The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
   void resizeAttributes(VkDeviceSize bytes) {
     attributes = gpu::Buffer(device, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
@@ -367,7 +379,7 @@ struct Renderer::Impl {
     const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
     const bool highUsed = objectSplit < gpuScene.objectCount;
     const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
-    VkDescriptorBufferInfo bufs[16] = {
+    VkDescriptorBufferInfo bufs[17] = {
         {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
         {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
@@ -375,14 +387,15 @@ struct Renderer::Impl {
         {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
         {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
         {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
-        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swRaster.buffer.handle(), 0, VK_WHOLE_SIZE}};
-    const uint32_t bufBindings[16] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
+        vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swRaster.buffer.handle(), 0, VK_WHOLE_SIZE},
+        {visibleList.handle(), 0, VK_WHOLE_SIZE}};
+    const uint32_t bufBindings[17] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
                                       BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
                                       BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
                                       BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3,
-                                      BINDING_DRAW_LISTS, BINDING_SW_VISIBILITY};
+                                      BINDING_DRAW_LISTS, BINDING_SW_VISIBILITY, BINDING_VISIBLE_LIST};
     std::vector<VkWriteDescriptorSet> w;
-    for (int i = 0; i < 16; ++i) {
+    for (int i = 0; i < 17; ++i) {
       VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       x.dstSet = set;
       x.dstBinding = bufBindings[i];
@@ -427,6 +440,18 @@ struct Renderer::Impl {
     x.descriptorCount = MAX_TEXTURE_CLASSES;
     x.pImageInfo = textureInfos.data();
     w.push_back(x);
+    const VkBufferView texelViews[3] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
+                                        gpuScene.objectTexels.handle()};
+    const uint32_t texelBindings[3] = {BINDING_VERTEX_TEXELS, BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS};
+    for (int i = 0; i < 3; ++i) {
+      VkWriteDescriptorSet t{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      t.dstSet = set;
+      t.dstBinding = texelBindings[i];
+      t.descriptorCount = 1;
+      t.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      t.pTexelBufferView = &texelViews[i];
+      w.push_back(t);
+    }
     VkDescriptorBufferInfo extrasInfo{gpuScene.vertexExtras.handle(), 0, VK_WHOLE_SIZE};
     x.dstBinding = BINDING_VERTEX_EXTRAS;
     x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -784,15 +809,23 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   auto recordCull = [&](uint32_t phase, const char* name) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
+    if (occlusion && phase == CULL_PHASE_LATE) {  // it lists the visible set anew, after the early phase read it
+      gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT, 0,
+                         VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0);
+      resetVisibleList(cmd);
+    }
     // Counters reset (setup) and, in the late phase, the pyramid and the early draws' reads.
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
                                 VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
                        VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
                        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
     uint32_t t = timestamps->begin(cmd, name);
-    cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
+    if (occlusion && phase == CULL_PHASE_EARLY)
+      cull.recordListed(cmd, pipelineLayout, set, visibleList);
+    else
+      cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
@@ -1109,6 +1142,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   }
   if (historyDirty) {
     vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
+    resetVisibleList(cmd);
     historyDirty = false;
   }
   VK_CHECK(vkEndCommandBuffer(cmd));
@@ -1500,9 +1534,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||
                         impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
   const uint32_t w = windowed ? 1u : 0u;
-  impl->cull = passes::CullPass::create(device, impl->pipelineLayout, w);
   const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
-                                     impl->gpuScene.skinned.empty() ? 0u : 1u);
+                                     impl->gpuScene.skinned.empty() ? 0u : 1u, impl->gpuScene.texels && !windowed ? 1u : 0u);
+  impl->cull = passes::CullPass::create(device, impl->pipelineLayout, textured);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
   if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->pipelineLayout, textured);
@@ -1531,6 +1565,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::DeviceLocal);
+  impl->visibleList = gpu::Buffer(device, (VISIBLE_LIST_HEADER + uint64_t(impl->gpuScene.objectCount)) * 4,
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                      VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                                  gpu::MemoryUse::DeviceLocal);
   impl->pyramid.create(device);
   impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 16);
   if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all

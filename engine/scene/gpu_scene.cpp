@@ -215,8 +215,9 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     if (!s) return s.error();
   }
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-  g.vertices = gpu::uploadVector(device, vertices, ssbo);
-  g.indices = gpu::uploadVector(device, indices, ssbo | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+  const VkBufferUsageFlags texel = VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
+  g.vertices = gpu::uploadVector(device, vertices, ssbo | texel);
+  g.indices = gpu::uploadVector(device, indices, ssbo | texel | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
   for (uint64_t bytes : blockBytes)  // contents written by the skinning pass before any frame reads them
     g.skinnedVertices.emplace_back(device, bytes,
                                    ssbo | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
@@ -233,7 +234,19 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     md.skinnedTangentHigh = uint32_t(t >> 32);
   }
   g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
-  g.objects = gpu::uploadVector(device, objects, ssbo);
+  g.objects = gpu::uploadVector(device, objects, ssbo | texel);
+  {
+    const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
+    auto view = [&](const gpu::Buffer& b, VkFormat format, VkDeviceSize texelBytes) {
+      const VkDeviceSize range = std::min(b.size() / texelBytes, maxTexels) * texelBytes;
+      return gpu::BufferView(device, b, format, 0, std::max(range, texelBytes));
+    };
+    g.vertexTexels = view(g.vertices, VK_FORMAT_R32G32B32A32_UINT, 16);
+    g.indexTexels = view(g.indices, VK_FORMAT_R32_UINT, 4);
+    g.objectTexels = view(g.objects, VK_FORMAT_R32G32B32A32_UINT, 16);
+    g.texels = g.vertices.size() / 16 <= maxTexels && g.indices.size() / 4 <= maxTexels &&
+               g.objects.size() / 16 <= maxTexels;
+  }
   g.materials = gpu::uploadVector(device, materials, ssbo);
   if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
   if (!morphDeltas.empty()) g.morphDeltas = gpu::uploadVector(device, morphDeltas, ssbo);

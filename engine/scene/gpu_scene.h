@@ -18,6 +18,12 @@ struct GpuScene {
   gpu::Buffer objects;    // gpu::ObjectData[]
   gpu::Buffer materials;  // gpu::MaterialData[]
   gpu::Buffer vertexExtras;  // gpu::VertexExtra[] of the meshes with tangents or TEXCOORD_1 (MeshData.extraOffset)
+  // The same vertex, index and object records as uniform texel buffers (RGBA32UI, R32UI, RGBA32UI): the hot fetches
+  // of the frame read through these where `texels` is set (common.glsl VB_TEXELS), because lavapipe loads a texel
+  // as one vector while it reads a storage buffer word by word and lane by lane. Set when every record fits
+  // maxTexelBufferElements; the views cover what fits either way (a descriptor is always written).
+  gpu::BufferView vertexTexels, indexTexels, objectTexels;
+  bool texels = false;
   std::vector<gpu::Image> textureClasses;  // Scene::textureClasses, same order: 2D arrays with full mip chains
   gpu::Image placeholderTexture;           // 1x1x1 white: bound to the class slots the scene does not use
   std::vector<gpu::MeshData> meshTable;  // CPU copy (forward path, ID decoding)

@@ -107,6 +107,11 @@
 #define BINDING_COLOR 9      // rgba16f output image
 #define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
 #define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
+// The same visible set as a list, for the next frame's early cull (one thread per listed object instead of one per
+// object of the scene): VISIBLE_LIST_HEADER uints -- count, then the early cull's indirect dispatch (x, 1, 1) --,
+// then the object IDs in append order. Written by the late cull, reset before it.
+#define BINDING_VISIBLE_LIST 32
+#define VISIBLE_LIST_HEADER 4u
 #define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
 // The vertex pool is read through VERTEX_WINDOWS descriptor windows of 2^FrameData.vertexWindowShift vertices
 // (each window at most maxStorageBufferRange): BINDING_VERTICES, then these.
@@ -148,6 +153,11 @@
                                // w 1 if the software micro-raster may take this list's draws (opaque, uncapped)
 // uint64 per pixel (software micro-raster): reverse-Z depth bits << 32 | payload, atomicMax'ed; 0 = nothing.
 #define BINDING_SW_VISIBILITY 26
+// Uniform texel buffer views of the vertex pool (RGBA32UI: two texels per Vertex), the index pool (R32UI) and the
+// object records (RGBA32UI: four texels per ObjectData), read where VB_TEXELS is 1 (GpuScene::texels).
+#define BINDING_VERTEX_TEXELS 23
+#define BINDING_INDEX_TEXELS 27
+#define BINDING_OBJECT_TEXELS 31
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
 // box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
 #define SW_RASTER_WORKGROUP 64
