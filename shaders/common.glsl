@@ -20,6 +20,7 @@ layout(constant_id = 3) const uint VB_TEXELS = 0u;
 layout(set = 0, binding = BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
 layout(set = 0, binding = BINDING_INDEX_TEXELS) uniform usamplerBuffer indexTexels;
 layout(set = 0, binding = BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData
+layout(set = 0, binding = BINDING_MESH_TEXELS) uniform usamplerBuffer meshTexels;  // MESH_TEXELS per MeshData
 layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
 // Index i of the unified index pool.
 uint indexAt(uint i) { return VB_TEXELS != 0u ? texelFetch(indexTexels, int(i)).x : indices[i]; }
@@ -43,6 +44,20 @@ ObjectData objectAt(uint i) {
   return o;
 }
 layout(std430, set = 0, binding = BINDING_MESHES) readonly buffer MeshBlock { MeshData meshes[]; };
+#define MESH_TEXELS (3 + MAX_LODS)  // sizeof(MeshData) / 16: boundsSphere, 2 texels of fields, then one per LOD
+
+vec4 meshBoundsSphere(uint mesh) {
+  if (VB_TEXELS != 0u) return uintBitsToFloat(texelFetch(meshTexels, int(mesh * MESH_TEXELS)));
+  return meshes[mesh].boundsSphere;
+}
+
+LodData meshLod(uint mesh, uint lod) {
+  if (VB_TEXELS != 0u) {
+    uvec4 t = texelFetch(meshTexels, int(mesh * MESH_TEXELS + 3u + lod));
+    return LodData(t.x, t.y, uintBitsToFloat(t.z), t.w);
+  }
+  return meshes[mesh].lods[lod];
+}
 layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer VertexBlock0 { Vertex vertices0[]; };
 layout(std430, set = 0, binding = BINDING_VERTICES_1) readonly buffer VertexBlock1 { Vertex vertices1[]; };
 layout(std430, set = 0, binding = BINDING_VERTICES_2) readonly buffer VertexBlock2 { Vertex vertices2[]; };

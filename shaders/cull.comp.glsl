@@ -37,41 +37,35 @@ bool frustumVisible(vec3 c, float r) {
 
 // Screen rectangle (NDC) of the sphere's bounding cube; false if the sphere touches the near plane. v: the centre in
 // view space, rr: the radius widened for rounding. Every corner is then in front of the camera, so the hull of the
-// projected corners contains the projected sphere.
+// projected corners contains the projected sphere. The corners have two depths and two x (y) values: the hull's
+// bounds are among their four quotients each (two reciprocals instead of eight divisions; the occlusion test's
+// 0.01-pixel margin covers the ulp this rounds differently).
 bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2 hi) {
   v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
   rr = r * (1.0 + 1e-5) + 1e-6;
   lo = vec2(1e30);
   hi = vec2(-1e30);
   if (-(v.z + rr) <= frame.nearPlane * 1.001) return false;
-  for (int i = 0; i < 8; ++i) {
-    vec3 p = v + rr * vec3((i & 1) != 0 ? 1.0 : -1.0, (i & 2) != 0 ? 1.0 : -1.0, (i & 4) != 0 ? 1.0 : -1.0);
-    vec2 ndc = vec2(frame.projX * p.x, frame.projY * p.y) / -p.z;
-    lo = min(lo, ndc);
-    hi = max(hi, ndc);
-  }
+  float nearInv = 1.0 / -(v.z + rr), farInv = 1.0 / -(v.z - rr);
+  vec2 proj = vec2(frame.projX, frame.projY);
+  vec2 a = proj * (v.xy - rr), b = proj * (v.xy + rr);
+  lo = min(min(a * nearInv, a * farInv), min(b * nearInv, b * farInv));
+  hi = max(max(a * nearInv, a * farInv), max(b * nearInv, b * farInv));
   return true;
 }
 
-// Software micro-raster routing: the object's screen box is at most frame.swMaxPixels per side, its triangles are
-// small (SW_RASTER_MAX_AREA_PER_TRIANGLE) and it lies wholly beyond the near plane (sw_raster.comp needs no
-// clipping and keeps its edge functions within 32 bits).
-bool smallOnScreen(vec3 c, float r, uint triangles) {
-  vec3 v;
-  float rr;
-  vec2 lo, hi;
-  if (!screenRect(c, r, v, rr, lo, hi)) return false;
+// Software micro-raster routing: the object's screen box (rect: screenRect's) is at most frame.swMaxPixels per
+// side, its triangles are small (SW_RASTER_MAX_AREA_PER_TRIANGLE) and it lies wholly beyond the near plane
+// (sw_raster.comp needs no clipping and keeps its edge functions within 32 bits).
+bool smallOnScreen(bool rect, vec2 lo, vec2 hi, uint triangles) {
   vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
-  return max(extent.x, extent.y) <= frame.swMaxPixels &&
+  return rect && max(extent.x, extent.y) <= frame.swMaxPixels &&
          extent.x * extent.y <= SW_RASTER_MAX_AREA_PER_TRIANGLE * float(triangles);
 }
 
-// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre. c: camera-relative centre.
-uint occlusionTest(vec3 c, float r) {
-  vec3 v;
-  float rr;
-  vec2 lo, hi;
-  if (!screenRect(c, r, v, rr, lo, hi)) return 0u;  // touches the near plane: always visible
+// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre. rect, v, rr, lo, hi: screenRect's.
+uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi) {
+  if (!rect) return 0u;  // touches the near plane: always visible
   vec2 size = frame.viewport.xy;
   // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding. MSAA: a
   // triangle can cover a sample and no centre; every sample lies within 0.5 px of its pixel's centre (per axis),
@@ -118,9 +112,13 @@ void main() {
     ObjectData o = objectAt(id);
     meshIndex = o.meshIndex;
     list = objectDrawList(o.flags);  // set at upload (drawListOf): no material fetch per object
-    vec4 sphere = meshes[meshIndex].boundsSphere;
+    vec4 sphere = meshBoundsSphere(meshIndex);
     vec3 c = objectToCamera(o, sphere.xyz);
     float r = sphere.w * o.maxScale;
+    vec3 v;
+    float rr;
+    vec2 lo, hi;
+    bool rect = screenRect(c, r, v, rr, lo, hi);  // (the occlusion test's and the micro-raster routing's)
     bool inFrustum = frame.cullMode == CULL_NONE || frustumVisible(c, r);
     if (frame.cullMode != CULL_OCCLUSION) {
       draw = inFrustum && list != DRAW_LIST_NONE;  // BLEND objects: the transparency pass
@@ -129,7 +127,7 @@ void main() {
       draw = inFrustum && history[id] != 0u && list != DRAW_LIST_NONE;  // culled ones: counted late
     } else {
       bool drawnEarly = inFrustum && history[id] != 0u;  // exactly the early phase's decision
-      uint test = inFrustum ? occlusionTest(c, r) : 3u;
+      uint test = inFrustum ? occlusionTest(rect, v, rr, lo, hi) : 3u;
       frustumCulled = test == 3u ? 1u : 0u;
       occluded = test == 1u ? 1u : 0u;
       subpixel = test == 2u ? 1u : 0u;
@@ -142,7 +140,7 @@ void main() {
       float dist = length(c) - r;
       if (dist > frame.nearPlane) {
         for (uint l = meshes[meshIndex].lodCount - 1; l > 0; --l) {
-          if (meshes[meshIndex].lods[l].error * o.maxScale * frame.lodScale <= frame.lodErrorPixels * dist) {
+          if (meshLod(meshIndex, l).error * o.maxScale * frame.lodScale <= frame.lodErrorPixels * dist) {
             lod = l;
             break;
           }
@@ -152,8 +150,8 @@ void main() {
     // Small objects of the lists the micro-raster may take go to sw_raster.comp (FrameData.swRaster): they fill their
     // list's region from its end, with a count of their own.
     if (draw && frame.swRaster != 0u && drawLists[list].w != 0u) {
-      uint lodTriangles = meshes[meshIndex].lods[lod].indexCount / 3u;
-      sw = lodTriangles <= frame.swMaxTriangles && smallOnScreen(c, r, lodTriangles);
+      uint lodTriangles = meshLod(meshIndex, lod).indexCount / 3u;
+      sw = lodTriangles <= frame.swMaxTriangles && smallOnScreen(rect, lo, hi, lodTriangles);
     }
   }
   // The next frame's visible list: one atomic per subgroup for the slots, one for the dispatch size.
@@ -203,7 +201,7 @@ void main() {
     atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
     return;
   }
-  LodData l = meshes[meshIndex].lods[lod];
+  LodData l = meshLod(meshIndex, lod);
   uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
   if (sw) slot = region.z - 1u - slot;
   draws[first + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);

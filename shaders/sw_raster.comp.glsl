@@ -12,6 +12,7 @@
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "common.glsl"
 
 layout(local_size_x = SW_RASTER_WORKGROUP) in;
@@ -20,6 +21,29 @@ layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]
 layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
 layout(std430, set = 0, binding = BINDING_SW_VISIBILITY) buffer SwBlock { uint64_t swVisibility[]; };
 layout(push_constant) uniform Push { PassConstants pc; };
+#if SW_CPU
+// Per subgroup: the chunk's front-facing triangles (SW_RASTER_CHUNK each; 4 lanes per subgroup at the least).
+shared uint swQueue[SW_RASTER_WORKGROUP / 4 * SW_RASTER_CHUNK];
+
+layout(set = 0, binding = BINDING_TRIANGLE_PLANES) uniform samplerBuffer trianglePlanes;
+
+// The camera position in the object's space: the inverse of objectToCamera at the camera-relative origin.
+vec3 cameraInObjectSpace(ObjectData o) {
+  mat3 m = transpose(mat3(o.row0.xyz, o.row1.xyz, o.row2.xyz));  // columns: objectToCamera's linear part
+  vec3 t = vec3(o.row0.w, o.row1.w, o.row2.w) + frame.cameraOffset.xyz;
+  return inverse(m) * -t;
+}
+
+// True where triangle t of the draw faces away from the camera by more than rounding could hide: the camera lies
+// behind its object-space plane by more than 1e-3 of its distance (`reach` bounds that distance: the distance to
+// the mesh's bounding sphere centre plus its radius), i.e. the cosine between the normal and the direction to the
+// camera is below -1e-3. Front (counter-clockwise seen from outside) in object space is what both single-sided
+// lists keep: a mirroring transform flips the screen winding and DRAW_LIST_OPAQUE_FLIPPED flips it back.
+bool clearlyBackFacing(DrawCommand d, vec3 eye, float reach, uint t) {
+  vec4 plane = texelFetch(trianglePlanes, int(d.firstIndex / 3u + t));
+  return dot(plane.xyz, eye) + plane.w < -1e-3 * reach;
+}
+#endif
 
 // Window position in 1/256 pixel, relative to the pixel-centre grid (pixel (i, j)'s centre is (256 i, 256 j)).
 ivec2 snapToGrid(vec4 clip) {
@@ -84,7 +108,7 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
       float z = (float(w0) * z0 + float(w1) * z1 + float(w2) * z2) * invArea;
       uint64_t packed = (uint64_t(floatBitsToUint(max(z, 0.0))) << 32) | uint64_t(payload);
       uint i = uint(px.y) * width + uint(px.x);
-#if SW_PRECHECK
+#if !SW_CPU
       if (packed > swVisibility[i]) atomicMax(swVisibility[i], packed);  // (a GPU's atomics cost more than a load)
 #else
       atomicMax(swVisibility[i], packed);  // (lavapipe: the load is another per-lane loop, the atomic one anyway)
@@ -114,8 +138,39 @@ void main() {
     ObjectData o = objectAt(d.firstInstance);
     uint triangles = d.indexCount / 3u;
     uint refused = 0u;
+#if SW_CPU
+    // lavapipe: back faces are dropped before their projection and setup. Per chunk of triangles each lane tests
+    // one triangle's object-space plane against the camera (in object space, computed once per draw), the front
+    // ones are queued in shared memory, and the raster runs over the queue only -- lavapipe executes every branch
+    // for every lane of a batch, so skipping work takes fewer loop passes, not a branch. Only clear back faces are
+    // dropped (a margin of 1e-3 of the cosine, where snapping could turn the projected winding); the raster's own
+    // integer winding test decides the rest, as before. (On an H100 the queue cost more than it saved.)
+    vec3 eye = cameraInObjectSpace(o);
+    vec4 sphere = meshes[o.meshIndex].boundsSphere;
+    float reach = length(eye - sphere.xyz) + sphere.w;
+    // (the planes are the rest pose's: a skinned or morphed instance's slot is not tested)
+    bool cullBack = VB_TEXELS != 0u && list != DRAW_LIST_OPAQUE_DOUBLE_SIDED &&
+                    (VB_SKINNED == 0u || uvec2(meshes[o.meshIndex].skinnedVertexLow,
+                                               meshes[o.meshIndex].skinnedVertexHigh) == uvec2(0u));
+    uint queueBase = gl_SubgroupID * SW_RASTER_CHUNK;
+    for (uint chunk = 0u; chunk < triangles; chunk += SW_RASTER_CHUNK) {
+      uint chunkEnd = min(chunk + SW_RASTER_CHUNK, triangles);
+      uint queued = 0u;
+      for (uint t = chunk + gl_SubgroupInvocationID; t - gl_SubgroupInvocationID < chunkEnd; t += gl_SubgroupSize) {
+        bool keep = t < chunkEnd && (!cullBack || !clearlyBackFacing(d, eye, reach, t));
+        uvec4 ballot = subgroupBallot(keep);
+        if (keep) swQueue[queueBase + queued + subgroupBallotExclusiveBitCount(ballot)] = t;
+        queued += subgroupBallotBitCount(ballot);
+      }
+      subgroupBarrier();
+      for (uint q = gl_SubgroupInvocationID; q - gl_SubgroupInvocationID < queued; q += gl_SubgroupSize)
+        if (q < queued) refused += rasterTriangle(slot, d, o, list, swQueue[queueBase + q]);
+      subgroupBarrier();
+    }
+#else
     for (uint t = gl_SubgroupInvocationID; t < triangles; t += gl_SubgroupSize)
       refused += rasterTriangle(slot, d, o, list, t);
+#endif
     if (refused > 0u) atomicAdd(stats[STAT_SW_OVERSIZE], refused);
   }
 }

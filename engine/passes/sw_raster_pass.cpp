@@ -9,7 +9,7 @@ namespace visbuf::passes {
 
 SwRasterPass SwRasterPass::create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec) {
   SwRasterPass p;
-  // lavapipe: no load before each atomic (sw_raster.comp.glsl SW_PRECHECK)
+  // lavapipe: no load before each atomic, the back-face queue (sw_raster.comp.glsl SW_CPU)
   p.raster = gpu::createComputePipeline(device, layout, device.isCpu() ? "sw_raster_cpu.comp" : "sw_raster.comp", spec);
   for (int wide = 0; wide < 2; ++wide) {
     gpu::GraphicsPipelineDesc d;

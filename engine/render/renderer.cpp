@@ -275,6 +275,8 @@ struct Renderer::Impl {
         {BINDING_VERTEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
         {BINDING_INDEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
         {BINDING_OBJECT_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+        {BINDING_TRIANGLE_PLANES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+        {BINDING_MESH_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -292,7 +294,7 @@ struct Renderer::Impl {
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
-                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 3}};
+                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 5}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = uint32_t(std::size(sizes));
@@ -440,10 +442,12 @@ struct Renderer::Impl {
     x.descriptorCount = MAX_TEXTURE_CLASSES;
     x.pImageInfo = textureInfos.data();
     w.push_back(x);
-    const VkBufferView texelViews[3] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
-                                        gpuScene.objectTexels.handle()};
-    const uint32_t texelBindings[3] = {BINDING_VERTEX_TEXELS, BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS};
-    for (int i = 0; i < 3; ++i) {
+    const VkBufferView texelViews[5] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
+                                        gpuScene.objectTexels.handle(), gpuScene.planeTexels.handle(),
+                                        gpuScene.meshTexels.handle()};
+    const uint32_t texelBindings[5] = {BINDING_VERTEX_TEXELS, BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
+                                       BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS};
+    for (int i = 0; i < 5; ++i) {
       VkWriteDescriptorSet t{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       t.dstSet = set;
       t.dstBinding = texelBindings[i];

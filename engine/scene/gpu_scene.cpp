@@ -87,6 +87,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   std::vector<gpu::Vertex> vertices;
   std::vector<uint32_t> indices;
   std::vector<gpu::VertexExtra> extras;
+  std::vector<glm::vec4> planes;  // per triangle of `indices` (all LODs): object-space unit normal, offset
   for (const Mesh& mesh : scene.meshes) {
     gpu::MeshData md{};
     md.boundsSphere = mesh.boundsSphere;
@@ -114,6 +115,13 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     g.maxTrianglesPerDraw = std::max(g.maxTrianglesPerDraw, mesh.triangleCount(0));
     vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
     indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
+    for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+      const glm::dvec3 p0(mesh.position(mesh.indices[i])), p1(mesh.position(mesh.indices[i + 1])),
+          p2(mesh.position(mesh.indices[i + 2]));
+      const glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
+      const double len = glm::length(n);
+      planes.push_back(len > 0.0 ? glm::vec4(glm::vec3(n / len), float(-glm::dot(n / len, p0))) : glm::vec4(0.0f));
+    }
     g.meshTable.push_back(md);
   }
   std::vector<gpu::ObjectData> objects;
@@ -233,8 +241,9 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     md.skinnedTangentLow = uint32_t(t);
     md.skinnedTangentHigh = uint32_t(t >> 32);
   }
-  g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+  g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | texel | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   g.objects = gpu::uploadVector(device, objects, ssbo | texel);
+  g.trianglePlanes = gpu::uploadVector(device, planes, texel);
   {
     const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
     auto view = [&](const gpu::Buffer& b, VkFormat format, VkDeviceSize texelBytes) {
@@ -244,8 +253,11 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     g.vertexTexels = view(g.vertices, VK_FORMAT_R32G32B32A32_UINT, 16);
     g.indexTexels = view(g.indices, VK_FORMAT_R32_UINT, 4);
     g.objectTexels = view(g.objects, VK_FORMAT_R32G32B32A32_UINT, 16);
+    g.planeTexels = view(g.trianglePlanes, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
+    static_assert(sizeof(gpu::MeshData) == (3 + MAX_LODS) * 16, "common.glsl MESH_TEXELS");
+    g.meshTexels = view(g.meshes, VK_FORMAT_R32G32B32A32_UINT, 16);
     g.texels = g.vertices.size() / 16 <= maxTexels && g.indices.size() / 4 <= maxTexels &&
-               g.objects.size() / 16 <= maxTexels;
+               g.objects.size() / 16 <= maxTexels && g.trianglePlanes.size() / 16 <= maxTexels;
   }
   g.materials = gpu::uploadVector(device, materials, ssbo);
   if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
@@ -263,7 +275,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   white.texels = {255, 255, 255, 255};
   g.placeholderTexture = uploadTextureClass(device, white);
   g.objectCount = uint32_t(objects.size());
-  g.bytes = g.vertices.size() + g.indices.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
+  g.bytes = g.vertices.size() + g.indices.size() + g.trianglePlanes.size() + g.meshes.size() + g.objects.size() + g.materials.size() +
             (g.skinVertices ? g.skinVertices.size() : 0) + (g.morphDeltas ? g.morphDeltas.size() : 0) + skinnedBytes + g.vertexExtras.size() +
             textureBytes;
   return g;

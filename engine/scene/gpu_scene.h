@@ -22,7 +22,11 @@ struct GpuScene {
   // of the frame read through these where `texels` is set (common.glsl VB_TEXELS), because lavapipe loads a texel
   // as one vector while it reads a storage buffer word by word and lane by lane. Set when every record fits
   // maxTexelBufferElements; the views cover what fits either way (a descriptor is always written).
-  gpu::BufferView vertexTexels, indexTexels, objectTexels;
+  gpu::BufferView vertexTexels, indexTexels, objectTexels, meshTexels;
+  // Per triangle of `indices` (every LOD; triangle k = indices 3k..3k+2): its object-space plane (unit normal,
+  // offset; zero for a degenerate one), RGBA32F, for the micro-raster's back-face test before projection.
+  gpu::Buffer trianglePlanes;
+  gpu::BufferView planeTexels;
   bool texels = false;
   std::vector<gpu::Image> textureClasses;  // Scene::textureClasses, same order: 2D arrays with full mip chains
   gpu::Image placeholderTexture;           // 1x1x1 white: bound to the class slots the scene does not use

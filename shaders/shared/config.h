@@ -158,9 +158,12 @@
 #define BINDING_VERTEX_TEXELS 23
 #define BINDING_INDEX_TEXELS 27
 #define BINDING_OBJECT_TEXELS 31
+#define BINDING_MESH_TEXELS 34      // the MeshData records, RGBA32UI (3 + MAX_LODS texels each)
+#define BINDING_TRIANGLE_PLANES 33  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
 // box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
 #define SW_RASTER_WORKGROUP 64
+#define SW_RASTER_CHUNK 256  // triangles per back-face pre-pass (sw_raster.comp.glsl), queued in shared memory
 #define SW_RASTER_MAX_EXTENT 96
 // The most triangles of a draw it takes: one invocation rasterises a whole draw, and lavapipe's JIT stops any loop
 // after 65,535 iterations (gallivm's loop limiter): a 28,800-triangle draw lost its last ~7,000 triangles.
