@@ -146,6 +146,29 @@ uint meshTangent(uint mesh, uint local, VertexExtra e) {
   return e.tangent;
 }
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
+layout(set = 0, binding = BINDING_MATERIAL_TEXELS) uniform usamplerBuffer materialTexels;  // MATERIAL_TEXELS each
+#define MATERIAL_TEXELS (4 + 3 * TEXTURE_SLOTS)  // sizeof(MaterialData) / 16
+
+// Material record i (only the texels of the fields a shader uses are fetched: the rest is dead code).
+MaterialData materialAt(uint i) {
+  if (VB_TEXELS == 0u) return materials[i];
+  int t = int(i * MATERIAL_TEXELS);
+  uvec4 h = texelFetch(materialTexels, t + 3);
+  MaterialData m;
+  m.baseColor = uintBitsToFloat(texelFetch(materialTexels, t));
+  m.emissive = uintBitsToFloat(texelFetch(materialTexels, t + 1));
+  m.params = uintBitsToFloat(texelFetch(materialTexels, t + 2));
+  m.flags = h.x;
+  m.slotCount = h.y;
+  m.pad1 = h.z;
+  m.pad2 = h.w;
+  for (int s = 0; s < TEXTURE_SLOTS; ++s) {
+    uvec4 a = texelFetch(materialTexels, t + 4 + 3 * s);
+    m.textures[s] = TextureSlotData(a.x, a.y, a.z, a.w, uintBitsToFloat(texelFetch(materialTexels, t + 5 + 3 * s)),
+                                    uintBitsToFloat(texelFetch(materialTexels, t + 6 + 3 * s)));
+  }
+  return m;
+}
 
 // Object space -> camera-relative world space. The translation is made camera-relative first
 // (anchor-relative translation + (anchor - camera)), so large coordinates cancel before the

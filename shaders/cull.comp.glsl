@@ -190,6 +190,11 @@ void main() {
       uint listCounter = current < DRAW_LISTS ? STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + current
                                               : STAT_SW_DRAWS + pc.phase * DRAW_LISTS + current - DRAW_LISTS;
       base = atomicAdd(stats[listCounter], count);
+      if (current >= DRAW_LISTS) {  // the micro-raster and its merge run this phase (sw_raster.comp grid-strides)
+        uint args = SW_ARGS + pc.phase * SW_ARGS_UINTS;
+        atomicMax(stats[args + SW_ARGS_DISPATCH], min((base + count + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
+        atomicMax(stats[args + SW_ARGS_MERGE], 3u);
+      }
     }
     base = subgroupBroadcastFirst(base);
     if (mine) slot = base + subgroupBallotExclusiveBitCount(ballot);

@@ -124,7 +124,7 @@ vec4 sampleSlot(TextureSlotData slot, SurfaceInputs si) {
 
 // Alpha of a material at the pixel (base colour factor x texture x vertex colour), for MASK and BLEND.
 float materialAlpha(uint materialIndex, SurfaceInputs si) {
-  MaterialData m = materials[materialIndex];
+  MaterialData m = materialAt(materialIndex);
   return m.baseColor.a * si.color.a * sampleSlot(m.textures[TEXTURE_SLOT_BASE_COLOR], si).a;
 }
 
@@ -152,7 +152,7 @@ bool tangentFrame(SurfaceInputs si, vec3 n, bool secondSet, out vec3 t, out vec3
 }
 
 Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
-  MaterialData m = materials[materialIndex];
+  MaterialData m = materialAt(materialIndex);
   vec3 n = normalize(si.normal);
   // Back faces of double-sided materials: the whole tangent frame flips (as the glTF sample viewer does).
   float side = !si.frontFacing && (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u ? -1.0 : 1.0;

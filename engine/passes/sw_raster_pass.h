@@ -21,13 +21,14 @@ struct SwRasterPass {
   void resetBuffer(gpu::Device& device);
   bool ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height);
   static SwRasterPass create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec);
-  // Workgroups of the raster dispatch: each loops over the phase's routed draws (their count is on the GPU).
-  static uint32_t workgroups(uint32_t capacity);
+  // The raster dispatch and the merge draw take their sizes from the cull pass (config.h SW_ARGS in `stats`): a
+  // phase that routed nothing here dispatches no workgroup and draws no triangle. Each workgroup loops over the
+  // phase's routed draws.
   void recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
-                    uint32_t groups) const;
+                    const gpu::Buffer& stats) const;
   // ids / depth: COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL, loaded and stored.
   void recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& ids,
-                   const gpu::Image& depth) const;
+                   const gpu::Image& depth, const gpu::Buffer& stats, uint32_t phase) const;
 
  private:
   bool sized_ = false;

@@ -277,6 +277,7 @@ struct Renderer::Impl {
         {BINDING_OBJECT_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
         {BINDING_TRIANGLE_PLANES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_MESH_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+        {BINDING_MATERIAL_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -294,7 +295,7 @@ struct Renderer::Impl {
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
-                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 5}};
+                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 6}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = uint32_t(std::size(sizes));
@@ -442,12 +443,12 @@ struct Renderer::Impl {
     x.descriptorCount = MAX_TEXTURE_CLASSES;
     x.pImageInfo = textureInfos.data();
     w.push_back(x);
-    const VkBufferView texelViews[5] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
+    const VkBufferView texelViews[6] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
                                         gpuScene.objectTexels.handle(), gpuScene.planeTexels.handle(),
-                                        gpuScene.meshTexels.handle()};
-    const uint32_t texelBindings[5] = {BINDING_VERTEX_TEXELS, BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
-                                       BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS};
-    for (int i = 0; i < 5; ++i) {
+                                        gpuScene.meshTexels.handle(),   gpuScene.materialTexels.handle()};
+    const uint32_t texelBindings[6] = {BINDING_VERTEX_TEXELS,   BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
+                                       BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS,  BINDING_MATERIAL_TEXELS};
+    for (int i = 0; i < 6; ++i) {
       VkWriteDescriptorSet t{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       t.dstSet = set;
       t.dstBinding = texelBindings[i];
@@ -910,10 +911,11 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                        VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                           VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
     uint32_t t = timestamps->begin(cmd, name);
-    swRaster.recordRaster(cmd, pipelineLayout, set, phase, passes::SwRasterPass::workgroups(capacity));
+    swRaster.recordRaster(cmd, pipelineLayout, set, phase, stats);
     timestamps->end(cmd, t);
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                        VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
@@ -922,7 +924,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | kDepthStages,
                        VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | kDepthAccess);
     t = timestamps->begin(cmd, mergeName);
-    swRaster.recordMerge(cmd, pipelineLayout, set, idTarget, depthTarget);
+    swRaster.recordMerge(cmd, pipelineLayout, set, idTarget, depthTarget, stats, phase);
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
@@ -1135,7 +1137,11 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   timestamps->reset(cmd);
-  if (!frozen) vkCmdFillBuffer(cmd, stats.handle(), 0, VK_WHOLE_SIZE, 0);  // frozen: keep the counts
+  if (!frozen) {  // frozen: keep the counts (and the micro-raster's arguments)
+    vkCmdFillBuffer(cmd, stats.handle(), 0, STAT_COUNT * sizeof(uint32_t), 0);
+    const uint32_t args[2 * SW_ARGS_UINTS] = {0, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1, 0, 0, 0};
+    vkCmdUpdateBuffer(cmd, stats.handle(), SW_ARGS * sizeof(uint32_t), sizeof(args), args);
+  }
   if (options.countOverdraw) {
     VkClearColorValue zero{};
     VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
@@ -1560,7 +1566,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                             gpu::MemoryUse::DeviceLocal);
-  impl->stats = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t),
+  impl->stats = gpu::Buffer(device, (SW_ARGS + 2 * SW_ARGS_UINTS) * sizeof(uint32_t),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             gpu::MemoryUse::DeviceLocal);

@@ -244,6 +244,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | texel | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   g.objects = gpu::uploadVector(device, objects, ssbo | texel);
   g.trianglePlanes = gpu::uploadVector(device, planes, texel);
+  g.materials = gpu::uploadVector(device, materials, ssbo | texel);
   {
     const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
     auto view = [&](const gpu::Buffer& b, VkFormat format, VkDeviceSize texelBytes) {
@@ -256,10 +257,13 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     g.planeTexels = view(g.trianglePlanes, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
     static_assert(sizeof(gpu::MeshData) == (3 + MAX_LODS) * 16, "common.glsl MESH_TEXELS");
     g.meshTexels = view(g.meshes, VK_FORMAT_R32G32B32A32_UINT, 16);
-    g.texels = g.vertices.size() / 16 <= maxTexels && g.indices.size() / 4 <= maxTexels &&
-               g.objects.size() / 16 <= maxTexels && g.trianglePlanes.size() / 16 <= maxTexels;
+    static_assert(sizeof(gpu::MaterialData) == (4 + 3 * TEXTURE_SLOTS) * 16, "common.glsl MATERIAL_TEXELS");
+    g.materialTexels = view(g.materials, VK_FORMAT_R32G32B32A32_UINT, 16);
+    g.texels = true;
+    for (const gpu::Buffer* b : {&g.vertices, &g.objects, &g.trianglePlanes, &g.meshes, &g.materials})
+      g.texels = g.texels && b->size() / 16 <= maxTexels;
+    g.texels = g.texels && g.indices.size() / 4 <= maxTexels;
   }
-  g.materials = gpu::uploadVector(device, materials, ssbo);
   if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
   if (!morphDeltas.empty()) g.morphDeltas = gpu::uploadVector(device, morphDeltas, ssbo);
   g.vertexExtras = gpu::uploadVector(device, extras, ssbo);  // at least 16 bytes: always bindable

@@ -22,7 +22,7 @@ struct GpuScene {
   // of the frame read through these where `texels` is set (common.glsl VB_TEXELS), because lavapipe loads a texel
   // as one vector while it reads a storage buffer word by word and lane by lane. Set when every record fits
   // maxTexelBufferElements; the views cover what fits either way (a descriptor is always written).
-  gpu::BufferView vertexTexels, indexTexels, objectTexels, meshTexels;
+  gpu::BufferView vertexTexels, indexTexels, objectTexels, meshTexels, materialTexels;
   // Per triangle of `indices` (every LOD; triangle k = indices 3k..3k+2): its object-space plane (unit normal,
   // offset; zero for a degenerate one), RGBA32F, for the micro-raster's back-face test before projection.
   gpu::Buffer trianglePlanes;

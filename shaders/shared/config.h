@@ -54,6 +54,14 @@
 #define STAT_SW_TRIANGLES (STAT_SW_DRAWS + 2 * DRAW_LISTS)
 #define STAT_SW_OVERSIZE (STAT_SW_TRIANGLES + 1)
 #define STAT_COUNT (STAT_SW_OVERSIZE + 1)
+// After the counters (same buffer, not read back): per cull phase, the micro-raster's indirect dispatch (x, 1, 1)
+// and its merge's indirect draw (vertexCount, 1, 0, 0), written by the cull pass where it routes a draw there and
+// left at 0 otherwise: a phase without micro-raster draws runs neither (SW_ARGS_UINTS per phase).
+#define SW_ARGS STAT_COUNT
+#define SW_ARGS_UINTS 8u
+#define SW_ARGS_DISPATCH 0u
+#define SW_ARGS_MERGE 3u
+#define SW_RASTER_MAX_WORKGROUPS 1024u
 
 // Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
 // state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and
@@ -158,6 +166,7 @@
 #define BINDING_VERTEX_TEXELS 23
 #define BINDING_INDEX_TEXELS 27
 #define BINDING_OBJECT_TEXELS 31
+#define BINDING_MATERIAL_TEXELS 35  // the MaterialData records, RGBA32UI
 #define BINDING_MESH_TEXELS 34      // the MeshData records, RGBA32UI (3 + MAX_LODS texels each)
 #define BINDING_TRIANGLE_PLANES 33  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
