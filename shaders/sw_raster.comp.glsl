@@ -146,7 +146,7 @@ void main() {
     // dropped (a margin of 1e-3 of the cosine, where snapping could turn the projected winding); the raster's own
     // integer winding test decides the rest, as before. (On an H100 the queue cost more than it saved.)
     vec3 eye = cameraInObjectSpace(o);
-    vec4 sphere = meshes[o.meshIndex].boundsSphere;
+    vec4 sphere = meshBoundsSphere(o.meshIndex);
     float reach = length(eye - sphere.xyz) + sphere.w;
     // (the planes are the rest pose's: a skinned or morphed instance's slot is not tested)
     bool cullBack = VB_TEXELS != 0u && list != DRAW_LIST_OPAQUE_DOUBLE_SIDED &&
