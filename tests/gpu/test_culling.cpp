@@ -293,6 +293,48 @@ TEST(Occlusion, FrozenCullingRedrawsTheFrozenDrawLists) {
 
 // Skipping what the scene does not need: a pyramid that hid nothing is not built on the next frames,
 // and the image stays identical to no culling while it is skipped.
+// The early phase runs over the late phase's list of the visible set (one thread per listed object): with a steady
+// camera it draws exactly what the previous frame found visible and the late phase draws nothing new; a cleared
+// history empties it without changing a pixel.
+TEST(Occlusion, EarlyPhaseDrawsLastFramesVisibleList) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene city = cityScene(1200);
+  auto renderer = Renderer::create(dev, city, {.width = 320, .height = 180});
+  ASSERT_TRUE(renderer.ok());
+  FrameOptions fo, none;
+  fo.readColor = none.readColor = false;
+  fo.readIds = none.readIds = true;
+  fo.lodErrorPixels = none.lodErrorPixels = 0.0f;
+  none.cull = CullMode::None;
+  auto reference = (*renderer)->renderFrame(city.defaultCamera, none);
+  ASSERT_TRUE(reference.ok());
+  auto visibleAtEnd = [](const FrameStats& s) {
+    return s.objectsTested - s.frustumCulled - s.occlusionCulled - s.subpixelCulled;
+  };
+  uint32_t lastVisible = 0;
+  for (int i = 0; i < 6; ++i) {
+    if (i == 4) (*renderer)->clearHistory();
+    auto f = (*renderer)->renderFrame(city.defaultCamera, fo);
+    ASSERT_TRUE(f.ok());
+    ASSERT_EQ(f->ids, reference->ids) << "frame " << i;
+    const FrameStats& s = f->stats;
+    if (i == 0 || i == 4) {
+      EXPECT_EQ(s.drawsEarly, 0u) << "frame " << i << ": no history, nothing listed";
+    } else {
+      EXPECT_EQ(s.drawsEarly, lastVisible) << "frame " << i << ": last frame's visible set, drawn early";
+    }
+    if (i == 2 || i == 3) {  // steady: the early set is the visible set, the late phase adds nothing
+      EXPECT_EQ(s.drawsLate, 0u) << "frame " << i;
+      EXPECT_EQ(s.drawsEarly, visibleAtEnd(s)) << "frame " << i;
+    }
+    lastVisible = visibleAtEnd(s);
+  }
+  EXPECT_GT(lastVisible, 0u);
+  EXPECT_LT(lastVisible, city.objects.size()) << "the camera sees only part of the city";
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
 TEST(Occlusion, UselessPyramidIsSkippedAndProbedAgain) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
