@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <random>
 #include <set>
+#include <utility>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -293,6 +294,16 @@ TEST(Occlusion, FrozenCullingRedrawsTheFrozenDrawLists) {
 
 // Skipping what the scene does not need: a pyramid that hid nothing is not built on the next frames,
 // and the image stays identical to no culling while it is skipped.
+// ID-only frames, LOD off: the default occlusion culling, and no culling at all (the reference).
+static std::pair<FrameOptions, FrameOptions> idFramesWithAndWithoutCulling() {
+  FrameOptions fo, none;
+  fo.readColor = none.readColor = false;
+  fo.readIds = none.readIds = true;
+  fo.lodErrorPixels = none.lodErrorPixels = 0.0f;
+  none.cull = CullMode::None;
+  return {fo, none};
+}
+
 // The early phase runs over the late phase's list of the visible set (one thread per listed object): with a steady
 // camera it draws exactly what the previous frame found visible and the late phase draws nothing new; a cleared
 // history empties it without changing a pixel.
@@ -302,11 +313,7 @@ TEST(Occlusion, EarlyPhaseDrawsLastFramesVisibleList) {
   Scene city = cityScene(1200);
   auto renderer = Renderer::create(dev, city, {.width = 320, .height = 180});
   ASSERT_TRUE(renderer.ok());
-  FrameOptions fo, none;
-  fo.readColor = none.readColor = false;
-  fo.readIds = none.readIds = true;
-  fo.lodErrorPixels = none.lodErrorPixels = 0.0f;
-  none.cull = CullMode::None;
+  const auto [fo, none] = idFramesWithAndWithoutCulling();
   auto reference = (*renderer)->renderFrame(city.defaultCamera, none);
   ASSERT_TRUE(reference.ok());
   auto visibleAtEnd = [](const FrameStats& s) {
@@ -341,11 +348,7 @@ TEST(Occlusion, UselessPyramidIsSkippedAndProbedAgain) {
   Scene field = fieldScene(40, true);  // 40 thin knots in a 600-unit cube: nothing occludes anything
   auto renderer = Renderer::create(dev, field, {.width = 160, .height = 90});
   ASSERT_TRUE(renderer.ok());
-  FrameOptions fo, none;
-  fo.readColor = none.readColor = false;
-  fo.readIds = none.readIds = true;
-  fo.lodErrorPixels = none.lodErrorPixels = 0.0f;
-  none.cull = CullMode::None;
+  const auto [fo, none] = idFramesWithAndWithoutCulling();
   uint32_t built = 0, skipped = 0;
   for (int i = 0; i < 40; ++i) {
     auto f = (*renderer)->renderFrame(field.defaultCamera, fo);
