@@ -115,7 +115,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     g.maxTrianglesPerDraw = std::max(g.maxTrianglesPerDraw, mesh.triangleCount(0));
     vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
     indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
-    for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+    // Only lavapipe's micro-raster reads them (sw_raster_cpu.comp); a GPU gets a 16-byte stand-in.
+    for (size_t i = 0; device.isCpu() && i + 2 < mesh.indices.size(); i += 3) {
       const glm::dvec3 p0(mesh.position(mesh.indices[i])), p1(mesh.position(mesh.indices[i + 1])),
           p2(mesh.position(mesh.indices[i + 2]));
       const glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);

@@ -24,7 +24,8 @@ struct GpuScene {
   // maxTexelBufferElements; the views cover what fits either way (a descriptor is always written).
   gpu::BufferView vertexTexels, indexTexels, objectTexels, meshTexels, materialTexels;
   // Per triangle of `indices` (every LOD; triangle k = indices 3k..3k+2): its object-space plane (unit normal,
-  // offset; zero for a degenerate one), RGBA32F, for the micro-raster's back-face test before projection.
+  // offset; zero for a degenerate one), RGBA32F, for lavapipe's micro-raster back-face test before projection (on
+  // a GPU device, whose micro-raster does not test, an empty stand-in).
   gpu::Buffer trianglePlanes;
   gpu::BufferView planeTexels;
   bool texels = false;
