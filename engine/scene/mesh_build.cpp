@@ -293,7 +293,8 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   size_t previous = indexCount;
   float previousError = 0.0f;
   while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
-    size_t target = std::max<size_t>((previous / 2) / 3 * 3, size_t(options.minTriangles) * 3);
+    const double ratio = previous / 3 > 2048 ? 0.5 : 0.7;
+    size_t target = std::max<size_t>(size_t(previous / 3 * ratio) * 3, size_t(options.minTriangles) * 3);
     float err = 0.0f;
     size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
                                     &err);
@@ -327,6 +328,7 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
       // cull pass takes the coarsest level under the threshold), so this one replaces it.
       mesh.indices.resize(mesh.lods.back().firstIndex);
       mesh.lods.pop_back();
+      previousError = mesh.lods.back().error;  // (not the replaced level's: this one may lose less than it did)
     }
     error = std::max(error, previousError);  // non-decreasing along the chain
     mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
