@@ -51,6 +51,11 @@ vec4 meshBoundsSphere(uint mesh) {
   return meshes[mesh].boundsSphere;
 }
 
+uint meshExtraOffset(uint mesh) {
+  if (VB_TEXELS != 0u) return texelFetch(meshTexels, int(mesh * MESH_TEXELS + 1u)).w;
+  return meshes[mesh].extraOffset;
+}
+
 LodData meshLod(uint mesh, uint lod) {
   if (VB_TEXELS != 0u) {
     uvec4 t = texelFetch(meshTexels, int(mesh * MESH_TEXELS + 3u + lod));

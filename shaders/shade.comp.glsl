@@ -55,15 +55,16 @@ bool frontFacing(ObjectData o, vec4 c0, vec4 c1, vec4 c2) {
 vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   uint slot, tri;
   decodeVisibility(raw, slot, tri);
-  DrawCommand d = draws[slot];
-  ObjectData o = objectAt(d.firstInstance);
+  uint firstIndex, vertexOffset, object;
+  drawAt(slot, firstIndex, vertexOffset, object);
+  ObjectData o = objectAt(object);
 #if CLASSIFIED
   o.materialIndex = pc.material;  // the same value (main() checked it), now known to be uniform over the dispatch
 #endif
-  uint base = d.firstIndex + 3u * tri;
-  Vertex v0 = meshVertex(o.meshIndex, indexAt(base + 0u) + uint(d.vertexOffset));
-  Vertex v1 = meshVertex(o.meshIndex, indexAt(base + 1u) + uint(d.vertexOffset));
-  Vertex v2 = meshVertex(o.meshIndex, indexAt(base + 2u) + uint(d.vertexOffset));
+  uint base = firstIndex + 3u * tri;
+  Vertex v0 = meshVertex(o.meshIndex, indexAt(base + 0u) + vertexOffset);
+  Vertex v1 = meshVertex(o.meshIndex, indexAt(base + 1u) + vertexOffset);
+  Vertex v2 = meshVertex(o.meshIndex, indexAt(base + 2u) + vertexOffset);
   vec4 c0 = clipPosition(o, vertexPosition(v0));
   vec4 c1 = clipPosition(o, vertexPosition(v1));
   vec4 c2 = clipPosition(o, vertexPosition(v2));
@@ -88,7 +89,7 @@ vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   si.uv1 = vec2(0.0);
   si.duv1dx = vec2(0.0);
   si.duv1dy = vec2(0.0);
-  uint extra = meshes[o.meshIndex].extraOffset;
+  uint extra = meshExtraOffset(o.meshIndex);
   if (extra != EXTRA_NONE) {
     VertexExtra e0 = vertexExtras[extra + indexAt(base + 0u)], e1 = vertexExtras[extra + indexAt(base + 1u)],
                 e2 = vertexExtras[extra + indexAt(base + 2u)];
@@ -129,7 +130,7 @@ void main() {
   uint slot, tri;
   if (!decodeVisibility(raw, slot, tri)) return;
 #if CLASSIFIED
-  if (objectAt(draws[slot].firstInstance).materialIndex != pc.material) return;
+  if (objectAt(drawObject(slot)).materialIndex != pc.material) return;
 #endif
   imageStore(colorOut, p, vec4(shadeVisible(raw, p, vec2(0.5)), 1.0));
 #endif

@@ -208,6 +208,7 @@ struct Renderer::Impl {
 
   gpu::Buffer frameBuffer;  // FrameData, host visible
   gpu::Buffer draws;        // DrawCommand[capacity]
+  gpu::BufferView drawTexels;  // the same as R32UI (BINDING_DRAW_TEXELS): the shading's per-pixel fetch
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Buffer statsReadback;
   gpu::Image ids, depth, color;
@@ -278,6 +279,7 @@ struct Renderer::Impl {
         {BINDING_TRIANGLE_PLANES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
         {BINDING_MESH_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
         {BINDING_MATERIAL_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+        {BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     lci.bindingCount = uint32_t(b.size());
@@ -295,7 +297,7 @@ struct Renderer::Impl {
                                     {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
-                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 6}};
+                                    {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 7}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = uint32_t(std::size(sizes));
@@ -443,12 +445,14 @@ struct Renderer::Impl {
     x.descriptorCount = MAX_TEXTURE_CLASSES;
     x.pImageInfo = textureInfos.data();
     w.push_back(x);
-    const VkBufferView texelViews[6] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
+    const VkBufferView texelViews[7] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
                                         gpuScene.objectTexels.handle(), gpuScene.planeTexels.handle(),
-                                        gpuScene.meshTexels.handle(),   gpuScene.materialTexels.handle()};
-    const uint32_t texelBindings[6] = {BINDING_VERTEX_TEXELS,   BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
-                                       BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS,  BINDING_MATERIAL_TEXELS};
-    for (int i = 0; i < 6; ++i) {
+                                        gpuScene.meshTexels.handle(),   gpuScene.materialTexels.handle(),
+                                        drawTexels.handle()};
+    const uint32_t texelBindings[7] = {BINDING_VERTEX_TEXELS,   BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
+                                       BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS,  BINDING_MATERIAL_TEXELS,
+                                       BINDING_DRAW_TEXELS};
+    for (int i = 0; i < 7; ++i) {
       VkWriteDescriptorSet t{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       t.dstSet = set;
       t.dstBinding = texelBindings[i];
@@ -1007,7 +1011,9 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     cmd = cmds[used++];
     beginCmd(cmd);
   }
-  // shade
+  // shade (it reads the cull pass's draws through a texel view)
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
                     VK_ACCESS_2_TRANSFER_WRITE_BIT);
@@ -1544,8 +1550,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||
                         impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
   const uint32_t w = windowed ? 1u : 0u;
+  // Texel views: the scene's records and the draws (five words each) within maxTexelBufferElements.
+  const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
+  const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
   const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
-                                     impl->gpuScene.skinned.empty() ? 0u : 1u, impl->gpuScene.texels && !windowed ? 1u : 0u);
+                                     impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
   impl->cull = passes::CullPass::create(device, impl->pipelineLayout, textured);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
@@ -1564,8 +1573,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                                   gpu::MemoryUse::HostVisible);
   impl->draws = gpu::Buffer(device, drawBytes,
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                             gpu::MemoryUse::DeviceLocal);
+  impl->drawTexels = gpu::BufferView(device, impl->draws, VK_FORMAT_R32_UINT, 0,
+                                     std::min<VkDeviceSize>(drawBytes / 4, maxTexels) * 4);
   impl->stats = gpu::Buffer(device, (SW_ARGS + 2 * SW_ARGS_UINTS) * sizeof(uint32_t),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,

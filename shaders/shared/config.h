@@ -169,6 +169,7 @@
 #define BINDING_OBJECT_TEXELS 31
 #define BINDING_MATERIAL_TEXELS 35  // the MaterialData records, RGBA32UI
 #define BINDING_MESH_TEXELS 34      // the MeshData records, RGBA32UI (3 + MAX_LODS texels each)
+#define BINDING_DRAW_TEXELS 36      // the draws (DrawCommand, five words each) as R32UI, read by the shading
 #define BINDING_TRIANGLE_PLANES 33  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
 // box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
