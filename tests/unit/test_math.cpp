@@ -269,6 +269,13 @@ TEST(Barycentrics, SliverTrianglesStayAccurate) {
   EXPECT_LT(worst, 2e-2);
 }
 
+// The first mesh of a glTF file, optimised with its LOD chain as the renderer builds it.
+Result<Mesh> importAndBuildMesh(const std::filesystem::path& path) {
+  Result<MeshSource> source = importGltfMesh(path.string());
+  if (!source.ok()) return source.error();
+  return buildMesh(*source);
+}
+
 // The LOD chain keeps, per level, the simplifier candidate that deviates less from the full mesh. On the Kitten
 // topology-preserving simplification at ~900 triangles costs 8x the previous level's error (0.088 mesh units, the
 // tail's handle cannot close) and then stalls; the sloppy candidate loses about half as much with fewer
@@ -278,9 +285,7 @@ TEST(Barycentrics, SliverTrianglesStayAccurate) {
 TEST(MeshBuild, KittenChainTakesTheCandidateWithTheSmallerMeasuredError) {
   const std::filesystem::path kitten = test::assetPath("Kitten/kitten.glb");
   REQUIRE_ASSET(kitten);
-  Result<MeshSource> source = importGltfMesh(kitten.string());
-  ASSERT_TRUE(source.ok()) << source.error().message;
-  Result<Mesh> mesh = buildMesh(*source);
+  Result<Mesh> mesh = importAndBuildMesh(kitten);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   const Mesh& m = *mesh;
   std::vector<glm::vec3> positions(m.vertices.size());
@@ -307,9 +312,7 @@ TEST(MeshBuild, KittenChainTakesTheCandidateWithTheSmallerMeasuredError) {
 TEST(MeshBuild, KittenCoarseLevelsComeInFineSteps) {
   const std::filesystem::path kitten = test::assetPath("Kitten/kitten.glb");
   REQUIRE_ASSET(kitten);
-  Result<MeshSource> source = importGltfMesh(kitten.string());
-  ASSERT_TRUE(source.ok()) << source.error().message;
-  Result<Mesh> mesh = buildMesh(*source);
+  Result<Mesh> mesh = importAndBuildMesh(kitten);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   const Mesh& m = *mesh;
   size_t coarse = 0;
