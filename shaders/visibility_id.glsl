@@ -11,21 +11,23 @@
 layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
 layout(set = 0, binding = BINDING_DRAW_TEXELS) uniform usamplerBuffer drawTexels;  // five words per DrawCommand
 
-// What the shading needs of draw `slot`: its LOD's first index, the mesh's vertex offset, the object (the texel
-// view where VB_TEXELS: lavapipe loads a storage buffer word by word and lane by lane).
+// The object of draw `slot` (its firstInstance), and what the shading needs of it: its LOD's first index and the
+// mesh's vertex offset. Through the texel view where VB_TEXELS (lavapipe loads a storage buffer word by word and
+// lane by lane).
+uint drawObject(uint slot) {
+  if (VB_TEXELS != 0u) return texelFetch(drawTexels, int(slot * 5u + 4u)).x;
+  return draws[slot].firstInstance;
+}
 void drawAt(uint slot, out uint firstIndex, out uint vertexOffset, out uint object) {
+  object = drawObject(slot);
   if (VB_TEXELS != 0u) {
-    int b = int(slot * 5u);
-    firstIndex = texelFetch(drawTexels, b + 2).x;
-    vertexOffset = texelFetch(drawTexels, b + 3).x;
-    object = texelFetch(drawTexels, b + 4).x;
+    firstIndex = texelFetch(drawTexels, int(slot * 5u + 2u)).x;
+    vertexOffset = texelFetch(drawTexels, int(slot * 5u + 3u)).x;
     return;
   }
   firstIndex = draws[slot].firstIndex;
   vertexOffset = uint(draws[slot].vertexOffset);
-  object = draws[slot].firstInstance;
 }
-uint drawObject(uint slot) { return VB_TEXELS != 0u ? texelFetch(drawTexels, int(slot * 5u + 4u)).x : draws[slot].firstInstance; }
 #if !MSAA  // (the MSAA shading variant reads the multisampled target: msaa_samples.glsl)
 layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
 #endif

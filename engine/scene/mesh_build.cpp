@@ -293,8 +293,8 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   size_t previous = indexCount;
   float previousError = 0.0f;
   while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
-    const double ratio = previous / 3 > 2048 ? 0.5 : 0.7;
-    size_t target = std::max<size_t>(size_t(previous / 3 * ratio) * 3, size_t(options.minTriangles) * 3);
+    const double ratio = previous / 3 > options.fineBelowTriangles ? options.lodRatio : options.fineLodRatio;
+    size_t target = std::max<size_t>(size_t(double(previous / 3) * ratio) * 3, size_t(options.minTriangles) * 3);
     float err = 0.0f;
     size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
                                     &err);

@@ -321,4 +321,13 @@ TEST(MeshBuild, KittenCoarseLevelsComeInFineSteps) {
   EXPECT_GE(coarse, 7u);
   EXPECT_LE(m.triangleCount(m.lods.size() - 1), 50u);
   EXPECT_LE(m.lods.size(), size_t(MAX_LODS));
+  // The steps are the options': halving all the way down offers fewer such levels.
+  Result<MeshSource> source = importGltfMesh(kitten.string());
+  ASSERT_TRUE(source.ok());
+  Result<Mesh> halving = buildMesh(*source, {.fineLodRatio = 0.5f});
+  ASSERT_TRUE(halving.ok()) << halving.error().message;
+  size_t halvingCoarse = 0;
+  for (size_t l = 0; l < halving->lods.size(); ++l)
+    if (halving->triangleCount(l) >= 40 && halving->triangleCount(l) <= 2048) ++halvingCoarse;
+  EXPECT_LT(halvingCoarse, coarse);
 }
