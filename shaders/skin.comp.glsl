@@ -41,7 +41,7 @@ float orderedFloatInverse(uint u) { return uintBitsToFloat((u & 0x80000000u) != 
 #if RESOLVE_BOUNDS
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SkinnedVertexRef { SkinnedVertex items[]; };
 
-// The sphere of GPU bounds, after the skinning pass reduced each instance's AABB, in three steps (pc.pad1):
+// The sphere of GPU bounds, after the skinning pass reduced each instance's AABB, in three steps (pc.variant):
 //  SKIN_BOUNDS_CENTRE (one thread per instance): the AABB centre c -> the mesh slot's boundsSphere.xyz;
 //  SKIN_BOUNDS_DISTANCE (one thread per instance vertex, dispatched like the skinning): the largest |p - c| of
 //    the instance's skinned vertices, reduced per subgroup, then atomicMin of orderedFloat(-distance);
@@ -50,7 +50,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Sk
 // So the radius is the tightest about the AABB centre, not the AABB's half diagonal (up to sqrt(3) larger).
 void main() {
   uint b;
-  if (pc.pad1 == SKIN_BOUNDS_DISTANCE) {
+  if (pc.variant == SKIN_BOUNDS_DISTANCE) {
     uint inst = gl_WorkGroupID.y + gl_WorkGroupID.z * 65535u;
     if (inst >= pc.phase) return;
     uint slot = instances[inst].meshSlot;
@@ -66,7 +66,7 @@ void main() {
   if (inst >= pc.phase) return;
   b = SKIN_BOUNDS_UINTS * inst;
   uint slot = instances[inst].meshSlot;
-  if (pc.pad1 == SKIN_BOUNDS_CENTRE) {
+  if (pc.variant == SKIN_BOUNDS_CENTRE) {
     vec3 lo = vec3(orderedFloatInverse(bounds[b]), orderedFloatInverse(bounds[b + 1u]), orderedFloatInverse(bounds[b + 2u]));
     vec3 hi = -vec3(orderedFloatInverse(bounds[b + 3u]), orderedFloatInverse(bounds[b + 4u]),
                     orderedFloatInverse(bounds[b + 5u]));

@@ -16,6 +16,9 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("objects       {} tested, {} frustum-culled, {} occluded, {} sub-pixel, {} drawn ({} early + {} late)\n",
                      s.objectsTested, s.frustumCulled, s.occlusionCulled, s.subpixelCulled, s.drawsRendered,
                      s.drawsEarly, s.drawsLate);
+  if (s.refineTested)
+    out += fmt::format("refinement    {} objects tested again at a finer pyramid level, {} of them occluded there\n",
+                       s.refineTested, s.refineOccluded);
   out += fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
   if (s.swRaster)
     out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.swDraws,
@@ -79,6 +82,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["frustumCulled"] = s.frustumCulled;
   j["occlusionCulled"] = s.occlusionCulled;
   j["subpixelCulled"] = s.subpixelCulled;
+  j["refineTested"] = s.refineTested;
+  j["refineOccluded"] = s.refineOccluded;
   j["drawsEarly"] = s.drawsEarly;
   j["drawsLate"] = s.drawsLate;
   j["cullingFrozen"] = s.cullingFrozen;

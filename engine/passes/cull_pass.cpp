@@ -17,13 +17,13 @@ void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptor
   vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
 }
 
-void CullPass::recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                            const gpu::Buffer& visibleList) const {
+void CullPass::recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& lists,
+                            VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
-  gpu::PassConstants pc{CULL_PHASE_EARLY, 0, 0, 0};
+  gpu::PassConstants pc{phase, 0, 0, variant};
   vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
-  vkCmdDispatchIndirect(cmd, visibleList.handle(), sizeof(uint32_t));  // header words 1..3
+  vkCmdDispatchIndirect(cmd, lists.handle(), headerOffset + sizeof(uint32_t));  // header words 1..3
 }
 
 }  // namespace visbuf::passes

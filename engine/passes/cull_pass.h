@@ -15,10 +15,11 @@ struct CullPass {
   // history.
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
               uint32_t phase) const;
-  // The early phase of occlusion culling: one thread per object of last frame's visible list, whose header holds
-  // the dispatch size (config.h BINDING_VISIBLE_LIST).
-  void recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                    const gpu::Buffer& visibleList) const;
+  // One thread per object of a list in BINDING_VISIBLE_LIST's buffer, whose header (at byte `headerOffset`) holds
+  // the dispatch size: the early phase of occlusion culling over last frame's visible list, and the late phase's
+  // refinement dispatch (variant CULL_REFINE) over the objects its first dispatch listed (config.h).
+  void recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& lists,
+                    VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const;
 };
 
 }  // namespace visbuf::passes

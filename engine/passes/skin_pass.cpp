@@ -94,7 +94,7 @@ void SkinPass::record(VkCommandBuffer cmd, uint32_t instances, uint32_t maxVerti
       gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-      pc.pad1 = step;
+      pc.variant = step;
       vkCmdPushConstants(cmd, layout_, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
       if (step == SKIN_BOUNDS_DISTANCE)
         vkCmdDispatch(cmd, vertexGroups, y, z);

@@ -366,9 +366,13 @@ struct Renderer::Impl {
   }
 
   // An empty visible list (no thread in the next early cull) with its dispatch arguments (0, 1, 1).
+  // Byte offset of the late cull's refinement list in the visibleList buffer (config.h BINDING_VISIBLE_LIST).
+  VkDeviceSize refineListOffset() const { return (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) * 4; }
+  // Empties the visible list and the refinement list (count 0, dispatch size 0 x 1 x 1).
   void resetVisibleList(VkCommandBuffer cmd) const {
     const uint32_t header[VISIBLE_LIST_HEADER] = {0, 0, 1, 1};
     vkCmdUpdateBuffer(cmd, visibleList.handle(), 0, sizeof(header), header);
+    vkCmdUpdateBuffer(cmd, visibleList.handle(), refineListOffset(), sizeof(header), header);
   }
 
   // The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
@@ -831,10 +835,18 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
     uint32_t t = timestamps->begin(cmd, name);
-    if (occlusion && phase == CULL_PHASE_EARLY)
-      cull.recordListed(cmd, pipelineLayout, set, visibleList);
-    else
+    if (occlusion && phase == CULL_PHASE_EARLY) {
+      cull.recordListed(cmd, pipelineLayout, set, visibleList, 0, CULL_PHASE_EARLY, 0);
+    } else {
       cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
+      if (occlusion && phase == CULL_PHASE_LATE) {  // the objects the coarse pyramid test left: at a finer level
+        gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                               VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
+        cull.recordListed(cmd, pipelineLayout, set, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
+      }
+    }
     timestamps->end(cmd, t);
     VK_CHECK(vkEndCommandBuffer(cmd));
   };
@@ -1360,6 +1372,8 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
     st.frustumCulled = s[STAT_FRUSTUM_CULLED];
     st.occlusionCulled = s[STAT_OCCLUSION_CULLED];
     st.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
+    st.refineTested = s[STAT_REFINE_TESTED];
+    st.refineOccluded = s[STAT_REFINE_OCCLUDED];
     st.drawsEarly = st.drawsLate = 0;
     for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
       st.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_EARLY, l);
@@ -1586,7 +1600,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::DeviceLocal);
-  impl->visibleList = gpu::Buffer(device, (VISIBLE_LIST_HEADER + uint64_t(impl->gpuScene.objectCount)) * 4,
+  impl->visibleList = gpu::Buffer(device, 2 * (VISIBLE_LIST_HEADER + uint64_t(impl->gpuScene.objectCount)) * 4,
                                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                                       VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                                   gpu::MemoryUse::DeviceLocal);

@@ -118,6 +118,8 @@ struct FrameStats {
   uint32_t frustumCulled = 0;
   uint32_t occlusionCulled = 0;  // late phase: behind the depth pyramid
   uint32_t subpixelCulled = 0;   // late phase: bounds cover no pixel centre
+  uint32_t refineTested = 0;     // late phase: tested again at a finer pyramid level (the coarse one kept them)
+  uint32_t refineOccluded = 0;   // ... and occluded there (part of occlusionCulled)
   uint32_t drawsEarly = 0;       // occlusion mode: draws of the early phase (last frame's visible set)
   uint32_t drawsLate = 0;        // occlusion mode: draws of the late phase (newly visible)
   uint32_t drawsAppended = 0;   // draws the cull pass produced (visible objects)

@@ -27,6 +27,10 @@
 // Cull phases (push constant): single-phase modes use CULL_PHASE_EARLY only.
 #define CULL_PHASE_EARLY 0u
 #define CULL_PHASE_LATE 1u
+// The late phase runs in two dispatches: every object gets the pyramid test at the level whose texels span its
+// rectangle in 2x2; those it does not prove occluded, where a finer level exists, are listed and tested again by
+// the second dispatch (PassConstants.variant = CULL_REFINE), one thread per listed object, three levels finer.
+#define CULL_REFINE 1u
 
 // Depth pyramid: at most 2^15 pixels per side (16 levels incl. the full-resolution level 0).
 #define MAX_PYRAMID_LEVELS 16
@@ -54,7 +58,11 @@
 #define STAT_SW_DRAWS (STAT_PER_SAMPLE_PIXELS + 1)
 #define STAT_SW_TRIANGLES (STAT_SW_DRAWS + 2 * DRAW_LISTS)
 #define STAT_SW_OVERSIZE (STAT_SW_TRIANGLES + 1)
-#define STAT_COUNT (STAT_SW_OVERSIZE + 1)
+// Late phase's refinement dispatch (CULL_REFINE): objects it tested again at the finer level, and those it found
+// occluded there (also counted in STAT_OCCLUSION_CULLED).
+#define STAT_REFINE_TESTED (STAT_SW_OVERSIZE + 1)
+#define STAT_REFINE_OCCLUDED (STAT_REFINE_TESTED + 1)
+#define STAT_COUNT (STAT_REFINE_OCCLUDED + 1)
 // After the counters (same buffer, not read back): per cull phase, the micro-raster's indirect dispatch (x, 1, 1)
 // and its merge's indirect draw (vertexCount, 1, 0, 0), written by the cull pass where it routes a draw there and
 // left at 0 otherwise: a phase without micro-raster draws runs neither (SW_ARGS_UINTS per phase).
@@ -94,7 +102,7 @@
 // GPU-computed skinned bounds (RendererConfig::skinBounds = Gpu): per instance the ordered-float encodings
 // (orderedFloat in skin.comp.glsl) of min x, y, z and of min -x, -y, -z over its skinned vertices, then of
 // min -|p - centre|, reduced with atomicMin only (so one fill of 0xffffffff resets them); the skin_bounds
-// variant turns them into the mesh slot's sphere in three steps (PassConstants.pad1). 32 bytes per instance.
+// variant turns them into the mesh slot's sphere in three steps (PassConstants.variant). 32 bytes per instance.
 #define SKIN_BOUNDS_UINTS 8
 #define SKIN_BOUNDS_CENTRE 0u    // per instance: AABB centre -> boundsSphere.xyz
 #define SKIN_BOUNDS_DISTANCE 1u  // per instance vertex: largest distance from the centre
@@ -118,7 +126,8 @@
 #define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
 // The same visible set as a list, for the next frame's early cull (one thread per listed object instead of one per
 // object of the scene): VISIBLE_LIST_HEADER uints -- count, then the early cull's indirect dispatch (x, 1, 1) --,
-// then the object IDs in append order. Written by the late cull, reset before it.
+// then the object IDs in append order. Written by the late cull, reset before it. The late phase's refinement list
+// (CULL_REFINE) follows it in the same buffer, at word VISIBLE_LIST_HEADER + objectCount, in the same layout.
 #define BINDING_VISIBLE_LIST 32
 #define VISIBLE_LIST_HEADER 4u
 #define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)

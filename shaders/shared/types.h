@@ -218,7 +218,7 @@ struct PassConstants {
   uint drawBase;  // slot of this phase's first draw in the draw buffer (late draws follow the early ones)
   uint material;  // classified shading: the material of this dispatch; classification's scan: the material count;
                   // skinning: SKIN_MODE_* flags
-  uint pad1;
+  uint variant;   // cull: CULL_REFINE in the late phase's refinement dispatch; skin bounds: the step (SKIN_BOUNDS_*)
 };
 
 // Push constants of the depth pyramid pass (32 bytes): valid sizes of the source and destination

@@ -342,6 +342,35 @@ TEST(Occlusion, EarlyPhaseDrawsLastFramesVisibleList) {
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
+// The late phase tests what the coarse pyramid level (2x2 texels over the object's rectangle) kept again three
+// levels finer, in a dispatch of its own over those objects: it must occlude some of them in an occluded city,
+// never more than it tested, and leave every frame's IDs those of the unculled frame.
+TEST(Occlusion, FinerLevelOccludesWhatTheCoarseLevelKept) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene city = cityScene(3000);
+  auto renderer = Renderer::create(dev, city, {.width = 640, .height = 360});
+  ASSERT_TRUE(renderer.ok());
+  const auto [fo, none] = idFramesWithAndWithoutCulling();
+  auto reference = (*renderer)->renderFrame(city.defaultCamera, none);
+  ASSERT_TRUE(reference.ok());
+  for (int i = 0; i < 3; ++i) {
+    auto f = (*renderer)->renderFrame(city.defaultCamera, fo);
+    ASSERT_TRUE(f.ok());
+    ASSERT_EQ(f->ids, reference->ids) << "frame " << i;
+    const FrameStats& s = f->stats;
+    EXPECT_LE(s.refineOccluded, s.refineTested) << "frame " << i;
+    EXPECT_LE(s.refineOccluded, s.occlusionCulled) << "frame " << i;
+    if (i > 0) {  // with a depth pyramid of the early phase
+      EXPECT_GT(s.refineTested, 0u) << "frame " << i;
+      EXPECT_GT(s.refineOccluded, 0u) << "frame " << i;
+    }
+    std::printf("frame %d: %u occluded, %u tested again finer, %u of them occluded\n", i, s.occlusionCulled,
+                s.refineTested, s.refineOccluded);
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
 TEST(Occlusion, UselessPyramidIsSkippedAndProbedAgain) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
