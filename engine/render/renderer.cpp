@@ -839,7 +839,8 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
       cull.recordListed(cmd, pipelineLayout, set, visibleList, 0, CULL_PHASE_EARLY, 0);
     } else {
       cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
-      if (occlusion && phase == CULL_PHASE_LATE) {  // the objects the coarse pyramid test left: at a finer level
+      // The objects the coarse pyramid test left, at a finer level (without a pyramid this frame it lists none).
+      if (occlusion && phase == CULL_PHASE_LATE && usePyramid) {
         gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
