@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# The asset pictures of docs/assets.md: each named asset of ../shared/assets rendered by visbuf and by the
+# The asset pictures of docs/assets.md: each named asset of assets/ rendered by visbuf and by the
 # forward reference (same camera: the scene's default, framing its bounds), with the error between them.
 # Skinned assets are posed at the time given. Usage: scripts/asset_images.sh [OUTDIR] (default docs/images/assets)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-docs/images/assets}
 bin=${VISBUF_BIN:-build/tools/visbuf}
-assets=${VISBUF_ASSETS:-../shared/assets}
+assets=${VISBUF_ASSETS:-assets}
 mkdir -p "$out"
 while read -r name file time; do
   for path in visbuf forward; do

@@ -15,7 +15,7 @@ while (($#)); do
   esac
 done
 bin=${VISBUF_BIN:-build/tools/visbuf}
-kitten=${VISBUF_KITTEN:-../shared/assets/Kitten/kitten.glb}
+kitten=${VISBUF_KITTEN:-assets/Kitten/kitten.glb}
 mkdir -p "$out"
 run() {
   local name=$1; shift

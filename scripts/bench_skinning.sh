@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Skinning cost (docs/benchmarks.md, "Animated meshes"): N animated Foxes (../shared/assets/Fox, 1,502 skinned
+# Skinning cost (docs/benchmarks.md, "Animated meshes"): N animated Foxes (assets/Fox, 1,502 skinned
 # vertices each after welding, every instance at its own phase) at 1k, 10k and 100k instances, 1280x720, the
 # animation advancing every frame (--animate), medians over the frames after the first, each run with the
 # joint-reach bounds and with the GPU-reduced bounds (--skin-bounds), and --skin-check 64: 64 instances read
@@ -22,7 +22,7 @@ while (($#)); do
   esac
 done
 bin=${VISBUF_BIN:-build/tools/visbuf}
-fox=${VISBUF_FOX:-../shared/assets/Fox/glTF-Binary/Fox.glb}
+fox=${VISBUF_FOX:-assets/Fox/glTF-Binary/Fox.glb}
 mkdir -p "$out"
 for n in $counts; do
   for b in $bounds; do

@@ -21,7 +21,11 @@ while (($#)); do
   esac
 done
 bin=${VISBUF_BIN:-build/tools/visbuf}
+# The textured asset: DamagedHelmet (the figures in docs/benchmarks.md) from the larger corpus when it is there,
+# else the repository's NormalTangentMirrorTest (base colour, normal and ORM maps). The tables name the file.
 helmet=${VISBUF_HELMET:-../shared/assets/DamagedHelmet/glTF-Binary/DamagedHelmet.glb}
+[ -f "$helmet" ] || helmet=assets/NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf
+echo "textured asset: $helmet"
 frames="--warmup 2 --frames 5"                         # lavapipe: seconds per frame at 4K
 [ "$device" = cpu ] || frames="--warmup 3 --frames 10"
 mkdir -p "$out"

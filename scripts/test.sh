@@ -1,19 +1,32 @@
 #!/usr/bin/env bash
 # Command (b): set up, build, and run the whole test suite:
-#  1. the CPU unit tests (importers, pack reader with its mutation fuzz, math) built a second time with
-#     AddressSanitizer + UndefinedBehaviorSanitizer + LeakSanitizer (build-asan/), any report fails;
+#  1. the clang build (build-clang/: clang 14, -Werror, AddressSanitizer + UndefinedBehaviorSanitizer, libFuzzer
+#     instrumentation) of the engine, the tool, the CPU unit tests and the fuzz targets; the unit tests run
+#     under ASan + UBSan + LeakSanitizer, then each fuzz target for 60 s (scripts/fuzz.sh); any report fails;
 #  2. every test through ctest: unit, GPU on lavapipe with validation layers (any message fails), CLI,
 #     the installed CMake package.
 # Exits non-zero on any failure; ctest's summary is the last thing printed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
+# Warnings are errors here (CI and development); a user's build (scripts/demo.sh) only shows them.
+scripts/setup.sh -DVISBUF_WERROR=ON
+# The team's larger asset corpus joins the asset sweeps when it is there (assets/ alone is complete).
+if [ -z "${VISBUF_EXTRA_ASSETS:-}" ] && [ -d ../shared/assets ]; then
+  VISBUF_EXTRA_ASSETS="$(cd ../shared/assets && pwd)"
+  export VISBUF_EXTRA_ASSETS
+  echo "tests: extra assets from $VISBUF_EXTRA_ASSETS"
+fi
 
-echo "== sanitizer build of the CPU unit tests (build-asan/)"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISBUF_SANITIZE=ON >/dev/null
-cmake --build build-asan -j "$(nproc)" --target visbuf_unit_tests
+echo "== clang sanitizer build (build-clang/: clang, -Werror, ASan + UBSan, libFuzzer targets)"
+CC=clang CXX=clang++ cmake -S . -B build-clang -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISBUF_WERROR=ON \
+  -DVISBUF_SANITIZE=ON -DVISBUF_FUZZ=ON >/dev/null
+cmake --build build-clang -j "$(nproc)" --target visbuf visbuf_unit_tests visbuf_fuzz
+echo "== CPU unit tests under ASan + UBSan + LSan (build-clang/)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  build-asan/tests/visbuf_unit_tests --gtest_brief=1
+  build-clang/tests/visbuf_unit_tests --gtest_brief=1
+for target in fuzz_gltf_import fuzz_pack_reader fuzz_image_decode; do
+  scripts/fuzz.sh "$target" 60
+done
 
 echo "== full suite (build/)"
 cd build

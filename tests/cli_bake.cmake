@@ -1,35 +1,56 @@
 # visbuf bake as a user runs it: a real asset to a pack, the pack rendered; bad input exits 1, usage 2,
 # and a failed bake leaves no file behind.
 file(MAKE_DIRECTORY ${OUT})
-file(REMOVE ${OUT}/helmet.vbp)
-execute_process(COMMAND ${VISBUF} bake ${ASSETS}/DamagedHelmet/glTF-Binary/DamagedHelmet.glb -o ${OUT}/helmet.vbp
+file(REMOVE ${OUT}/truck.vbp)
+execute_process(COMMAND ${VISBUF} bake ${ASSETS}/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb -o ${OUT}/truck.vbp
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet.vbp)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/truck.vbp)
   message(FATAL_ERROR "bake failed (${rc}):\n${out}\n${err}")
 endif()
-execute_process(COMMAND ${VISBUF} render --scene ${OUT}/helmet.vbp --size 160x120 --validation -o ${OUT}/helmet.png
+execute_process(COMMAND ${VISBUF} render --scene ${OUT}/truck.vbp --size 160x120 --validation -o ${OUT}/truck.png
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out2 ERROR_VARIABLE err2)
-if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet.png)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/truck.png)
   message(FATAL_ERROR "render of the pack failed (${rc}):\n${out2}\n${err2}")
 endif()
 # --quantize: the summary and the JSON carry the measured error, and the quantised pack renders.
-file(REMOVE ${OUT}/helmet_q.vbp ${OUT}/helmet_q.json)
-execute_process(COMMAND ${VISBUF} bake ${ASSETS}/DamagedHelmet/glTF-Binary/DamagedHelmet.glb -o ${OUT}/helmet_q.vbp
-                        --quantize --no-textures --json ${OUT}/helmet_q.json
+file(REMOVE ${OUT}/truck_q.vbp ${OUT}/truck_q.json)
+execute_process(COMMAND ${VISBUF} bake ${ASSETS}/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb -o ${OUT}/truck_q.vbp
+                        --quantize --no-textures --json ${OUT}/truck_q.json
                 RESULT_VARIABLE rc OUTPUT_VARIABLE outq ERROR_VARIABLE errq)
-if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet_q.vbp OR NOT outq MATCHES "position error: max")
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/truck_q.vbp OR NOT outq MATCHES "position error: max")
   message(FATAL_ERROR "quantised bake failed (${rc}):\n${outq}\n${errq}")
 endif()
-file(READ ${OUT}/helmet_q.json jq)
+file(READ ${OUT}/truck_q.json jq)
 string(JSON qmax GET "${jq}" quantization maxPositionError)
 string(JSON qsaved GET "${jq}" quantization bytesSaved)
 if(NOT qsaved GREATER 0)
   message(FATAL_ERROR "quantised bake JSON: bytesSaved ${qsaved}, maxPositionError ${qmax}")
 endif()
-execute_process(COMMAND ${VISBUF} render --scene ${OUT}/helmet_q.vbp --size 160x120 --validation -o ${OUT}/helmet_q.png
+execute_process(COMMAND ${VISBUF} render --scene ${OUT}/truck_q.vbp --size 160x120 --validation -o ${OUT}/truck_q.png
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out3 ERROR_VARIABLE err3)
-if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/helmet_q.png)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/truck_q.png)
   message(FATAL_ERROR "render of the quantised pack failed (${rc}):\n${out3}\n${err3}")
+endif()
+# Rigid node animation through the pack: CesiumMilkTruck's wheels (TRS clips on unskinned nodes) turn, so the
+# ID images at two times differ, and the posed wheel matches the CPU's double-precision node transform.
+foreach(t 0 0.4)
+  execute_process(COMMAND ${VISBUF} render --scene ${OUT}/truck.vbp --size 160x120 --validation --time ${t}
+                          --skin-check 1 --json ${OUT}/truck_${t}.json --ids-out ${OUT}/truck_${t}.tif
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE outt ERROR_VARIABLE errt)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "render of the truck pack at t=${t} failed (${rc}):\n${outt}\n${errt}")
+  endif()
+  file(READ ${OUT}/truck_${t}.json jt)
+  string(JSON tinst GET "${jt}" skinCheck instances)
+  string(JSON tpos GET "${jt}" skinCheck maxPositionError)
+  if(NOT tinst EQUAL 1 OR tpos GREATER 1e-5)
+    message(FATAL_ERROR "truck wheel at t=${t}: ${tinst} instances checked, position error ${tpos}")
+  endif()
+endforeach()
+file(SHA256 ${OUT}/truck_0.tif ids0)
+file(SHA256 ${OUT}/truck_0.4.tif ids1)
+if(ids0 STREQUAL ids1)
+  message(FATAL_ERROR "CesiumMilkTruck: the same ID image at t=0 and t=0.4 (its wheels do not turn)")
 endif()
 # Animated morph targets through a pack (version 4 morph sections): --skin-check reads the morphed instance back
 # against the CPU's double-precision morph + skinning; at t = 1 s AnimatedMorphCube's weights are non-zero.
@@ -56,8 +77,12 @@ execute_process(COMMAND ${VISBUF} bake ${OUT}/missing.glb -o ${OUT}/missing.vbp 
 if(NOT rc EQUAL 1 OR EXISTS ${OUT}/missing.vbp)
   message(FATAL_ERROR "a missing input must exit 1 and write nothing (got ${rc}): ${e}")
 endif()
-execute_process(COMMAND ${VISBUF} bake --lod-count abc RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+execute_process(COMMAND ${VISBUF} bake --no-such-option RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
 if(NOT rc EQUAL 2)
   message(FATAL_ERROR "a usage error must exit 2 (got ${rc})")
+endif()
+execute_process(COMMAND ${VISBUF} bake --lod-count abc RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+if(NOT rc EQUAL 1)
+  message(FATAL_ERROR "an option value that is not a number is bad input, exit 1 (got ${rc})")
 endif()
 message(STATUS "${out}")

@@ -1,6 +1,6 @@
 # `visbuf stress --reduced` end to end (the CI-sized stress suite): every bound holds, validation clean,
 # both outputs written.
-execute_process(COMMAND ${VISBUF} stress --reduced --validation --device cpu -o ${OUT}
+execute_process(COMMAND ${VISBUF} stress --reduced --validation --device cpu --assets ${ASSETS} -o ${OUT}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("${out}${err}")
 if(NOT rc EQUAL 0)

@@ -17,3 +17,25 @@ if(NOT rc EQUAL 0 OR NOT o MATCHES "objects drawn")
   message(FATAL_ERROR "host run failed (${rc}):\n${o}\n${e}")
 endif()
 message(STATUS "${o}")
+
+# The same host through pkg-config (no CMake on the host's side): visbuf.pc names the include folder, the
+# static libraries and their dependencies' .pc files.
+find_program(PKG_CONFIG pkg-config REQUIRED)
+find_program(CXX_COMPILER NAMES c++ g++ REQUIRED)
+set(ENV{PKG_CONFIG_PATH} ${WORK}/prefix/lib/pkgconfig)
+execute_process(COMMAND ${PKG_CONFIG} --cflags --libs visbuf RESULT_VARIABLE rc OUTPUT_VARIABLE flags ERROR_VARIABLE e
+                OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config --cflags --libs visbuf failed:\n${e}")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags}")
+execute_process(COMMAND ${CXX_COMPILER} ${SRC}/examples/host/main.cpp -o ${WORK}/visbuf_host_pc ${flags}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "host build through pkg-config failed (flags: ${flags}):\n${o}\n${e}")
+endif()
+execute_process(COMMAND ${WORK}/visbuf_host_pc RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
+if(NOT rc EQUAL 0 OR NOT o MATCHES "objects drawn")
+  message(FATAL_ERROR "pkg-config host run failed (${rc}):\n${o}\n${e}")
+endif()
+message(STATUS "pkg-config build: ${o}")

@@ -7,23 +7,27 @@
 // error included).
 //
 // Exit codes: 0 written; 1 bad input (unreadable / malformed glTF, a mesh that cannot be built, an image that
-// is missing or cannot be decoded, a write that failed; the old OUT, if any, is untouched); 2 usage (option
-// values out of range).
+// is missing or cannot be decoded, a write that failed; an output folder that is missing or not writable, an
+// output that is the input itself -- both checked before any work; the old OUT, if any, is untouched); 2 usage
+// (option values out of range, refused by the option validators with the option's name).
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <bit>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "asset/gltf_import.h"
-#include "asset/pack_reader.h"
-#include "asset/pack_writer.h"
-#include "asset/scene_bake.h"
-#include "asset/texture_bake.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/pack_writer.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/asset/texture_bake.h"
+#include "cli_checks.h"
 #include "commands.h"
+#include "invocation.h"
 #include "stats_output.h"
 
 namespace visbuf::tools {
@@ -34,17 +38,28 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
   sub->add_option("-o,--output", c.output, "pack to write (.vbp); replaced atomically");
   sub->add_option("--lod-count", c.lodCount,
                   fmt::format("LOD levels per mesh including the full mesh, 1..{}", MAX_LODS))
+      ->check(unsignedIn(1, MAX_LODS))
       ->capture_default_str();
   sub->add_option("--lod-min-triangles", c.lodMinTriangles,
                   "stop a mesh's LOD chain once a level has this few triangles")
+      ->check(unsignedIn(1, UINT32_MAX))
       ->capture_default_str();
   sub->add_flag("--quantize", c.quantize,
                 "store quantised vertices: 16-bit positions over each mesh's box and uvs over its uv range "
                 "(20 instead of 32 bytes a vertex; the error is measured and printed)");
   sub->add_option("--max-texture-size", c.maxTextureSize,
                   "largest baked texture side (power of two, 1..16384); larger images are downscaled")
+      ->check(powerOfTwo(16384))
       ->capture_default_str();
   sub->add_flag("--no-textures", c.noTextures, "do not bake texture pixels (materials keep their references)");
+  sub->add_option("--allow-uri-root", c.allowUriRoots,
+                  "also let the glTF's buffer / image uris point into this folder (repeatable; by default only "
+                  "files inside the glTF's own folder are read: docs/security.md)")
+      ->check(CLI::ExistingDirectory);
+  sub->add_option("--max-image-pixels", c.maxImagePixels,
+                  "refuse images whose header declares more pixels than this (width x height), before decoding")
+      ->check(unsignedIn(1, uint64_t{1} << 40))
+      ->capture_default_str();
   sub->add_option("--json", c.json, "also write the summary as JSON");
 }
 
@@ -55,12 +70,17 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 int usage(const std::string& message) {
-  std::fprintf(stderr, "visbuf bake: %s (see visbuf bake --help)\n", message.c_str());
+  std::fprintf(stderr, "visbuf bake: %s (see visbuf bake --help)\n", printable(message).c_str());
   return 2;
+}
+// An option value out of its range: bad input (exit 1), as CLI11's validators give.
+int badValue(const std::string& message) {
+  std::fprintf(stderr, "visbuf bake: %s (see visbuf bake --help)\n", printable(message).c_str());
+  return 1;
 }
 
 int badInput(const Error& e) {
-  std::fprintf(stderr, "visbuf bake: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  std::fprintf(stderr, "visbuf bake: error (%s): %s\n", errorCodeName(e.code), printable(e.message).c_str());
   return 1;
 }
 
@@ -73,7 +93,7 @@ class Progress {
     const auto now = Clock::now();
     if (done < total && now - last_ < std::chrono::milliseconds(250)) return;
     last_ = now;
-    std::fprintf(stderr, "%sbake: %s %zu/%zu (%s)%s", tty_ ? "\r\033[K" : "", stage, done, total, what.c_str(),
+    std::fprintf(stderr, "%sbake: %s %zu/%zu (%s)%s", tty_ ? "\r\033[K" : "", stage, done, total, printable(what).c_str(),
                  tty_ && done < total ? "" : "\n");
     std::fflush(stderr);
   }
@@ -113,21 +133,43 @@ int runBake(const BakeCommand& c) {
   if (c.input.empty()) return usage("missing the input glTF file");
   if (c.output.empty()) return usage("missing -o OUT (the pack to write)");
   if (c.lodCount < 1 || c.lodCount > MAX_LODS)
-    return usage(fmt::format("--lod-count {}: must be 1..{}", c.lodCount, MAX_LODS));
-  if (c.lodMinTriangles < 1) return usage("--lod-min-triangles must be at least 1");
+    return badValue(fmt::format("--lod-count {}: must be 1..{}", c.lodCount, MAX_LODS));
+  if (c.lodMinTriangles < 1) return badValue("--lod-min-triangles must be at least 1");
   if (c.maxTextureSize < 1 || c.maxTextureSize > 16384 || !std::has_single_bit(c.maxTextureSize))
-    return usage(fmt::format("--max-texture-size {}: must be a power of two in 1..16384", c.maxTextureSize));
+    return badValue(fmt::format("--max-texture-size {}: must be a power of two in 1..16384", c.maxTextureSize));
+  // The output paths before any work (bad input, exit 1): their folders exist and are writable (nothing is
+  // created yet), and neither is the input itself (also through a symlink or a hard link).
+  if (Status s = checkOutputFile("-o", c.output); !s) return badInput(s.error());
+  if (Status s = checkNotSameFile(c.input, "-o", c.output); !s) return badInput(s.error());
+  if (!c.json.empty()) {
+    if (Status s = checkOutputFile("--json", c.json); !s) return badInput(s.error());
+    if (Status s = checkNotSameFile(c.input, "--json", c.json); !s) return badInput(s.error());
+    std::error_code ec1, ec2;
+    if (std::filesystem::weakly_canonical(c.json, ec1) == std::filesystem::weakly_canonical(c.output, ec2) && !ec1 &&
+        !ec2)
+      return badValue("--json and -o name the same file");
+  }
   if (isPackFile(c.input)) {
     return badInput(
         {ErrorCode::InvalidArgument, c.input + ": is already a visbuf pack; bake takes a .gltf/.glb file"});
   }
   const auto start = Clock::now();
 
-  std::fprintf(stderr, "bake: importing %s\n", c.input.c_str());
+  std::fprintf(stderr, "bake: importing %s\n", printable(c.input).c_str());
   GltfImportReport report;
-  Result<ImportedScene> imported = importGltfScene(c.input, {}, &report);
-  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf bake: warning: %s\n", w.c_str());
+  GltfImportOptions importOptions;
+  importOptions.allowedUriRoots = c.allowUriRoots;
+  Result<ImportedScene> imported = importGltfScene(c.input, importOptions, &report);
+  for (const std::string& w : report.warnings)
+    std::fprintf(stderr, "visbuf bake: warning: %s\n", printable(w).c_str());
   if (!imported) return badInput(imported.error());
+  // Nor may the output be one of the images the asset references (read later, by the texture bake).
+  for (const ImportedImage& image : imported->images) {
+    if (image.path.empty()) continue;
+    if (Status s = checkNotSameFile(image.path, "-o", c.output); !s) return badInput(s.error());
+    if (!c.json.empty())
+      if (Status s = checkNotSameFile(image.path, "--json", c.json); !s) return badInput(s.error());
+  }
   const double importSeconds = secondsSince(start);
 
   MeshBuildOptions options;
@@ -146,16 +188,17 @@ int runBake(const BakeCommand& c) {
   if (!c.noTextures) {
     TextureBakeOptions textureOptions;
     textureOptions.maxTextureSize = c.maxTextureSize;
+    textureOptions.maxImagePixels = c.maxImagePixels;
     Status baked = bakeTextures(*imported, textureOptions, &scene.value(), &textureReport,
                                 [&](size_t done, size_t total, const std::string& name) {
                                   progress.update("baked texture", done, total, name);
                                 });
-    for (const std::string& note : textureReport.notes) std::fprintf(stderr, "bake: resized %s\n", note.c_str());
+    for (const std::string& note : textureReport.notes) std::fprintf(stderr, "bake: resized %s\n", printable(note).c_str());
     if (!baked) return badInput(baked.error());
   }
   const double textureSeconds = secondsSince(textureStart);
 
-  std::fprintf(stderr, "bake: writing %s\n", c.output.c_str());
+  std::fprintf(stderr, "bake: writing %s\n", printable(c.output).c_str());
   const auto writeStart = Clock::now();
   PackWriteReport written;
   PackWriteOptions writeOptions;
@@ -176,15 +219,16 @@ int runBake(const BakeCommand& c) {
       std::fprintf(stderr,
                    "visbuf bake: warning: mesh %zu '%s' cannot be simplified below %u triangles: its LOD chain ends "
                    "after %zu of %u level(s) (no simplification kept between 1 triangle and %.0f %% of them)\n",
-                   i, m.name.c_str(), coarsest, m.lods.size(), options.maxLods, 100.0 * options.minReduction);
+                   i, printable(m.name).c_str(), coarsest, m.lods.size(), options.maxLods, 100.0 * options.minReduction);
     }
   }
 
   // Summary: per mesh, triangles in (the imported source) and out per LOD with its recorded error.
   nlohmann::json json;
+  stampInvocation(json, "none (bake runs on the CPU)");
   json["input"] = c.input;
   json["output"] = c.output;
-  std::printf("visbuf bake: %s -> %s\n", c.input.c_str(), c.output.c_str());
+  std::printf("visbuf bake: %s -> %s\n", printable(c.input).c_str(), printable(c.output).c_str());
   std::vector<size_t> instances(scene->meshes.size(), 0);
   for (const Object& o : scene->objects) ++instances[o.mesh];
   uint64_t trianglesIn = 0, trianglesLod0 = 0, trianglesAllLods = 0;
@@ -193,7 +237,7 @@ int runBake(const BakeCommand& c) {
     const uint64_t in = imported->meshes[i].source.indices.size() / 3;
     trianglesIn += in;
     trianglesLod0 += m.triangleCount(0);
-    std::printf("  mesh %zu '%s': %zu instance(s), %zu vertices, %llu triangles in\n", i, m.name.c_str(),
+    std::printf("  mesh %zu '%s': %zu instance(s), %zu vertices, %llu triangles in\n", i, printable(m.name).c_str(),
                 instances[i], m.vertices.size(), static_cast<unsigned long long>(in));
     nlohmann::json jm = {{"name", m.name},
                          {"instances", instances[i]},

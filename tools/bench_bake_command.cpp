@@ -31,14 +31,16 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "asset/gltf_import.h"
-#include "asset/pack_reader.h"
-#include "asset/pack_writer.h"
-#include "asset/scene_bake.h"
-#include "asset/texture_bake.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/pack_writer.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/asset/texture_bake.h"
+#include "cli_checks.h"
 #include "commands.h"
-#include "gpu/device.h"
-#include "scene/gpu_scene.h"
+#include "invocation.h"
+#include "visbuf/gpu/device.h"
+#include "visbuf/scene/gpu_scene.h"
 #include "stats_output.h"
 
 namespace visbuf::tools {
@@ -51,12 +53,13 @@ void addBenchBakeCommand(CLI::App& app, BenchBakeCommand& c, int argc, char** ar
       "bench-bake", "bake throughput and pack load time for every glTF file of an assets folder");
   sub->add_option("--assets", c.assets, "folder searched recursively for .gltf / .glb files")->capture_default_str();
   sub->add_option("--repeats", c.repeats, "measured runs per file (medians)")
-      ->check(CLI::Range(1u, 1000u))
+      ->check(unsignedIn(1, 1000))
       ->capture_default_str();
   sub->add_option("--warmup", c.warmup, "unmeasured runs before them")
-      ->check(CLI::Range(0u, 100u))
+      ->check(unsignedIn(0, 100))
       ->capture_default_str();
   sub->add_option("--max-texture-size", c.maxTextureSize, "texture cap of the bake (power of two, 1..16384)")
+      ->check(powerOfTwo(16384))
       ->capture_default_str();
   sub->add_flag("--quantize", c.quantize, "also write, load and upload a pack of quantised vertices");
   sub->add_option("--device", c.device, "device for the upload: auto | cpu | gpu | N")->capture_default_str();
@@ -69,7 +72,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 int fail(const Error& e) {
-  std::fprintf(stderr, "visbuf bench-bake: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  std::fprintf(stderr, "visbuf bench-bake: error (%s): %s\n", errorCodeName(e.code),
+               printable(e.message, e.code == ErrorCode::NoDevice).c_str());
   return 1;
 }
 
@@ -272,6 +276,8 @@ int runBenchBake(const BenchBakeCommand& c) {
                  c.maxTextureSize);
     return 2;
   }
+  // The output folder before any work (bad input, exit 1): it exists and is writable, or can be created.
+  if (Status s = checkOutputFolder("-o", c.output); !s) return fail(s.error());
   if (!fs::is_directory(c.assets))
     return fail({ErrorCode::FileNotFound, fmt::format("{}: not a folder (--assets)", c.assets)});
   std::vector<fs::path> files;
@@ -294,7 +300,7 @@ int runBenchBake(const BenchBakeCommand& c) {
   if (!device) return fail(device.error());
   const std::string deviceName = (*device)->name();
   std::printf("visbuf bench-bake: %zu file(s) under %s, %u+%u runs each, textures capped at %u, device %s\n",
-              files.size(), c.assets.c_str(), c.warmup, c.repeats, c.maxTextureSize, deviceName.c_str());
+              files.size(), printable(c.assets).c_str(), c.warmup, c.repeats, c.maxTextureSize, deviceName.c_str());
 
   std::vector<AssetRow> rows;
   for (const fs::path& file : files) {
@@ -309,7 +315,7 @@ int runBenchBake(const BenchBakeCommand& c) {
       }
     }
     if (!row.error.empty()) {
-      std::printf("  %-60s skipped: %s\n", row.file.c_str(), row.error.c_str());
+      std::printf("  %-60s skipped: %s\n", printable(row.file).c_str(), printable(row.error).c_str());
       rows.push_back(std::move(row));
       continue;
     }
@@ -318,7 +324,7 @@ int runBenchBake(const BenchBakeCommand& c) {
     for (size_t i = 0; i < 9; ++i) *stages[i] = timing(samples[i]);
     std::printf("  %-60s %8llu tris  import %8.2f  geometry %8.2f  textures %8.2f  write %7.2f  load %7.2f  "
                 "upload %7.2f ms  pack %.2f MB\n",
-                row.file.c_str(), static_cast<unsigned long long>(row.trianglesIn), row.import.median,
+                printable(row.file).c_str(), static_cast<unsigned long long>(row.trianglesIn), row.import.median,
                 row.geometry.median, row.textureBake.median, row.write.median, row.load.median, row.upload.median,
                 mb(row.packBytes));
     std::fflush(stdout);
@@ -368,8 +374,7 @@ int runBenchBake(const BenchBakeCommand& c) {
 
   const std::string date = utcNow();
   nlohmann::json j;
-  j["command"] = c.commandLine;
-  j["device"] = deviceName;
+  stampInvocation(j, deviceName);
   j["date"] = date;
   j["repeats"] = c.repeats;
   j["warmup"] = c.warmup;
@@ -496,7 +501,7 @@ int runBenchBake(const BenchBakeCommand& c) {
 
   if (Status s = writeTextFile((out / "bench-bake.md").string(), md); !s) return fail(s.error());
   if (Status s = writeJsonFile((out / "bench-bake.json").string(), j); !s) return fail(s.error());
-  std::printf("wrote %s/bench-bake.{json,md}: %zu file(s) measured, %zu skipped\n", c.output.c_str(), baked,
+  std::printf("wrote %s/bench-bake.{json,md}: %zu file(s) measured, %zu skipped\n", printable(c.output).c_str(), baked,
               rows.size() - baked);
   if ((*device)->validationEnabled() && (*device)->validationMessages() > 0) {
     std::fprintf(stderr, "visbuf bench-bake: %u validation message(s)\n", (*device)->validationMessages());

@@ -18,27 +18,22 @@
 #include <unistd.h>
 
 #include "bench_plot.h"
+#include "cli_checks.h"
 #include "commands.h"
-#include "core/image_compare.h"
-#include "core/image_io.h"
-#include "gpu/device.h"
-#include "render/renderer.h"
-#include "asset/pack_reader.h"
-#include "asset/pack_writer.h"
+#include "render_budget.h"
+#include "visbuf/core/image_compare.h"
+#include "visbuf/core/image_io.h"
+#include "visbuf/gpu/device.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/pack_writer.h"
+#include "invocation.h"
 #include "stats_output.h"
 
 namespace visbuf::tools {
 
 namespace {
 
-std::string shellQuote(const std::string& s) {
-  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=./,:@%") ==
-                        std::string::npos)
-    return s;
-  std::string out = "'";
-  for (char ch : s) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-  return out + "'";
-}
 
 }  // namespace
 
@@ -49,16 +44,18 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   sub->add_option("--scene", c.scene, "field | city | a .gltf/.glb file | a baked pack (.vbp)")->capture_default_str();
   sub->add_option("--objects", c.objects,
                   "object counts, one scene each (default: 100,1000 for field and city; a file's own objects)")
-      ->delimiter(',');
-  sub->add_option("--seed", c.seed, "scene generator seed")->capture_default_str();
+      ->delimiter(',')
+      ->check(unsignedIn(1, UINT32_MAX));
+  sub->add_option("--seed", c.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
   sub->add_option("--mesh", c.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
-  sub->add_option("--lights", c.lights, "scatter N point lights over each scene (tiled light culling)");
-  sub->add_option("--size", c.size, "image size WxH")->capture_default_str();
+  sub->add_option("--lights", c.lights, "scatter N point lights over each scene (tiled light culling)")
+      ->check(unsignedIn(0, UINT32_MAX));
+  sub->add_option("--size", c.size, "image size WxH")->check(imageSize())->capture_default_str();
   sub->add_option("--frames", c.frames, "measured frames per configuration (one camera of the path each)")
-      ->check(CLI::Range(1u, 10000u))
+      ->check(unsignedIn(1, 10000))
       ->capture_default_str();
   sub->add_option("--warmup", c.warmup, "warm-up frames before them (the path's preceding cameras)")
-      ->check(CLI::Range(0u, 10000u))
+      ->check(unsignedIn(0, 10000))
       ->capture_default_str();
   sub->add_option("--device", c.device, "auto | cpu | gpu | N")->capture_default_str();
   sub->add_option("--paths", c.paths, "render paths: visbuf,forward,gbuffer (G-buffer deferred baseline)")
@@ -80,7 +77,8 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
                   "references always use the hardware raster)")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "on", "off"}));
-  sub->add_option("--materials", c.materials, "field, city, foliage: N generated PBR materials (3 of 4 textured)");
+  sub->add_option("--materials", c.materials, "field, city, foliage: N generated PBR materials (3 of 4 textured)")
+      ->check(unsignedIn(0, UINT32_MAX));
   sub->add_option("--vertices", c.vertices, "vertex precision: float, quantized (as bake --quantize stores them)")
       ->delimiter(',')
       ->check(CLI::IsMember({"float", "quantized"}));
@@ -89,7 +87,15 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
                   "and paths fail with the device's supported ones)")
       ->delimiter(',')
       ->check(CLI::IsMember({"1", "2", "4"}));
-  sub->add_option("--lod", c.lod, "LOD thresholds in pixels of projected error; off = full detail")->delimiter(',');
+  sub->add_option("--lod", c.lod, "LOD thresholds in pixels of projected error; off = full detail")
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [range = finiteNumber(0.0, 1e6)](std::string& text) -> std::string {
+            if (text == "off") return {};
+            const std::string e = range(text);
+            return e.empty() ? e : "must be off or " + e.substr(std::string("must be ").size());
+          },
+          "off or a threshold in px"));
   sub->add_option("--reference", c.reference,
                   "auto (forward with no culling and no LOD unless the scene has more than --reference-max-triangles "
                   "triangles, then visbuf with no culling and no LOD) | forward | visbuf-full")
@@ -97,6 +103,7 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
       ->capture_default_str();
   sub->add_option("--reference-max-triangles", c.referenceMaxTriangles,
                   "--reference auto: full-detail triangles above which the forward reference is too slow")
+      ->check(unsignedIn(0, UINT64_MAX))
       ->capture_default_str();
   sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
   sub->add_option("-o,--output", c.output, "output folder (bench.json, bench.csv, bench.md, bench.svg)")
@@ -106,7 +113,8 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
 namespace {
 
 int fail(const Error& e) {
-  std::fprintf(stderr, "visbuf bench: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  std::fprintf(stderr, "visbuf bench: error (%s): %s\n", errorCodeName(e.code),
+               printable(e.message, e.code == ErrorCode::NoDevice).c_str());
   return 1;
 }
 
@@ -302,15 +310,30 @@ int runBench(const BenchCommand& c) {
       objectCounts = {0};
   }
 
+  // The output folder and the memory for the largest scene before any work (bad input, exit 1).
+  if (Status s = checkOutputFolder("-o", c.output); !s) return fail(s.error());
+  RenderBudgetInput budget;
+  budget.objects = *std::max_element(objectCounts.begin(), objectCounts.end());
+  budget.lights = c.lights;
+  budget.materials = c.materials;
+  budget.width = size->first;
+  budget.height = size->second;
+  budget.msaa = *std::max_element(c.msaa.begin(), c.msaa.end());
+  budget.gbuffer = std::find(c.paths.begin(), c.paths.end(), "gbuffer") != c.paths.end();
+  budget.ids = true;
+  budget.reference = true;
+  const std::string asked = fmt::format("--objects {} at {}x{}", budget.objects, size->first, size->second);
+  if (Status s = checkMemory(estimateRender(budget), nullptr, asked); !s) return fail(s.error());
   std::error_code ec;
   std::filesystem::create_directories(c.output, ec);
   if (ec) return fail({ErrorCode::IoError, fmt::format("{}: cannot create the output folder", c.output)});
 
   auto device = gpu::Device::create(*devOptions);
   if (!device) return fail(device.error());
+  if (Status s = checkMemory(estimateRender(budget), device->get(), asked); !s) return fail(s.error());
   const std::string deviceName = (*device)->name();
   std::printf("visbuf bench: %s, %zu configurations x %zu scene sizes, %u+%u frames each, device %s\n",
-              c.scene.c_str(), configs.size(), objectCounts.size(), c.warmup, c.frames, deviceName.c_str());
+              printable(c.scene).c_str(), configs.size(), objectCounts.size(), c.warmup, c.frames, deviceName.c_str());
   for (const auto& s : skipped)
     std::printf("  skipped %s/%s: %s\n", s["path"].get<std::string>().c_str(), s["cull"].get<std::string>().c_str(),
                 s["reason"].get<std::string>().c_str());
@@ -373,7 +396,7 @@ int runBench(const BenchCommand& c) {
     const bool needFullIds = std::any_of(configs.begin(), configs.end(), [](const Config& k) {
       return k.path == RenderPath::Visbuf && k.lod <= 0.0f;
     });
-    std::printf("scene %s, %u objects, %llu full-detail triangles; reference: %s (%s)\n", scene->name.c_str(),
+    std::printf("scene %s, %u objects, %llu full-detail triangles; reference: %s (%s)\n", printable(scene->name).c_str(),
                 info.sceneObjects, (unsigned long long)info.triangles, info.reference.c_str(),
                 info.referenceReason.c_str());
 
@@ -573,8 +596,7 @@ int runBench(const BenchCommand& c) {
   const std::string date = utcNow();
   // bench.json
   nlohmann::json j;
-  j["command"] = c.commandLine;
-  j["device"] = deviceName;
+  stampInvocation(j, deviceName);
   j["date"] = date;
   j["scene"] = c.scene;
   j["mesh"] = c.mesh;
@@ -737,7 +759,7 @@ int runBench(const BenchCommand& c) {
   }
   Status s = writeJsonFile((out / "bench.json").string(), j);
   if (!s) return fail(s.error());
-  std::printf("wrote %s/bench.{json,csv,md,svg}: %zu rows\n", c.output.c_str(), rows.size());
+  std::printf("wrote %s/bench.{json,csv,md,svg}: %zu rows\n", printable(c.output).c_str(), rows.size());
 
   if ((*device)->validationEnabled() && (*device)->validationMessages() > 0) {
     std::fprintf(stderr, "visbuf bench: %u validation message(s)\n", (*device)->validationMessages());

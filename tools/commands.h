@@ -42,6 +42,11 @@ struct RenderCommand {
   float swRasterPixels = 64.0f;  // its object size bound in pixels (FrameOptions::swRasterPixels)
 };
 
+// visbuf render (tools/render_command.cpp). Exit codes: 0 ok; 1 bad input (an option value out of range, not
+// finite or not a number, refused by the option validators with the option's name; a scene that cannot be
+// loaded; an output path whose folder is missing or not writable; a request beyond the memory of the machine or
+// the device -- all but the scene checked before any work); 2 usage (an unknown option, a missing argument,
+// contradicting options); 3 validation messages.
 void addRenderCommand(CLI::App& app, RenderCommand& cmd);
 int runRender(const RenderCommand& cmd);
 
@@ -55,6 +60,8 @@ struct BakeCommand {
   std::string json;                                    // summary as JSON; empty: none
   uint32_t maxTextureSize = 2048;                      // power of two, 1..16384
   bool noTextures = false;                             // skip texture baking (materials keep their references)
+  std::vector<std::string> allowUriRoots;              // --allow-uri-root: more folders uris may point into
+  uint64_t maxImagePixels = uint64_t{64} << 20;        // --max-image-pixels (TextureBakeOptions::maxImagePixels)
 };
 
 void addBakeCommand(CLI::App& app, BakeCommand& cmd);
@@ -95,7 +102,7 @@ int runBench(const BenchCommand& cmd);
 // visbuf bench-bake (tools/bench_bake_command.cpp): bake throughput and pack load time per glTF file of a
 // folder. Exit codes: 0 ok, 1 failure, 2 usage, 3 validation messages.
 struct BenchBakeCommand {
-  std::string assets = VISBUF_DEFAULT_ASSETS_DIR;  // searched recursively for .gltf / .glb
+  std::string assets = "assets";                   // searched recursively for .gltf / .glb (the repo's assets/)
   uint32_t repeats = 5;                            // measured runs per file
   uint32_t warmup = 1;
   uint32_t maxTextureSize = 2048;                  // as bake --max-texture-size
@@ -116,7 +123,7 @@ struct StressCommand {
   bool reduced = false;
   std::string device = "auto";
   bool validation = false;
-  std::string assets = VISBUF_DEFAULT_ASSETS_DIR;
+  std::string assets = "assets";  // the repo's assets/ (AssimpBadData: malformed inputs)
   std::string output = "stress-out";
   std::string commandLine;
 };

@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "render/frame_math.h"
+#include "visbuf/render/frame_math.h"
 
 namespace visbuf::tools {
 

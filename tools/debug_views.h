@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "core/result.h"
-#include "render/renderer.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf::tools {
 

@@ -1,17 +1,24 @@
 // visbuf render: one scene, one camera, headless; writes the image and prints per-pass GPU times and
 // culling stats (also as JSON).
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include <fmt/format.h>
 
+#include "cli_checks.h"
 #include "commands.h"
+#include "invocation.h"
 #include "debug_views.h"
-#include "core/image_compare.h"
-#include "core/image_io.h"
-#include "gpu/device.h"
-#include "render/renderer.h"
+#include "visbuf/core/image_compare.h"
+#include "visbuf/core/image_io.h"
+#include "visbuf/gpu/device.h"
+#include "visbuf/passes/depth_pyramid_pass.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/scene/generate.h"
+#include "render_budget.h"
 #include "skin_check.h"
 #include "stats_output.h"
 
@@ -21,7 +28,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   CLI::App* sub = app.add_subcommand("render", "render a scene headless to an image, print GPU times and stats");
   addSceneOptions(*sub, c.scene);
   addCameraOptions(*sub, c.camera);
-  sub->add_option("--size", c.size, "image size WxH")->capture_default_str();
+  sub->add_option("--size", c.size, "image size WxH")->check(imageSize())->capture_default_str();
   sub->add_option("--path", c.path,
                   "visbuf | forward (CPU-culled, one draw per object reference) | gbuffer (visbuf's culling, deferred "
                   "G-buffer raster + lighting baseline; no IDs)")
@@ -31,13 +38,16 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--cull", c.cull, "none | frustum | occlusion (two-phase, depth pyramid; forward path: frustum)")
       ->check(CLI::IsMember({"none", "frustum", "occlusion"}))
       ->capture_default_str();
-  sub->add_option("--lod-error", c.lodError, "LOD threshold in pixels of projected error")->capture_default_str();
+  sub->add_option("--lod-error", c.lodError, "LOD threshold in pixels of projected error")
+      ->check(finiteNumber(0.0, 1e6))
+      ->capture_default_str();
   sub->add_flag("--no-lod", c.noLod, "always draw the full-detail mesh");
-  sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per phase and draw list (default: one per object)");
+  sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per phase and draw list (default: one per object)")
+      ->check(unsignedIn(1, UINT32_MAX));
   sub->add_flag("--wide-ids", c.wideIds, "force the 64-bit visibility target");
   sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
   sub->add_option("--time", c.time, "animation time in seconds (skinned scenes: every instance's pose)")
-      ->check(CLI::Range(-1e9, 1e9))
+      ->check(finiteNumber(-1e9, 1e9))
       ->capture_default_str();
   sub->add_flag("--animate", c.animate, "with --frames N: advance the animation by 1/30 s per frame (else paused)");
   sub->add_option("--skin-bounds", c.skinBounds,
@@ -47,9 +57,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->capture_default_str();
   sub->add_option("--skin-check", c.skinCheck,
                   "after the frames, read N skinned instances back and report their error against the CPU's "
-                  "double-precision skinning and whether their culling bounds contain them");
+                  "double-precision skinning and whether their culling bounds contain them")
+      ->check(unsignedIn(0, UINT32_MAX));
   sub->add_option("--frames", c.frames, "frames to render; timings are the median over frames after the first")
-      ->check(CLI::Range(1u, 10000u))
+      ->check(unsignedIn(1, 10000))
       ->capture_default_str();
   sub->add_option("-o,--output", c.output, "colour image (.png, .exr, .tif); empty: none")->capture_default_str();
   sub->add_option("--ids-out", c.idsOut, "decoded IDs (object+1, triangle) as a 2-channel uint32 TIFF");
@@ -63,7 +74,8 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--view", c.view, "image written to -o: shaded | objects | triangles | lod | culled | pyramid | overdraw")
       ->check(CLI::IsMember(debugViewNames()))
       ->capture_default_str();
-  sub->add_option("--pyramid-level", c.pyramidLevel, "--view pyramid: depth pyramid level (0 = full resolution)");
+  sub->add_option("--pyramid-level", c.pyramidLevel, "--view pyramid: depth pyramid level (0 = full resolution)")
+      ->check(integerIn(0, 14));
   sub->add_flag("--reference-lights", c.referenceLights,
                 "also render the same frame shading every pixel with every point light (no tile lists) and report "
                 "the error against it");
@@ -72,6 +84,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                   "samples per pixel: 1, 2 or 4 (the device's supported counts; visbuf: per-sample shading where a "
                   "pixel's samples differ, forward: hardware resolve; not with gbuffer, BLEND scenes, --view or "
                   "--ids-out)")
+      ->check(CLI::IsMember({"1", "2", "4"}))
       ->capture_default_str();
   sub->add_option("--shading", c.shading,
                   "visbuf shading: auto (the device type's default) | uber (one dispatch) | classified (per-material "
@@ -84,6 +97,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
   sub->add_option("--sw-raster-px", c.swRasterPixels, "--sw-raster: the object size bound in pixels (0, 94]")
+      ->check(finiteNumber(0.0, 94.0, true, false))
       ->capture_default_str();
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
@@ -92,24 +106,116 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
 
 namespace {
 int fail(const Error& e) {
-  std::fprintf(stderr, "visbuf: error (%s): %s\n", errorCodeName(e.code), e.message.c_str());
+  // Messages quote names and paths from assets: escaped (the device report alone keeps its lines).
+  std::fprintf(stderr, "visbuf: error (%s): %s\n", errorCodeName(e.code),
+               printable(e.message, e.code == ErrorCode::NoDevice).c_str());
   return 1;
+}
+
+// Options that contradict each other: a usage error (exit 2).
+int usage(const std::string& message) {
+  std::fprintf(stderr, "visbuf render: %s (see visbuf render --help)\n", printable(message).c_str());
+  return 2;
+}
+// An option value out of its range (for the image size too): bad input (exit 1), as CLI11's validators give.
+int badValue(const std::string& message) {
+  std::fprintf(stderr, "visbuf render: %s (see visbuf render --help)\n", printable(message).c_str());
+  return 1;
+}
+
+std::string lowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return ext;
+}
+
+// The objects --objects asks for (or the generated layout's default), before the scene exists; 0 when only
+// loading the file tells (estimateUpload checks those once loaded).
+uint64_t expectedObjects(const SceneOptions& o) {
+  if (o.objects > 0) return o.objects;
+  if (o.scene == "field") return FieldParams{}.objects;
+  if (o.scene == "city") return CityParams{}.objects;
+  if (o.scene == "foliage" || o.scene == "foliage-opaque") return FoliageParams{}.cards;
+  return 0;
 }
 }  // namespace
 
 int runRender(const RenderCommand& c) {
+  // Every option and output path is checked before any work (values out of range were already refused by
+  // the option validators, exit 2): combinations are usage errors (2), paths and memory bad input (1).
   auto size = parseSize(c.size);
-  if (!size) return fail(size.error());
+  if (!size) return badValue(size.error().message);
   auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
   if (!devOptions) return fail(devOptions.error());
-  if (!(c.lodError >= 0.0f)) return fail({ErrorCode::InvalidArgument, "--lod-error must be >= 0"});
+  if (!(c.lodError >= 0.0f)) return badValue("--lod-error must be >= 0");
+  if (c.msaa > 1 && (c.view != "shaded" || !c.idsOut.empty()))
+    return usage("--view and --ids-out show one ID per pixel: use them with --msaa 1");
+  if (int(c.reference) + int(c.referenceFull) + int(c.referenceLights) > 1)
+    return usage("--reference, --reference-full and --reference-lights are exclusive");
+  if (c.freezeCulling && c.path == "forward") return usage("--freeze-culling needs --path visbuf or gbuffer");
+  if (const uint32_t levels = passes::pyramidLevelCount(size->first, size->second);
+      c.pyramidLevel >= 0 && uint32_t(c.pyramidLevel) >= levels)
+    return badValue(fmt::format("--pyramid-level {}: a {}x{} frame's depth pyramid has levels 0..{}", c.pyramidLevel,
+                             size->first, size->second, levels - 1));
+  if (!c.output.empty()) {
+    if (Status s = checkOutputFile("-o", c.output); !s) return fail(s.error());
+    const std::string ext = lowerExtension(c.output);
+    if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".exr" && ext != ".tif" && ext != ".tiff")
+      return fail({ErrorCode::InvalidArgument,
+                   fmt::format("-o '{}': the image must be .png, .jpg, .exr or .tif", c.output)});
+  }
+  if (!c.idsOut.empty()) {
+    if (Status s = checkOutputFile("--ids-out", c.idsOut); !s) return fail(s.error());
+    const std::string ext = lowerExtension(c.idsOut);
+    if (ext != ".tif" && ext != ".tiff")
+      return fail({ErrorCode::InvalidArgument, fmt::format("--ids-out '{}': the ID image must be .tif", c.idsOut)});
+  }
+  if (!c.json.empty()) {
+    if (Status s = checkOutputFile("--json", c.json); !s) return fail(s.error());
+  }
+
+  // Memory, before anything is allocated: the machine's for --objects and the targets, then the device's
+  // (the device is created before the scene so that its heaps are known), then, once the scene is loaded,
+  // what uploading it adds.
+  RenderBudgetInput budget;
+  budget.objects = expectedObjects(c.scene);
+  budget.lights = c.scene.lights;
+  budget.materials = c.scene.materials;
+  budget.width = size->first;
+  budget.height = size->second;
+  budget.msaa = c.msaa;
+  budget.gbuffer = c.path == "gbuffer";
+  budget.ids = !c.idsOut.empty();
+  budget.reference = c.reference || c.referenceFull || c.referenceLights;
+  budget.debugView = c.view != "shaded";
+  const std::string asked = c.scene.objects > 0
+                                ? fmt::format("--objects {} at {}x{}", c.scene.objects, size->first, size->second)
+                                : fmt::format("--scene {} at {}x{}", c.scene.scene, size->first, size->second);
+  if (Status s = checkMemory(estimateRender(budget), nullptr, asked); !s) return fail(s.error());
+  auto device = gpu::Device::create(*devOptions);
+  if (!device) return fail(device.error());
+  if (Status s = checkMemory(estimateRender(budget), device->get(), asked); !s) return fail(s.error());
+  {
+    // uploadScene's limit: the objects' records in two descriptor windows of maxStorageBufferRange.
+    const uint64_t range = (*device)->properties().limits.maxStorageBufferRange;
+    const uint64_t maxObjects = 2 * (range / sizeof(gpu::ObjectData) / 4 * 4);
+    if (budget.objects > maxObjects)
+      return fail({ErrorCode::CapacityExceeded,
+                   fmt::format("{}: {} objects are over the {} this device can address ({} bytes each in two "
+                               "windows of maxStorageBufferRange {})",
+                               asked, budget.objects, maxObjects, sizeof(gpu::ObjectData), range)});
+  }
 
   auto scene = loadScene(c.scene);
   if (!scene) return fail(scene.error());
+  if (Status s = checkMemory(estimateUpload(*scene, budget), device->get(), fmt::format("uploading this scene ({} "
+                                                                                         "objects) at {}x{}",
+                                                                                         scene->objects.size(),
+                                                                                         size->first, size->second));
+      !s)
+    return fail(s.error());
   auto camera = makeCamera(c.camera, *scene);
   if (!camera) return fail(camera.error());
-  auto device = gpu::Device::create(*devOptions);
-  if (!device) return fail(device.error());
 
   RendererConfig rc;
   rc.width = size->first;
@@ -128,8 +234,6 @@ int runRender(const RenderCommand& c) {
   fo.lodErrorPixels = c.noLod ? 0.0f : c.lodError;
   fo.tiledLights = !c.allLights;
   fo.msaa = c.msaa;
-  if (c.msaa > 1 && (c.view != "shaded" || !c.idsOut.empty()))
-    return fail({ErrorCode::Unsupported, "--view and --ids-out show one ID per pixel: use them with --msaa 1"});
   fo.shading = parseShadingMode(c.shading);
   fo.swRaster = parseSwRasterMode(c.swRaster);
   fo.swRasterPixels = c.swRasterPixels;
@@ -190,6 +294,11 @@ int runRender(const RenderCommand& c) {
   FrameStats stats = run(fo, !c.output.empty() || compare, frame);
   if (!frame) return fail(frame.error());
 
+  uint64_t sceneTriangles = 0;
+  for (const Object& o : scene->objects) sceneTriangles += scene->meshes[o.mesh].triangleCount();
+  std::printf("scene         %s: %zu objects, %zu meshes, %zu materials, %llu triangles at full detail\n",
+              printable(c.scene.scene).c_str(), scene->objects.size(), scene->meshes.size(), scene->materials.size(),
+              (unsigned long long)sceneTriangles);
   std::printf("%s", formatStats(stats).c_str());
   if (c.frames > 1) std::printf("(times: median of %u frames after 1 warm-up)\n", c.frames - 1);
   if (!c.output.empty() && c.view != "shaded") {
@@ -200,12 +309,12 @@ int runRender(const RenderCommand& c) {
   if (!c.output.empty()) {
     Status s = writeColorImage(c.output, frame->width, frame->height, frame->color);
     if (!s) return fail(s.error());
-    std::printf("image         %s\n", c.output.c_str());
+    std::printf("image         %s\n", printable(c.output).c_str());
   }
   if (!c.idsOut.empty()) {
     Status s = writeIdImage(c.idsOut, frame->width, frame->height, frame->ids);
     if (!s) return fail(s.error());
-    std::printf("ids           %s\n", c.idsOut.c_str());
+    std::printf("ids           %s\n", printable(c.idsOut).c_str());
   }
   nlohmann::json referenceJson;
   if (compare) {
@@ -250,6 +359,7 @@ int runRender(const RenderCommand& c) {
   }
   if (!c.json.empty()) {
     nlohmann::json j = statsToJson(stats);
+    stampInvocation(j, stats.device);
     if (compare) j["reference"] = referenceJson;
     if (!skinJson.is_null()) j["skinCheck"] = skinJson;
     j["scene"] = c.scene.scene;

@@ -6,32 +6,50 @@
 
 #include <fmt/format.h>
 
-#include "asset/gltf_import.h"
-#include "asset/pack_reader.h"
-#include "asset/scene_bake.h"
-#include "asset/texture_bake.h"
-#include "scene/generate.h"
+#include "cli_checks.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/asset/texture_bake.h"
+#include "visbuf/scene/generate.h"
 
 namespace visbuf::tools {
 
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--scene", o.scene, "field | city | foliage | foliage-opaque | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
       ->capture_default_str();
-  app.add_option("--objects,--instances", o.objects, "number of objects (field: instances; city: approx. total)");
-  app.add_option("--seed", o.seed, "scene generator seed")->capture_default_str();
+  app.add_option("--objects,--instances", o.objects, "number of objects (field: instances; city: approx. total)")
+      ->check(unsignedIn(1, UINT32_MAX));
+  app.add_option("--seed", o.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
-  app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)");
+  app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)")
+      ->check(unsignedIn(0, UINT32_MAX));
   app.add_flag("--no-sun", o.noSun, "no directional light (ambient, emissive and point lights only)");
+  app.add_option("--allow-uri-root", o.allowUriRoots,
+                 "glTF scenes: also let buffer / image uris point into this folder (repeatable; by default only "
+                 "files inside the glTF's own folder are read: docs/security.md)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--max-image-pixels", o.maxImagePixels,
+                 "glTF scenes: refuse images whose header declares more pixels than this, before decoding")
+      ->check(unsignedIn(1, uint64_t{1} << 40))
+      ->capture_default_str();
   app.add_option("--materials", o.materials,
                  "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
-                 "assigned to objects by hash (material classification's many-material scenes)");
+                 "assigned to objects by hash (material classification's many-material scenes)")
+      ->check(unsignedIn(0, UINT32_MAX));
 }
 
 namespace {
-Result<MeshSource> importMesh(const std::string& path) {
+GltfImportOptions importOptions(const SceneOptions& o) {
+  GltfImportOptions options;
+  options.allowedUriRoots = o.allowUriRoots;
+  return options;
+}
+
+Result<MeshSource> importMesh(const std::string& path, const SceneOptions& o) {
   GltfImportReport report;
-  Result<MeshSource> m = importGltfMesh(path, {}, &report);
-  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", w.c_str());
+  Result<MeshSource> m = importGltfMesh(path, importOptions(o), &report);
+  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
   return m;
 }
 }  // namespace
@@ -61,7 +79,7 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
     if (o.objects) p.objects = o.objects;
     p.seed = o.seed;
     if (!o.mesh.empty()) {
-      Result<MeshSource> m = importMesh(o.mesh);
+      Result<MeshSource> m = importMesh(o.mesh, o);
       if (!m) return m.error();
       p.mesh = std::move(m.value());
     }
@@ -93,9 +111,10 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   // its default scene flattened into one mesh, instanced N times in the field layout.
   if (o.objects > 1) {
     GltfImportReport report;
-    Result<ImportedScene> imported = importGltfScene(o.scene, {}, &report);
+    Result<ImportedScene> imported = importGltfScene(o.scene, importOptions(o), &report);
     if (imported && imported->skins.size() > 0) {
-      for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", w.c_str());
+      for (const std::string& w : report.warnings)
+        std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
       Result<Scene> asset = buildImportedScene(*imported);
       if (!asset) return asset.error();
       if (!asset->skinnedObjects.empty()) {
@@ -105,7 +124,7 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
         return makeAnimatedField(*asset, p);
       }
     }
-    Result<MeshSource> m = importMesh(o.scene);
+    Result<MeshSource> m = importMesh(o.scene, o);
     if (!m) return m.error();
     FieldParams p;
     p.objects = o.objects;
@@ -116,23 +135,34 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   // Otherwise its node hierarchy as instances of per-material meshes, baked in memory as `visbuf bake` does
   // (default LOD options); the default camera frames the scene's bounds.
   GltfImportReport report;
-  Result<ImportedScene> imported = importGltfScene(o.scene, {}, &report);
-  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", w.c_str());
+  Result<ImportedScene> imported = importGltfScene(o.scene, importOptions(o), &report);
+  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
   if (!imported) return imported.error();
   Result<Scene> scene = buildImportedScene(*imported);
   if (!scene) return scene.error();
   // Its textures too, as `visbuf bake` does (default size cap), so the material is shaded as in a pack.
-  if (Status t = bakeTextures(*imported, {}, &*scene); !t) return t.error();
+  TextureBakeOptions textureOptions;
+  textureOptions.maxImagePixels = o.maxImagePixels;
+  if (Status t = bakeTextures(*imported, textureOptions, &*scene); !t) return t.error();
   scene->name = o.scene;
   return scene;
 }
 }  // namespace
 
 void addCameraOptions(CLI::App& app, CameraOptions& o) {
-  app.add_option("--camera-pos", o.position, "camera position x y z (default: the scene's)")->expected(3)->delimiter(',');
-  app.add_option("--camera-target", o.target, "point the camera looks at x y z")->expected(3)->delimiter(',');
-  app.add_option("--fov", o.fovDegrees, "vertical field of view in degrees")->capture_default_str();
-  app.add_option("--near", o.nearPlane, "near plane distance (reverse-Z, infinite far)");
+  app.add_option("--camera-pos", o.position, "camera position x y z (default: the scene's)")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(finiteNumber());
+  app.add_option("--camera-target", o.target, "point the camera looks at x y z")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(finiteNumber());
+  app.add_option("--fov", o.fovDegrees, "vertical field of view in degrees, in (0, 179)")
+      ->check(finiteNumber(0.0, 179.0, true, true))
+      ->capture_default_str();
+  app.add_option("--near", o.nearPlane, "near plane distance > 0 (reverse-Z, infinite far; default: the scene's)")
+      ->check(finiteNumber(0.0, std::numeric_limits<double>::infinity(), true));
 }
 
 Result<Camera> makeCamera(const CameraOptions& o, const Scene& scene) {

@@ -6,8 +6,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf::tools {
 
@@ -19,6 +19,8 @@ struct SceneOptions {
   uint32_t lights = 0;          // point lights scattered over the scene (scatterPointLights)
   bool noSun = false;           // switch the directional light off
   uint32_t materials = 0;       // generated layouts: replace the materials with N generated ones (applyGeneratedMaterials)
+  std::vector<std::string> allowUriRoots;        // glTF: more folders its uris may point into (--allow-uri-root)
+  uint64_t maxImagePixels = uint64_t{64} << 20;  // glTF: per-image pixel budget (--max-image-pixels)
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);

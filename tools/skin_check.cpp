@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "scene/animation.h"
+#include "visbuf/scene/animation.h"
 
 namespace visbuf::tools {
 

@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "render/renderer.h"
+#include "visbuf/render/renderer.h"
 
 namespace visbuf::tools {
 

@@ -5,7 +5,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include "core/image_io.h"
+#include "visbuf/core/image_io.h"
 
 namespace visbuf::tools {
 

@@ -5,8 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/result.h"
-#include "render/renderer.h"
+#include "visbuf/core/result.h"
+#include "visbuf/render/renderer.h"
 
 namespace visbuf::tools {
 

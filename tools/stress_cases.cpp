@@ -11,10 +11,10 @@
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "asset/gltf_import.h"
-#include "asset/scene_bake.h"
-#include "render/renderer.h"
-#include "scene/generate.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/scene/generate.h"
 #include "stress_reference.h"
 
 namespace visbuf::tools {
@@ -367,7 +367,7 @@ bool colorsSane(const FrameResult& f) {
 StressCase badInput(const StressContext& ctx) {
   StressCase c{"bad-input",
                "NaN/Inf transforms, zero-scale objects, NaN vertices, out-of-range indices, degenerate triangles, "
-               "and the malformed glTF files in shared/assets/AssimpBadData",
+               "and the malformed glTF files in assets/AssimpBadData",
                "each is rejected with a message naming the culprit, or repaired/rendered with only finite colours "
                "in [0,1]; never a crash",
                {}};

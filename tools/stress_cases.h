@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gpu/device.h"
+#include "visbuf/gpu/device.h"
 
 namespace visbuf::tools {
 

@@ -8,9 +8,11 @@
 
 #include <fmt/format.h>
 
+#include "cli_checks.h"
 #include "commands.h"
 #include "stats_output.h"
 #include "stress_cases.h"
+#include "visbuf/core/version.h"
 
 namespace visbuf::tools {
 
@@ -57,13 +59,13 @@ std::string markdown(const std::vector<StressCase>& cases, const std::string& de
         if (std::find(keys.begin(), keys.end(), it.key()) == keys.end()) keys.push_back(it.key());
     std::string header = "|", rule = "|";
     for (const auto& k : keys) {
-      header += " " + k + " |";
+      header += fmt::format(" {} |", k);
       rule += "---|";
     }
     md += header + "\n" + rule + "\n";
     for (const StressRow& r : c.rows) {
       std::string line = "|";
-      for (const auto& k : keys) line += " " + (r.values.contains(k) ? cell(r.values[k]) : std::string()) + " |";
+      for (const auto& k : keys) line += fmt::format(" {} |", r.values.contains(k) ? cell(r.values[k]) : std::string());
       md += line + "\n";
     }
   }
@@ -75,24 +77,29 @@ std::string markdown(const std::vector<StressCase>& cases, const std::string& de
 int runStress(const StressCommand& c) {
   auto devOptions = gpu::parseDeviceOption(c.device);
   if (!devOptions) {
-    std::fprintf(stderr, "visbuf stress: %s\n", devOptions.error().message.c_str());
+    std::fprintf(stderr, "visbuf stress: %s\n", printable(devOptions.error().message).c_str());
     return 2;
   }
   devOptions->validation = c.validation;
+  // The output folder before any work (bad input, exit 1): it exists and is writable, or can be created.
+  if (Status s = checkOutputFolder("-o", c.output); !s) {
+    std::fprintf(stderr, "visbuf stress: error: %s\n", printable(s.error().message).c_str());
+    return 1;
+  }
   std::error_code ec;
   std::filesystem::create_directories(c.output, ec);
   if (ec) {
-    std::fprintf(stderr, "visbuf stress: %s: cannot create the output folder\n", c.output.c_str());
+    std::fprintf(stderr, "visbuf stress: %s: cannot create the output folder\n", printable(c.output).c_str());
     return 1;
   }
   auto device = gpu::Device::create(*devOptions);
   if (!device) {
-    std::fprintf(stderr, "visbuf stress: error: %s\n", device.error().message.c_str());
+    std::fprintf(stderr, "visbuf stress: error: %s\n", printable(device.error().message, true).c_str());
     return 1;
   }
   StressContext ctx{**device, c.reduced, c.assets};
   std::vector<StressCase> results;
-  nlohmann::ordered_json json = {{"command", c.commandLine}, {"device", (*device)->name()}, {"reduced", c.reduced}};
+  nlohmann::ordered_json json = {{"version", versionString()}, {"command", c.commandLine}, {"device", (*device)->name()}, {"reduced", c.reduced}};
   for (const auto& info : stressCases()) {
     if (!c.cases.empty() && std::find(c.cases.begin(), c.cases.end(), info.name) == c.cases.end()) continue;
     const auto t0 = std::chrono::steady_clock::now();
@@ -117,7 +124,7 @@ int runStress(const StressCommand& c) {
   for (Status st : {writeTextFile((out / "stress.json").string(), json.dump(2) + "\n"),
                     writeTextFile((out / "stress.md").string(), markdown(results, (*device)->name(), c.commandLine))})
     if (!st) {
-      std::fprintf(stderr, "visbuf stress: %s\n", st.error().message.c_str());
+      std::fprintf(stderr, "visbuf stress: %s\n", printable(st.error().message).c_str());
       return 1;
     }
   std::printf("visbuf stress: %s; wrote %s/stress.json and stress.md\n", all ? "every bound holds" : "BOUNDS FAILED",

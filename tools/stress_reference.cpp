@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "shared/config.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf::tools {
 

@@ -11,9 +11,9 @@
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
-#include "render/frame_math.h"
-#include "render/renderer.h"
-#include "scene/scene.h"
+#include "visbuf/render/frame_math.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf::tools {
 

@@ -1,7 +1,7 @@
 // The skinning and animation half of the glTF importer (gltf_animation.h): node hierarchy, skins, animation
 // clips and per-vertex joints/weights. Accessor bytes are read through the importer's checked reader; this
 // file checks accessor types, counts and values against what skins and animations need.
-#include "asset/gltf_animation.h"
+#include "visbuf/asset/gltf_animation.h"
 
 #include <algorithm>
 #include <cmath>

@@ -10,8 +10,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/type_precision.hpp>
 
-#include "asset/gltf_detail.h"
-#include "asset/gltf_import.h"
+#include "visbuf/asset/gltf_detail.h"
+#include "visbuf/asset/gltf_import.h"
 
 namespace visbuf::gltf_detail {
 

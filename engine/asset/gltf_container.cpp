@@ -1,48 +1,60 @@
 // The glTF/GLB container loader: file reading, GLB checking and re-packing, and the tinygltf parse.
 // This is the one translation unit that compiles tinygltf's implementation (see gltf_detail.h).
 #define TINYGLTF_IMPLEMENTATION
-#include "asset/gltf_detail.h"
+#include "visbuf/asset/gltf_detail.h"
 
 #include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <map>
 #include <optional>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
 
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/uri_resolver.h"
+#include "visbuf/core/file_read.h"
+
 namespace visbuf::gltf_detail {
+
+Status MemoryBudget::charge(uint64_t bytes, const std::string& what) {
+  if (bytes > limit_ - used_) {
+    return makeError(ErrorCode::CapacityExceeded,
+                     what + ": needs " + str(bytes) + " more bytes, past the import memory budget of " + str(limit_) +
+                         " bytes (" + str(used_) + " already used; GltfImportOptions::maxMemoryBytes)");
+  }
+  used_ += bytes;
+  return {};
+}
+
 namespace {
 
 // ---------------------------------------------------------------------------------------------------------
 // File loading
 
-Result<std::vector<uint8_t>> readFile(const std::string& path) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) {
-    return makeError(ErrorCode::FileNotFound, path + ": file not found");
+// A rough bound of a parsed JSON document's size per byte of text (nlohmann's values are 16 bytes, plus
+// their vectors and maps), for the memory budget.
+constexpr uint64_t kJsonDomBytesPerTextByte = 8;
+
+// tinygltf's memory API takes an unsigned int size, and GLB cannot describe 4 GiB or more.
+constexpr uint64_t kMaxGltfFileBytes = (uint64_t{1} << 32) - 65;
+
+// The input itself: a regular file only, opened without blocking (a FIFO or device never hangs the import),
+// within the budget.
+Result<std::vector<uint8_t>> readFile(const std::string& path, MemoryBudget* budget) {
+  uint64_t size = 0;
+  const FileKind kind = probeFile(path, &size);
+  if (kind == FileKind::Regular) {
+    if (size > kMaxGltfFileBytes)
+      return makeError(ErrorCode::Unsupported, path + ": files of 4 GiB or more are not supported");
+    if (Status s = budget->charge(size, path + ": the file"); !s) return s.error();
   }
-  if (!std::filesystem::is_regular_file(status)) {
-    return makeError(ErrorCode::FileNotFound, path + ": not a regular file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return makeError(ErrorCode::IoError, path + ": cannot open for reading");
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) return makeError(ErrorCode::IoError, path + ": cannot determine file size");
-  // tinygltf's memory API takes an unsigned int size, and GLB cannot describe 4 GiB or more.
-  if (static_cast<uint64_t>(size) >= (uint64_t{1} << 32) - 64) {
-    return makeError(ErrorCode::Unsupported, path + ": files of 4 GiB or more are not supported");
-  }
-  std::vector<uint8_t> bytes(static_cast<size_t>(size));
-  in.seekg(0, std::ios::beg);
-  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size)) {
-    return makeError(ErrorCode::IoError, path + ": read failed");
-  }
-  return bytes;
+  FileReadOptions options;
+  options.maxBytes = std::min(kMaxGltfFileBytes, size);  // a file that grows meanwhile is refused
+  return readRegularFile(path, options);
 }
 
 uint32_t readU32(const uint8_t* p) {
@@ -129,27 +141,29 @@ std::vector<uint8_t> buildGlb(std::string_view json, const uint8_t* bin, uint64_
   return out;
 }
 
+// A buffer marked as an EXT_meshopt_compression fallback (its data is never read).
+bool isMeshoptFallback(const nlohmann::json& buffer) {
+  if (!buffer.is_object()) return false;
+  auto extensions = buffer.find("extensions");
+  if (extensions == buffer.end() || !extensions->is_object()) return false;
+  auto meshopt = extensions->find(kMeshoptExt);
+  if (meshopt == extensions->end() || !meshopt->is_object()) return false;
+  auto fallback = meshopt->find("fallback");
+  return fallback != meshopt->end() && fallback->is_boolean() && fallback->get<bool>();
+}
+
 // EXT_meshopt_compression allows a "fallback" buffer with no uri (and, in a GLB, no data): every bufferView
 // in it is meant to be decoded from a compressed buffer instead. tinygltf 2.7 insists on loading every buffer
 // and fails on those, so we give such buffers a 4-byte placeholder data URI. The buffer keeps its extension
 // object, which is how the importer later knows never to read it. Returns nullopt when nothing changes
-// (including when the JSON does not parse: tinygltf then reports the syntax error itself).
-std::optional<std::string> neutraliseMeshoptFallbackBuffers(std::string_view jsonText) {
-  if (jsonText.find(kMeshoptExt) == std::string_view::npos) return std::nullopt;
-  nlohmann::json doc = nlohmann::json::parse(jsonText.begin(), jsonText.end(), nullptr,
-                                             /*allow_exceptions=*/false);
+// (including when the JSON did not parse: tinygltf then reports the syntax error itself).
+std::optional<std::string> neutraliseMeshoptFallbackBuffers(nlohmann::json& doc) {
   if (doc.is_discarded() || !doc.is_object()) return std::nullopt;
   auto buffers = doc.find("buffers");
   if (buffers == doc.end() || !buffers->is_array()) return std::nullopt;
   bool changed = false;
   for (auto& buffer : *buffers) {
-    if (!buffer.is_object()) continue;
-    auto extensions = buffer.find("extensions");
-    if (extensions == buffer.end() || !extensions->is_object()) continue;
-    auto meshopt = extensions->find(kMeshoptExt);
-    if (meshopt == extensions->end() || !meshopt->is_object()) continue;
-    auto fallback = meshopt->find("fallback");
-    if (fallback == meshopt->end() || !fallback->is_boolean() || !fallback->get<bool>()) continue;
+    if (!isMeshoptFallback(buffer)) continue;
     buffer["uri"] = "data:application/octet-stream;base64,AAAAAA==";
     buffer["byteLength"] = 4;
     changed = true;
@@ -210,11 +224,125 @@ void appendLines(const std::string& text, const std::string& prefix, std::vector
   }
 }
 
-// Reads and parses the file into a tinygltf::Model. Parse warnings go to `warnings`.
+// asset.version must be 2.x and asset.minVersion, when given, 2.0 ("2", "2.0", "2.1", ...).
+bool isVersion2(const std::string& v, bool exactMinor0) {
+  if (v == "2") return true;
+  if (v.size() < 3 || v[0] != '2' || v[1] != '.') return false;
+  for (size_t i = 2; i < v.size(); ++i)
+    if (!std::isdigit(static_cast<unsigned char>(v[i]))) return false;
+  return !exactMinor0 || v.find_first_not_of('0', 2) == std::string::npos;
+}
+
+// The external files tinygltf may read: the path tinygltf will ask for (its JoinPath(baseDir, urldecode(uri)))
+// -> the file the URI rule resolved. Nothing else can be opened through the callbacks below.
+struct FsGate {
+  std::map<std::string, std::string> approved;
+  uint64_t maxBytes = 0;
+};
+
+bool gateFileExists(const std::string& path, void* user) {
+  return static_cast<const FsGate*>(user)->approved.count(path) > 0;
+}
+std::string gateExpandFilePath(const std::string& path, void*) { return path; }
+bool gateReadWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  const FsGate& gate = *static_cast<const FsGate*>(user);
+  auto it = gate.approved.find(path);
+  if (it == gate.approved.end()) {
+    if (err) *err += "not a file this import may read";
+    return false;
+  }
+  FileReadOptions options;
+  options.maxBytes = gate.maxBytes;
+  options.noFollow = true;  // the resolved path is link-free
+  Result<std::vector<uint8_t>> bytes = readRegularFile(it->second, options);
+  if (!bytes) {
+    if (err) *err += bytes.error().message;
+    return false;
+  }
+  *out = std::move(bytes.value());
+  return true;
+}
+bool gateWriteWholeFile(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "writing is not allowed";
+  return false;
+}
+
+// Before tinygltf sees the JSON: the version, the URI rule for every external buffer and image, and the
+// buffers' sizes against the budget. A JSON text that does not parse is left to tinygltf to report.
+Status preflight(const nlohmann::json& doc, const std::string& path, const std::string& baseDir,
+                 const UriResolver& resolver, MemoryBudget* budget, FsGate* gate, LoadedReferences* refs) {
+  if (doc.is_discarded() || !doc.is_object()) return {};
+  if (auto asset = doc.find("asset"); asset != doc.end() && asset->is_object()) {
+    auto version = asset->find("version");
+    if (version != asset->end() && version->is_string() && !isVersion2(version->get<std::string>(), false)) {
+      return makeError(ErrorCode::Unsupported, path + ": asset.version '" +
+                                                   quoteForMessage(version->get<std::string>()) +
+                                                   "' is not supported (only glTF 2.x)");
+    }
+    auto minVersion = asset->find("minVersion");
+    if (minVersion != asset->end() && minVersion->is_string() &&
+        !isVersion2(minVersion->get<std::string>(), true)) {
+      return makeError(ErrorCode::Unsupported, path + ": asset.minVersion '" +
+                                                   quoteForMessage(minVersion->get<std::string>()) +
+                                                   "' is not supported (only glTF 2.0)");
+    }
+  }
+  if (auto buffers = doc.find("buffers"); buffers != doc.end() && buffers->is_array()) {
+    for (size_t i = 0; i < buffers->size(); ++i) {
+      const nlohmann::json& buffer = (*buffers)[i];
+      if (!buffer.is_object() || isMeshoptFallback(buffer)) continue;  // fallbacks are never read
+      const std::string what = path + ": buffer " + str(uint64_t{i});
+      auto uri = buffer.find("uri");
+      if (uri == buffer.end() || !uri->is_string() || uri->get<std::string>().empty() ||
+          isDataUri(uri->get<std::string>())) {
+        // Embedded (GLB BIN chunk or data: URI): tinygltf allocates the declared length.
+        auto length = buffer.find("byteLength");
+        if (length != buffer.end() && length->is_number_unsigned()) {
+          if (Status s = budget->charge(length->get<uint64_t>(), what); !s) return s;
+        }
+        continue;
+      }
+      const std::string& text = uri->get_ref<const std::string&>();
+      Result<std::string> file = resolver.resolve(text, what);
+      if (!file) return file.error();
+      uint64_t size = 0;
+      const FileKind kind = probeFile(*file, &size, /*noFollow=*/true);
+      const std::string shown = what + ": uri '" + quoteForMessage(text) + "'";
+      if (kind == FileKind::Missing) return makeError(ErrorCode::FileNotFound, shown + ": file not found");
+      if (kind != FileKind::Regular) {
+        return makeError(ErrorCode::InvalidArgument,
+                         shown + ": not a regular file (" + fileKindName(kind) + "); only regular files are read");
+      }
+      if (Status s = budget->charge(size, shown); !s) return s;
+      const std::string key = tinygltf::JoinPath(baseDir, tinygltf::dlib::urldecode(text));
+      auto [it, added] = gate->approved.emplace(key, *file);
+      if (!added && it->second != *file) {
+        return malformed(shown + ": ambiguous with another buffer's uri (they differ only in '+' / ' ')");
+      }
+    }
+  }
+  if (auto images = doc.find("images"); images != doc.end() && images->is_array()) {
+    refs->imagePaths.assign(images->size(), std::string());
+    for (size_t i = 0; i < images->size(); ++i) {
+      const nlohmann::json& image = (*images)[i];
+      if (!image.is_object()) continue;
+      auto uri = image.find("uri");
+      if (uri == image.end() || !uri->is_string() || uri->get<std::string>().empty() ||
+          isDataUri(uri->get<std::string>()))
+        continue;
+      Result<std::string> file = resolver.resolve(uri->get_ref<const std::string&>(), path + ": image " + str(uint64_t{i}));
+      if (!file) return file.error();
+      refs->imagePaths[i] = std::move(file.value());
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
-Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<std::string>* warnings) {
-  auto bytes = readFile(path);
+Status loadModel(const std::string& path, const GltfImportOptions& options, MemoryBudget* budget,
+                 tinygltf::Model* model, LoadedReferences* references, std::vector<std::string>* warnings) {
+  auto bytes = readFile(path, budget);
   if (!bytes) return bytes.error();
 
   const bool isGlb = bytes->size() >= 4 && readU32(bytes->data()) == kGlbMagic;
@@ -223,35 +351,53 @@ Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<st
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (!isGlb && extension == ".glb") return malformed(path + ": not a GLB file (bad magic)");
 
+  Result<UriResolver> resolver = UriResolver::create(path, options.allowedUriRoots);
+  if (!resolver) return resolver.error();
   const std::string baseDir = std::filesystem::path(path).parent_path().string();
+  FsGate gate;
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&keepDataUriImage, nullptr);
+  loader.SetFsCallbacks({&gateFileExists, &gateExpandFilePath, &gateReadWholeFile, &gateWriteWholeFile, &gate});
+
+  // The JSON text (GLB: its JSON chunk), checked, resolved and patched before tinygltf parses it.
+  std::optional<GlbParts> parts;
+  std::string_view text;
+  if (isGlb) {
+    auto parsed = parseGlb(*bytes, path);
+    if (!parsed) return parsed.error();
+    parts = *parsed;
+    // Some exporters pad the JSON chunk with NULs instead of spaces; the JSON parser would reject them.
+    while (!parts->json.empty() && parts->json.back() == '\0') parts->json.remove_suffix(1);
+    text = parts->json;
+  } else {
+    text = std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size());
+  }
+  if (!jsonDepthWithin(text, kMaxJsonDepth)) {
+    return malformed(path + ": JSON nesting deeper than " + str(kMaxJsonDepth) + " levels");
+  }
+  // The parsed document (ours, then tinygltf's) takes several times the text: charged as an estimate.
+  if (Status s = budget->charge(uint64_t{kJsonDomBytesPerTextByte} * text.size(), path + ": the JSON document");
+      !s)
+    return s;
+  nlohmann::json doc = nlohmann::json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
+  if (Status s = preflight(doc, path, baseDir, *resolver, budget, &gate, references); !s) return s;
+  gate.maxBytes = budget->limit();  // sizes were charged above; a file that grew since is refused by tinygltf
+  const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(doc);
+  nlohmann::json().swap(doc);  // freed before tinygltf builds its own
+  const std::string_view json = patched ? std::string_view(*patched) : text;
+
   std::string err;
   std::string warn;
   bool ok = false;
   if (isGlb) {
-    auto parts = parseGlb(*bytes, path);
-    if (!parts) return parts.error();
-    // Some exporters pad the JSON chunk with NULs instead of spaces; the JSON parser would reject them.
-    while (!parts->json.empty() && parts->json.back() == '\0') parts->json.remove_suffix(1);
-    if (!jsonDepthWithin(parts->json, kMaxJsonDepth)) {
-      return malformed(path + ": JSON nesting deeper than " + str(kMaxJsonDepth) + " levels");
-    }
-    const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(parts->json);
-    const std::vector<uint8_t> glb =
-        buildGlb(patched ? std::string_view(*patched) : parts->json, parts->bin, parts->binSize);
+    if (Status s = budget->charge(bytes->size(), path + ": the GLB container"); !s) return s;
+    const std::vector<uint8_t> glb = buildGlb(json, parts->bin, parts->binSize);
     if (glb.size() > std::numeric_limits<unsigned int>::max()) {
       return makeError(ErrorCode::Unsupported, path + ": files of 4 GiB or more are not supported");
     }
     ok = loader.LoadBinaryFromMemory(model, &err, &warn, glb.data(), static_cast<unsigned int>(glb.size()),
                                      baseDir);
   } else {
-    const std::string_view text(reinterpret_cast<const char*>(bytes->data()), bytes->size());
-    if (!jsonDepthWithin(text, kMaxJsonDepth)) {
-      return malformed(path + ": JSON nesting deeper than " + str(kMaxJsonDepth) + " levels");
-    }
-    const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(text);
-    const std::string_view json = patched ? std::string_view(*patched) : text;
     ok = loader.LoadASCIIFromString(model, &err, &warn, json.data(), static_cast<unsigned int>(json.size()),
                                     baseDir);
   }
@@ -262,6 +408,7 @@ Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<st
     return malformed(path + ": glTF parse failed: " + err);
   }
   appendLines(err, path + ": tinygltf: ", warnings);  // non-fatal notes tinygltf reports through err
+  references->imagePaths.resize(model->images.size());
   return {};
 }
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/result.h"
+#include "visbuf/core/result.h"
 
 // tinygltf is compiled without image codecs (stb is not a dependency; texture_bake.cpp decodes images with
 // OpenImageIO) and never reads external image files; loadModel keeps the encoded bytes of data: URI images in
@@ -35,6 +35,7 @@
 namespace visbuf {
 struct Material;
 struct ImportedImage;
+struct GltfImportOptions;
 }  // namespace visbuf
 
 namespace visbuf::gltf_detail {
@@ -51,11 +52,38 @@ inline std::string str(int v) { return std::to_string(v); }
 inline std::string named(const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; }
 inline Error malformed(std::string message) { return makeError(ErrorCode::MalformedInput, std::move(message)); }
 
-// Reads the file ourselves (FileNotFound / IoError), checks and re-packs a GLB container, refuses JSON nested
-// deeper than 512 levels, neutralises EXT_meshopt_compression fallback buffers (tinygltf 2.7 cannot load a
-// buffer without data), then lets tinygltf parse the JSON and load external/data-URI buffers. tinygltf's
-// warnings are appended to `warnings`.
-Status loadModel(const std::string& path, tinygltf::Model* model, std::vector<std::string>* warnings);
+// The import's memory budget (GltfImportOptions::maxMemoryBytes): a running total of what the import holds
+// (the file, its buffers, decoded accessors, output streams), charged BEFORE each allocation.
+class MemoryBudget {
+ public:
+  explicit MemoryBudget(uint64_t limit) : limit_(limit) {}
+  // Adds `bytes`; CapacityExceeded naming `what` when the total would pass the limit (nothing is added then).
+  Status charge(uint64_t bytes, const std::string& what);
+  uint64_t limit() const { return limit_; }
+  uint64_t used() const { return used_; }
+  uint64_t remaining() const { return limit_ - used_; }
+
+ private:
+  uint64_t limit_;
+  uint64_t used_ = 0;
+};
+
+// What loadModel() learnt about the file's external references.
+struct LoadedReferences {
+  // glTF image i's external file, resolved by the URI rule (uri_resolver.h); "" for embedded images.
+  std::vector<std::string> imagePaths;
+};
+
+// Reads the file ourselves (only a regular file, opened without blocking: core/file_read.h; FileNotFound /
+// IoError / CapacityExceeded), checks and re-packs a GLB container, refuses JSON nested deeper than 512
+// levels, checks asset.version (2.x), resolves every external buffer and image uri by the URI rule
+// (uri_resolver.h: anything outside the asset's folder and options.allowedUriRoots is refused before any
+// file is opened), charges the file and its buffers to `budget`, neutralises EXT_meshopt_compression
+// fallback buffers (tinygltf 2.7 cannot load a buffer without data), then lets tinygltf parse the JSON and
+// load data-URI buffers and the external buffers approved above (through file-system callbacks that read
+// nothing else). tinygltf's warnings are appended to `warnings`.
+Status loadModel(const std::string& path, const GltfImportOptions& options, MemoryBudget* budget,
+                 tinygltf::Model* model, LoadedReferences* references, std::vector<std::string>* warnings);
 
 // gltf_materials.cpp (importGltfScene): materials, texture references, samplers, KHR_texture_transform.
 using WarnFn = std::function<void(const std::string&)>;
@@ -63,7 +91,8 @@ using WarnFn = std::function<void(const std::string&)>;
 Status importMaterials(const tinygltf::Model& model, const std::string& path, const WarnFn& warn,
                        std::vector<Material>* out);
 // Appends one ImportedImage per glTF image, in file order: embedded bytes (bufferView, range-checked; data:
-// URI) or the resolved path of an external file (not read here).
-Status collectImages(const tinygltf::Model& model, const std::string& path, std::vector<ImportedImage>* out);
+// URI) or the resolved path of an external file (`references.imagePaths`, from loadModel; not read here).
+Status collectImages(const tinygltf::Model& model, const std::string& path, const LoadedReferences& references,
+                     std::vector<ImportedImage>* out);
 
 }  // namespace visbuf::gltf_detail

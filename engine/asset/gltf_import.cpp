@@ -2,9 +2,12 @@
 // gltf_import.h.
 //
 // Pipeline:
-//   1. loadModel() (gltf_container.cpp): read the file ourselves (FileNotFound / IoError), check and re-pack the GLB container,
-//      neutralise EXT_meshopt_compression fallback buffers (tinygltf 2.7 cannot load a buffer without data),
-//      then hand the bytes to tinygltf for JSON parsing and external/data-URI buffer loading.
+//   1. loadModel() (gltf_container.cpp): read the file ourselves (regular files only, never blocking;
+//      FileNotFound / IoError), check and re-pack the GLB container, check asset.version, resolve every
+//      external uri by the URI rule (uri_resolver.h), neutralise EXT_meshopt_compression fallback buffers
+//      (tinygltf 2.7 cannot load a buffer without data), then hand the bytes to tinygltf for JSON parsing and
+//      loading the data-URI buffers and the approved external ones. The file, its buffers and everything
+//      decoded below are charged to the memory budget (GltfImportOptions::maxMemoryBytes) before allocation.
 //   2. Importer::run(): walk the scene graph with double-precision transforms; the first time a mesh is met,
 //      decode its primitives into local-space arrays (cached, so a mesh instanced by 1000 nodes is decoded
 //      once); then transform, morph and append each primitive instance to the output MeshSource.
@@ -16,13 +19,14 @@
 // comes from the file is checked here with overflow-safe arithmetic before any byte is touched, and every
 // problem becomes an Error (never an assert, exception or out-of-bounds read).
 
-#include "asset/gltf_import.h"
+#include "visbuf/asset/gltf_import.h"
 
 #include <meshoptimizer.h>
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -36,8 +40,8 @@
 #include <tuple>
 #include <utility>
 
-#include "asset/gltf_animation.h"
-#include "asset/gltf_detail.h"
+#include "visbuf/asset/gltf_animation.h"
+#include "visbuf/asset/gltf_detail.h"
 
 namespace visbuf {
 namespace {
@@ -57,6 +61,12 @@ constexpr uint64_t kMaxMeshoptExpansion = 256;
 
 // ---------------------------------------------------------------------------------------------------------
 // Small helpers
+
+std::string fmtCoord(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
 
 // Overflow-safe arithmetic on values read from the file.
 bool checkedMul(uint64_t a, uint64_t b, uint64_t* out) { return !__builtin_mul_overflow(a, b, out); }
@@ -293,8 +303,9 @@ struct DecodedPrimitive {
 class Importer {
  public:
   Importer(const std::string& path, const tinygltf::Model& model, const GltfImportOptions& options,
-           std::vector<std::string>* warnings)
-      : path_(path), model_(model), options_(options), warnings_(warnings) {}
+           const LoadedReferences& references, MemoryBudget* budget, std::vector<std::string>* warnings)
+      : path_(path), model_(model), options_(options), references_(references), budget_(budget),
+        warnings_(warnings) {}
 
   Result<MeshSource> run();
   Result<ImportedScene> runScene();
@@ -308,6 +319,8 @@ class Importer {
   }
 
   Status checkRequiredExtensions();
+  Status checkNodeGraph();
+  Status checkCoordinates(const glm::dvec3& lo, const glm::dvec3& hi, const std::string& where);
   bool isMeshoptFallbackBuffer(int buffer) const;
   Result<Bytes> viewBytes(int view, const std::string& where);
   Result<Bytes> plainViewBytes(int view, const std::string& where);
@@ -347,17 +360,23 @@ class Importer {
   Status emitSceneNode(int node, const glm::dmat4& world, ImportedScene* scene);
   Status emitNodeLight(int node, const glm::dmat4& world, ImportedScene* scene);
 
-  // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights).
-  // The last member marks a mesh that keeps its morph targets (its node's weights are animated).
-  using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>, bool>;
+  // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights, morphed,
+  // one-joint). `morphed` marks a mesh that keeps its morph targets (its node's weights are animated);
+  // `one-joint` a mesh whose every vertex follows joint 0 (an unskinned node that is animated).
+  using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>, bool, bool>;
   std::set<int> morphAnimatedNodes_;        // nodes targeted by a weights channel of any clip
-  std::map<int, int32_t> morphSkins_;       // unskinned morph-animated node -> its one-joint skin
+  std::set<int> movingNodes_;               // nodes whose global transform a clip animates (a TRS channel
+                                            // targets them or an ancestor)
+  std::map<int, int32_t> nodeSkins_;        // unskinned animated node -> its one-joint skin
   std::map<SceneMeshKey, uint32_t> sceneMeshes_;  // -> ImportedScene::meshes index, UINT32_MAX: no triangles
   std::optional<uint32_t> defaultMaterial_;
+  std::vector<std::optional<std::pair<glm::dvec3, glm::dvec3>>> meshBoxes_;  // object-space box per scene mesh
 
   const std::string& path_;
   const tinygltf::Model& model_;
   const GltfImportOptions& options_;
+  const LoadedReferences& references_;
+  MemoryBudget* budget_;
   std::vector<std::string>* warnings_;
   std::set<std::string> warned_;  // de-duplicates warnings of instanced meshes
   bool meshoptRequired_ = false;
@@ -518,6 +537,7 @@ Result<Bytes> Importer::meshoptViewBytes(int viewIndex, const std::string& where
                      str(byteLength) + " compressed bytes");
   }
 
+  if (Status s = budget_->charge(decodedSize, vw); !s) return s.error();
   std::vector<uint8_t> decoded(decodedSize);
   if (count > 0) {
     const uint8_t* src = source.data() + byteOffset;
@@ -652,6 +672,7 @@ Status Importer::readFloats(int accessor, AttributeKind kind, const std::string&
   if (!why.empty()) return malformed(where + ": " + why);
   const int n = plan->numComponents;
   *numComponents = n;
+  if (Status s = budget_->charge(plan->count * static_cast<uint64_t>(n) * sizeof(float), where); !s) return s;
   out->assign(plan->count * static_cast<uint64_t>(n), 0.0f);
   const AccessorPlan& p = *plan;
   return forEachElement(p, where, [&](uint64_t i, const uint8_t* element) {
@@ -689,6 +710,7 @@ Status Importer::readIndices(int accessor, const std::string& where, std::vector
     return malformed(where + ": indices must be SCALAR UNSIGNED_BYTE/SHORT/INT, not " +
                      componentTypeName(plan->componentType) + " x" + str(plan->numComponents));
   }
+  if (Status s = budget_->charge(plan->count * sizeof(uint32_t), where); !s) return s;
   out->assign(plan->count, 0);
   return forEachElement(*plan, where, [&](uint64_t i, const uint8_t* element) {
     (*out)[i] = element ? readUint(element, size) : 0;
@@ -831,6 +853,7 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     if (vertexCount > std::numeric_limits<uint32_t>::max()) {
       return makeError(ErrorCode::CapacityExceeded, where + ": more than 2^32-1 vertices");
     }
+    if (Status s = budget_->charge(vertexCount * sizeof(uint32_t), where); !s) return s.error();
     indices.resize(vertexCount);
     for (uint64_t i = 0; i < vertexCount; ++i) indices[i] = static_cast<uint32_t>(i);
   }
@@ -977,6 +1000,16 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
       (det < 0.0 ? -1.0 : 1.0);
   const bool flip = det < 0.0;
 
+  // What this primitive instance adds to the output (positions, normals, indices, the optional streams).
+  uint64_t perVertex = 2 * sizeof(glm::vec3);
+  if (!prim.uvs.empty()) perVertex += sizeof(glm::vec2);
+  if (!prim.uvs1.empty()) perVertex += sizeof(glm::vec2);
+  if (!prim.colors.empty()) perVertex += sizeof(uint32_t);
+  if (!prim.tangents.empty()) perVertex += sizeof(glm::vec4);
+  if (!prim.joints.empty()) perVertex += sizeof(glm::u16vec4) + sizeof(glm::vec4);
+  perVertex += (prim.positionDeltas.size() + prim.normalDeltas.size()) * sizeof(glm::vec3);
+  if (Status s = budget_->charge(count * perVertex + prim.triangles.size() * sizeof(uint32_t), where); !s) return s;
+
   out->positions.resize(base + count);
   out->normals.resize(base + count);
   std::vector<uint8_t> needsNormal(count, prim.normals.empty() ? 1 : 0);
@@ -990,6 +1023,12 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
     const glm::vec3 fp(wp);
     if (!std::isfinite(fp.x) || !std::isfinite(fp.y) || !std::isfinite(fp.z)) {
       return malformed(where + ": vertex " + str(uint64_t{v}) + " is non-finite after the node transform");
+    }
+    if (!(std::abs(wp.x) <= kMaxImportCoordinate && std::abs(wp.y) <= kMaxImportCoordinate &&
+          std::abs(wp.z) <= kMaxImportCoordinate)) {
+      return malformed(where + ": vertex " + str(uint64_t{v}) + " at (" + fmtCoord(wp.x) + ", " + fmtCoord(wp.y) +
+                       ", " + fmtCoord(wp.z) + ") is too far from the origin (|coordinate| > " +
+                       fmtCoord(kMaxImportCoordinate) + "): its bounds would overflow");
     }
     out->positions[base + v] = fp;
     if (!prim.normals.empty()) {
@@ -1114,6 +1153,7 @@ Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* ou
 template <typename Visit>
 Status Importer::walkScene(Visit&& visit, std::string* sceneLabel) {
   if (Status s = checkRequiredExtensions(); !s) return s;
+  if (Status s = checkNodeGraph(); !s) return s;
   meshCache_.resize(model_.meshes.size());
   const size_t nodeCount = model_.nodes.size();
 
@@ -1163,6 +1203,61 @@ Status Importer::walkScene(Visit&& visit, std::string* sceneLabel) {
       return malformed(path_ + ": node " + str(nodeIndex) + named(node.name) + ": non-finite transform");
     if (Status s = visit(nodeIndex, world); !s) return s;
     for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
+  }
+  return {};
+}
+
+// glTF nodes form disjoint trees: every node has at most one parent and no node is its own ancestor. Checked
+// over ALL the file's nodes, whether or not the default scene reaches them (a child index that does not
+// exist is reported by walkScene when reached).
+Status Importer::checkNodeGraph() {
+  const size_t n = model_.nodes.size();
+  std::vector<int> parent(n, -1);
+  for (size_t i = 0; i < n; ++i) {
+    for (const int child : model_.nodes[i].children) {
+      if (child < 0 || static_cast<size_t>(child) >= n) continue;
+      const size_t c = static_cast<size_t>(child);
+      if (c == i) {
+        return malformed(path_ + ": node " + str(child) + named(model_.nodes[c].name) +
+                         " is its own child (the node graph has a cycle)");
+      }
+      if (parent[c] >= 0) {
+        return malformed(path_ + ": node " + str(child) + named(model_.nodes[c].name) + " has several parents (nodes " +
+                         str(parent[c]) + " and " + str(uint64_t{i}) + ")");
+      }
+      parent[c] = static_cast<int>(i);
+    }
+  }
+  // One parent each: a cycle is a loop of parent links. Walk up from every node; 1 = on this walk, 2 = known
+  // to end at a root.
+  std::vector<uint8_t> state(n, 0);
+  std::vector<size_t> walk;
+  for (size_t i = 0; i < n; ++i) {
+    walk.clear();
+    int v = static_cast<int>(i);
+    while (v >= 0 && state[static_cast<size_t>(v)] == 0) {
+      state[static_cast<size_t>(v)] = 1;
+      walk.push_back(static_cast<size_t>(v));
+      v = parent[static_cast<size_t>(v)];
+    }
+    if (v >= 0 && state[static_cast<size_t>(v)] == 1) {
+      return malformed(path_ + ": node " + str(v) + named(model_.nodes[static_cast<size_t>(v)].name) +
+                       " is its own ancestor (the node graph has a cycle)");
+    }
+    for (const size_t w : walk) state[w] = 2;
+  }
+  return {};
+}
+
+// An axis-aligned box (already transformed) must stay within kMaxImportCoordinate.
+Status Importer::checkCoordinates(const glm::dvec3& lo, const glm::dvec3& hi, const std::string& where) {
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::abs(lo[a]) <= kMaxImportCoordinate && std::abs(hi[a]) <= kMaxImportCoordinate)) {
+      return malformed(where + ": world-space bounds (" + fmtCoord(lo.x) + ", " + fmtCoord(lo.y) + ", " +
+                       fmtCoord(lo.z) + ") .. (" + fmtCoord(hi.x) + ", " + fmtCoord(hi.y) + ", " + fmtCoord(hi.z) +
+                       ") reach too far from the origin (|coordinate| > " + fmtCoord(kMaxImportCoordinate) +
+                       "): bounds would overflow");
+    }
   }
   return {};
 }
@@ -1298,6 +1393,11 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
   for (const DecodedPrimitive& prim : **prims)
     if (!prim.skipped) morphTargets = std::max(morphTargets, prim.positionDeltas.size());
   const bool morphed = morphTargets > 0 && morphAnimatedNodes_.count(nodeIndex) > 0;
+  // An unskinned node whose weights or global transform a clip animates is skinned with a one-joint skin whose
+  // joint is the node itself (identity inverse bind): the joint's global matrix is exactly the node transform
+  // glTF applies to an unskinned mesh, so rigid node animations (CesiumMilkTruck's wheels) play through the
+  // skinning pass, with its per-frame bounds, like skinned meshes.
+  const bool oneJoint = node.skin < 0 && (morphed || movingNodes_.count(nodeIndex) > 0);
   static const std::vector<double> kUnmorphed;
 
   // Material groups in order of first appearance among the primitives.
@@ -1311,7 +1411,7 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
   }
 
   for (const int gltfMaterial : groups) {
-    SceneMeshKey key{node.mesh, gltfMaterial, mirrored, weights, morphed};
+    SceneMeshKey key{node.mesh, gltfMaterial, mirrored, weights, morphed, oneJoint};
     auto found = sceneMeshes_.find(key);
     uint32_t meshIndex = 0;
     uint32_t groupPrimitives = 0;
@@ -1356,10 +1456,10 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
         im.source.morphWeights.assign(morphTargets, 0.0f);
         for (size_t t = 0; t < morphTargets && t < weights.size(); ++t)
           im.source.morphWeights[t] = static_cast<float>(weights[t]);
-        if (node.skin < 0) {  // morph only: every vertex follows joint 0 of the node's one-joint skin
-          im.source.joints.assign(im.source.positions.size(), glm::u16vec4(0));
-          im.source.weights.assign(im.source.positions.size(), glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
-        }
+      }
+      if (oneJoint) {  // every vertex follows joint 0 of the node's one-joint skin
+        im.source.joints.assign(im.source.positions.size(), glm::u16vec4(0));
+        im.source.weights.assign(im.source.positions.size(), glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
       }
       padOptionalStreams(&im.source);
       if (mirrored) {
@@ -1377,6 +1477,28 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
       found = sceneMeshes_.emplace(std::move(key), meshIndex).first;
     }
     meshIndex = found->second;
+    if (meshIndex != std::numeric_limits<uint32_t>::max()) {
+      // The instance's world-space box: its mesh's object-space box (cached per mesh) through `world`.
+      if (meshBoxes_.size() <= meshIndex) meshBoxes_.resize(meshIndex + 1);
+      auto& box = meshBoxes_[meshIndex];
+      if (!box) {
+        glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+        for (const glm::vec3& p : scene->meshes[meshIndex].source.positions) {
+          lo = glm::min(lo, glm::dvec3(p));
+          hi = glm::max(hi, glm::dvec3(p));
+        }
+        box = std::pair{lo, hi};
+      }
+      glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 c((corner & 1) ? box->second.x : box->first.x, (corner & 2) ? box->second.y : box->first.y,
+                           (corner & 4) ? box->second.z : box->first.z);
+        const glm::dvec3 w(world * glm::dvec4(c, 1.0));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
+      }
+      if (Status s = checkCoordinates(lo, hi, nodeWhere); !s) return s;
+    }
     // Counted per primitive instance, like importGltfMesh.
     uint32_t groupSkipped = 0;
     for (size_t p = 0; p < (*prims)->size(); ++p) {
@@ -1392,11 +1514,11 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
     inst.node = nodeIndex;
     inst.skin = node.skin >= 0 ? node.skin : -1;
     inst.morphed = morphed;
-    if (morphed && node.skin < 0) {  // glTF applies the node's world matrix: a joint at the node does the same
-      auto [it, added] = morphSkins_.emplace(nodeIndex, int32_t(scene->skins.size()));
+    if (oneJoint) {  // glTF applies the node's world matrix: a joint at the node does the same
+      auto [it, added] = nodeSkins_.emplace(nodeIndex, int32_t(scene->skins.size()));
       if (added) {
         Skin skin;
-        skin.name = "morph " + (node.name.empty() ? "node " + str(nodeIndex) : node.name);
+        skin.name = (morphed ? "morph " : "node ") + (node.name.empty() ? "node " + str(nodeIndex) : node.name);
         skin.joints = {static_cast<uint32_t>(nodeIndex)};
         skin.inverseBindMatrices = {glm::dmat4(1.0)};
         scene->skins.push_back(std::move(skin));
@@ -1413,7 +1535,7 @@ Result<ImportedScene> Importer::runScene() {
   scene.name = std::filesystem::path(path_).stem().string();
   const WarnFn warnFn = [this](const std::string& message) { warn(message); };
   if (Status s = importMaterials(model_, path_, warnFn, &scene.materials); !s) return s.error();
-  if (Status s = collectImages(model_, path_, &scene.images); !s) return s.error();
+  if (Status s = collectImages(model_, path_, references_, &scene.images); !s) return s.error();
   const ReadFloats read = [this](int accessor, const std::string& where, std::vector<float>* out) {
     int n = 0;
     return readFloats(accessor, AttributeKind::Unchecked, where, out, &n);
@@ -1421,7 +1543,18 @@ Result<ImportedScene> Importer::runScene() {
   if (Status s = importAnimationData(model_, path_, read, warnFn, &scene); !s) return s.error();
   for (const AnimationClip& clip : scene.animations)
     for (const AnimationChannel& c : clip.channels)
-      if (c.path == AnimationPath::Weights) morphAnimatedNodes_.insert(static_cast<int>(c.node));
+      (c.path == AnimationPath::Weights ? morphAnimatedNodes_ : movingNodes_).insert(static_cast<int>(c.node));
+  // A node moves when a TRS channel targets it or any of its ancestors (the hierarchy has no cycles: checked).
+  if (!movingNodes_.empty()) {
+    for (size_t n = 0; n < scene.nodes.size(); ++n) {
+      for (int32_t a = int32_t(n); a >= 0; a = scene.nodes[size_t(a)].parent) {
+        if (movingNodes_.count(a)) {
+          movingNodes_.insert(int(n));
+          break;
+        }
+      }
+    }
+  }
   std::string sceneLabel;
   Status walked = walkScene(
       [&](int nodeIndex, const glm::dmat4& world) { return emitSceneNode(nodeIndex, world, &scene); },
@@ -1447,9 +1580,11 @@ Result<T> importWith(const std::string& path, const GltfImportOptions& options, 
   GltfImportReport& rep = report ? *report : localReport;
   rep = GltfImportReport{};
   try {
+    MemoryBudget budget(options.maxMemoryBytes);
     tinygltf::Model model;
-    if (Status s = loadModel(path, &model, &rep.warnings); !s) return s.error();
-    Importer importer(path, model, options, &rep.warnings);
+    LoadedReferences references;
+    if (Status s = loadModel(path, options, &budget, &model, &references, &rep.warnings); !s) return s.error();
+    Importer importer(path, model, options, references, &budget, &rep.warnings);
     Result<T> result = (importer.*run)();
     rep.primitivesImported = importer.primitivesImported;
     rep.primitivesSkipped = importer.primitivesSkipped;

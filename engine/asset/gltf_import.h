@@ -36,18 +36,29 @@
 //   - EXT_meshopt_compression (vertex codec v0, index buffer / index sequence codecs, OCTAHEDRAL, QUATERNION
 //     and EXPONENTIAL filters), including fallback buffers without a uri.
 //
+// Untrusted files (docs/security.md): the file and its external buffers are read only when they are regular
+// files (opened without blocking, so a FIFO or device fails at once); every external buffer / image uri must
+// resolve inside the asset's folder or options.allowedUriRoots (uri_resolver.h), else MalformedInput with a
+// message that names the uri and is the same whether or not the target exists; asset.version must be 2.x;
+// decoded data is charged to options.maxMemoryBytes before it is allocated.
+//
 // Errors (the message names the file and, where it applies, node / mesh / primitive / accessor):
-//   - FileNotFound: `path` does not exist or is not a regular file.
+//   - FileNotFound: `path` (or an external buffer inside the allowed folders) does not exist.
+//   - InvalidArgument: `path` or an external buffer is not a regular file (a FIFO, device or folder: "not a
+//     regular file (a FIFO)"); an allowedUriRoots entry that is not an existing folder.
 //   - IoError: the file exists but could not be read.
 //   - MalformedInput: tinygltf parse failure (its error text is included); GLB container damage; any
 //     offset/count/stride that runs past its bufferView or buffer; index values >= vertex count; invalid
 //     component types for an attribute; NaN/Inf in positions, normals, morph deltas/weights or node
-//     transforms ("node 3 'Foo': non-finite transform"); node graph cycles or nodes with several parents;
+//     transforms ("node 3 'Foo': non-finite transform"); node graph cycles or nodes with several parents,
+//     anywhere among the file's nodes (not only the scene's); coordinates beyond kMaxImportCoordinate;
+//     an external uri outside the allowed folders or with a scheme other than data:;
 //     JSON nested deeper than 512 levels; a scene that produces no triangles ("no triangle geometry").
 //   - Unsupported: a required extension that changes geometry and is not handled (e.g.
 //     KHR_draco_mesh_compression), an EXT_meshopt_compression view that cannot be decoded while the extension
-//     is required, GLB versions other than 2, files of 4 GiB or more.
-//   - CapacityExceeded: more than 2^32-1 vertices, or memory exhausted.
+//     is required, GLB versions other than 2, asset.version other than 2.x (or minVersion other than 2.0),
+//     files of 4 GiB or more.
+//   - CapacityExceeded: more than 2^32-1 vertices, memory exhausted, or more than options.maxMemoryBytes.
 // Nothing in the file's contents can make the importer assert or crash.
 //
 // Not supported: KHR_draco_mesh_compression and EXT_mesh_gpu_instancing (Unsupported when required; when only
@@ -64,14 +75,28 @@
 
 #include <glm/glm.hpp>
 
-#include "core/result.h"
-#include "scene/mesh.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/mesh.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 
+// Default import memory budget (GltfImportOptions::maxMemoryBytes): 4 GiB.
+inline constexpr uint64_t kDefaultImportMemoryBytes = uint64_t{4} << 30;
+// Largest |coordinate| of an imported vertex (object space for importGltfScene, world space for
+// importGltfMesh, and every instance's world-space bounds): beyond it squared lengths overflow float and
+// bounds, framing and culling stop working, so such files are refused (MalformedInput).
+inline constexpr double kMaxImportCoordinate = 1e18;
+
 struct GltfImportOptions {
   bool generateNormalsIfMissing = true;
+  // Folders besides the asset's own that external buffer / image uris may resolve into (uri_resolver.h,
+  // docs/security.md; `--allow-uri-root`). Each must exist.
+  std::vector<std::string> allowedUriRoots;
+  // What the import may hold: the file, its parsed JSON (8 bytes per byte of text), its buffers, decoded
+  // accessors and output streams (an estimate that is checked before each allocation). CapacityExceeded
+  // beyond it.
+  uint64_t maxMemoryBytes = kDefaultImportMemoryBytes;
 };
 
 struct GltfImportReport {
@@ -126,7 +151,8 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     materials, only when needed.
 //   - Images: every glTF image, in file order (glTF image i is images[i]), NOT decoded: the encoded bytes of
 //     embedded images (bufferView, range-checked, or data: URI) or, for external files, the path resolved
-//     against the glTF's folder (the file is not opened here; texture_bake.h decodes all of them).
+//     by the URI rule (uri_resolver.h; a uri outside the allowed folders fails the import) (the file is not
+//     opened here; texture_bake.h decodes all of them).
 //   - Skinning: JOINTS_0 (VEC4 u8/u16) and WEIGHTS_0 (VEC4 float or normalized u8/u16) become
 //     MeshSource::joints / weights. Weights are renormalised to sum 1; a vertex whose weights are all 0 gets
 //     weight 1 on its first slot (warning); slots with weight 0 get joint 0. Meshes stay in rest pose (bind
@@ -145,6 +171,10 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     accessor (finite, strictly increasing), its values the output accessor, whose element count must be
 //     keys x (3 for CUBICSPLINE, else 1) [x morph target count for weights]. Channels without a target node,
 //     with an unknown path, or animating the weights of a node without morph targets are ignored (warning).
+//   - Rigid node animation: an instance of an unskinned node that a translation / rotation / scale channel
+//     moves (the channel targets the node or one of its ancestors, e.g. CesiumMilkTruck's wheels) gets a
+//     one-joint skin whose joint is the node itself (identity inverse bind), as a morph-only mesh does: every
+//     vertex has joint 0 with weight 1, so skinning by global(node) plays the clip exactly.
 // Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist, for
 // non-finite material factors or texture transforms, for texture / sampler indices that do not exist, for
 // an image bufferView that does not exist or runs past its buffer, and for skin / animation data that cannot
@@ -175,7 +205,8 @@ struct ImportedInstance {
 struct ImportedImage {
   std::string name;            // the image's name, else its URI, else "image N"
   std::string uri;             // as written in the glTF; empty for embedded images
-  std::string path;            // external file: the URI percent-decoded, resolved against the glTF's folder
+  std::string path;            // external file: the URI resolved by the URI rule (uri_resolver.h): absolute,
+                               // canonical (no links, no "..") and inside the allowed folders
   std::string mimeType;        // as declared (may be empty)
   std::vector<uint8_t> bytes;  // embedded image (bufferView or data: URI): the encoded file
 };

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "asset/gltf_detail.h"
-#include "asset/gltf_import.h"
+#include "visbuf/asset/gltf_detail.h"
+#include "visbuf/asset/gltf_import.h"
 
 namespace visbuf::gltf_detail {
 namespace {
@@ -199,26 +199,6 @@ Status convertPbr(const tinygltf::Model& model, const tinygltf::Material& gm, co
   return {};
 }
 
-// "%20" -> " ": glTF URIs are URI-encoded; the file name on disk is not.
-std::string percentDecode(const std::string& uri) {
-  std::string out;
-  for (size_t i = 0; i < uri.size(); ++i) {
-    auto hex = [](char c) -> int {
-      if (c >= '0' && c <= '9') return c - '0';
-      if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-      if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-      return -1;
-    };
-    if (uri[i] == '%' && i + 2 < uri.size() && hex(uri[i + 1]) >= 0 && hex(uri[i + 2]) >= 0) {
-      out += static_cast<char>(hex(uri[i + 1]) * 16 + hex(uri[i + 2]));
-      i += 2;
-    } else {
-      out += uri[i];
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 Status importMaterials(const tinygltf::Model& model, const std::string& path, const WarnFn& warn,
@@ -246,8 +226,8 @@ Status importMaterials(const tinygltf::Model& model, const std::string& path, co
   return {};
 }
 
-Status collectImages(const tinygltf::Model& model, const std::string& path, std::vector<ImportedImage>* out) {
-  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+Status collectImages(const tinygltf::Model& model, const std::string& path, const LoadedReferences& references,
+                     std::vector<ImportedImage>* out) {
   for (size_t i = 0; i < model.images.size(); ++i) {
     const tinygltf::Image& gi = model.images[i];
     const std::string where = path + ": image " + str(uint64_t{i}) + named(gi.name);
@@ -266,8 +246,8 @@ Status collectImages(const tinygltf::Model& model, const std::string& path, std:
         return malformed(where + ": bufferView " + str(gi.bufferView) + " runs past the end of its buffer");
       const auto first = data.begin() + static_cast<std::ptrdiff_t>(view.byteOffset);
       im.bytes.assign(first, first + static_cast<std::ptrdiff_t>(view.byteLength));
-    } else if (!gi.uri.empty()) {
-      im.path = (folder / percentDecode(gi.uri)).string();
+    } else if (!gi.uri.empty() && i < references.imagePaths.size() && !references.imagePaths[i].empty()) {
+      im.path = references.imagePaths[i];  // resolved and checked by the URI rule (uri_resolver.h)
     } else {
       im.bytes = gi.image;  // a data: URI, decoded from base64 by tinygltf and kept by loadModel
     }

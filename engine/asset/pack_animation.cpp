@@ -1,7 +1,7 @@
 // The optional animation sections of a pack (pack_animation.h, pack_animation_format.h): serialisation and a
 // reader that checks every index and range before copying, so a damaged file gives an Error, never an
 // out-of-bounds read or an allocation larger than the file.
-#include "asset/pack_animation.h"
+#include "visbuf/asset/pack_animation.h"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "asset/pack_animation_format.h"
+#include "visbuf/asset/pack_animation_format.h"
 
 namespace visbuf::pack {
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "asset/pack_format.h"
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/asset/pack_format.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf::pack {
 

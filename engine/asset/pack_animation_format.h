@@ -10,8 +10,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "asset/pack_format.h"
-#include "scene/skin_vertex.h"
+#include "visbuf/asset/pack_format.h"
+#include "visbuf/scene/skin_vertex.h"
 
 namespace visbuf::pack {
 

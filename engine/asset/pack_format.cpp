@@ -1,6 +1,6 @@
 // CRC-32 for the pack format (pack_format.h). A 256-entry table, one byte per step: ~0.5-1 GB/s, far more
 // than the disk a pack comes from. Hand-written rather than a zlib dependency for 15 lines.
-#include "asset/pack_format.h"
+#include "visbuf/asset/pack_format.h"
 
 #include <array>
 

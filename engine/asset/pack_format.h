@@ -24,7 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "shared/types.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::pack {
 

@@ -8,7 +8,7 @@
 //   5. contents: string refs, mesh/LOD/vertex/index ranges, index values, finite values, object references,
 //      then the optional animation sections (pack_animation.cpp);
 //   6. validateScene() on the result.
-#include "asset/pack_reader.h"
+#include "visbuf/asset/pack_reader.h"
 
 #include <fmt/format.h>
 
@@ -24,8 +24,9 @@
 #include <string_view>
 #include <vector>
 
-#include "asset/pack_animation.h"
-#include "asset/pack_format.h"
+#include "visbuf/asset/pack_animation.h"
+#include "visbuf/asset/pack_format.h"
+#include "visbuf/core/file_read.h"
 
 namespace visbuf {
 
@@ -608,37 +609,19 @@ Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& lab
   }
 }
 
+// Only a regular file is read, opened without blocking (core/file_read.h): a FIFO or device given as a pack
+// fails at once instead of hanging in open() or read().
 Result<Scene> readPack(const std::string& path) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status))
-    return makeError(ErrorCode::FileNotFound, path + ": file not found");
-  if (!std::filesystem::is_regular_file(status))
-    return makeError(ErrorCode::FileNotFound, path + ": not a regular file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return makeError(ErrorCode::IoError, path + ": cannot open for reading");
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) return makeError(ErrorCode::IoError, path + ": cannot determine the file size");
-  if (static_cast<uint64_t>(size) > std::numeric_limits<size_t>::max())
-    return makeError(ErrorCode::CapacityExceeded, path + ": file too large for this machine");
-  std::vector<uint8_t> bytes;
-  try {
-    bytes.resize(static_cast<size_t>(size));
-  } catch (const std::bad_alloc&) {
-    return makeError(ErrorCode::CapacityExceeded, path + ": out of memory reading the pack");
-  }
-  in.seekg(0, std::ios::beg);
-  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size))
-    return makeError(ErrorCode::IoError, path + ": read failed");
-  return parsePack(bytes.data(), bytes.size(), path);
+  FileReadOptions options;
+  options.maxBytes = std::numeric_limits<size_t>::max();
+  Result<std::vector<uint8_t>> bytes = readRegularFile(path, options);
+  if (!bytes) return bytes.error();
+  return parsePack(bytes->data(), bytes->size(), path);
 }
 
 bool isPackFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[4] = {};
-  if (!in || !in.read(magic, 4)) return false;
-  return std::memcmp(magic, pack::kMagic, 4) == 0;
+  Result<std::vector<uint8_t>> magic = readFilePrefix(path, 4);
+  return magic && magic->size() == 4 && std::memcmp(magic->data(), pack::kMagic, 4) == 0;
 }
 
 }  // namespace visbuf

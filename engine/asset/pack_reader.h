@@ -14,8 +14,8 @@
 #include <cstdint>
 #include <string>
 
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

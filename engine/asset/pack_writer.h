@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 
@@ -56,7 +56,10 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
 // (".<name>.tmp<pid>.<n>"), which is flushed to disk (fsync) and then renamed onto `path` (commitFile).
 // On any failure (serialisation, no permission, disk full, file size limit, rename) the temporary file is
 // removed, `path` is left as it was (an existing pack stays intact), and an IoError names the path and the
-// system's reason.
+// system's reason. While the temporary file exists, SIGINT / SIGTERM / SIGHUP (where their disposition is the
+// default one) remove it and then end the process with the signal's default action. Before writing, stale
+// ".<name>.tmp<pid>.<n>" files next to `path` whose process no longer exists (left by SIGKILL or a crash) are
+// removed.
 Status writePack(const Scene& scene, const std::string& path, PackWriteReport* report = nullptr);
 Status writePack(const Scene& scene, const std::string& path, const PackWriteOptions& options,
                  PackWriteReport* report = nullptr);

@@ -1,4 +1,4 @@
-#include "asset/scene_bake.h"
+#include "visbuf/asset/scene_bake.h"
 
 #include <fmt/format.h>
 

@@ -8,9 +8,9 @@
 #include <functional>
 #include <string>
 
-#include "asset/gltf_import.h"
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

@@ -1,6 +1,6 @@
 // Texture baking: size rule, mip chains, sRGB encoding, size classes (contract in texture_bake.h). Decoding and
 // resampling live in texture_decode_oiio.cpp (texture_decode_none.cpp without OpenImageIO).
-#include "asset/texture_bake.h"
+#include "visbuf/asset/texture_bake.h"
 
 #include <fmt/format.h>
 
@@ -8,10 +8,11 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <utility>
+
+#include "visbuf/asset/uri_resolver.h"
+#include "visbuf/core/file_read.h"
 
 namespace visbuf {
 
@@ -29,16 +30,24 @@ std::array<float, 255> makeSrgbMidpoints() {
   return mid;
 }
 
+// An external image: a regular file only, opened without blocking (core/file_read.h), within the size budget.
 Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(image.path, ec)) {
-    return makeError(ErrorCode::FileNotFound,
-                     fmt::format("image '{}': file '{}' not found", image.name, image.path));
+  const std::string shown = quoteForMessage(image.name);
+  uint64_t size = 0;
+  const FileKind kind = probeFile(image.path, &size, /*noFollow=*/true);
+  if (kind == FileKind::Missing) {
+    return makeError(ErrorCode::FileNotFound, fmt::format("image '{}': file '{}' not found", shown, image.path));
   }
-  std::ifstream in(image.path, std::ios::binary);
-  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in && !in.eof())
-    return makeError(ErrorCode::IoError, fmt::format("image '{}': cannot read '{}'", image.name, image.path));
+  if (kind != FileKind::Regular) {
+    return makeError(ErrorCode::InvalidArgument, fmt::format("image '{}': '{}' is not a regular file ({}); only regular "
+                                                          "files are read",
+                                                          shown, image.path, fileKindName(kind)));
+  }
+  FileReadOptions options;
+  options.maxBytes = kMaxImageFileBytes;
+  options.noFollow = true;  // the importer's paths are link-free (uri_resolver.h): a link here was swapped in
+  Result<std::vector<uint8_t>> bytes = readRegularFile(image.path, options);
+  if (!bytes) return makeError(bytes.error().code, fmt::format("image '{}': {}", shown, bytes.error().message));
   return bytes;
 }
 
@@ -155,8 +164,8 @@ std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace
 }
 
 Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
-                             uint32_t maxTextureSize) {
-  Result<LinearImage> decoded = decodeImage(bytes, size, name, colorSpace);
+                             uint32_t maxTextureSize, uint64_t maxPixels) {
+  Result<LinearImage> decoded = decodeImage(bytes, size, name, colorSpace, maxPixels);
   if (!decoded) return decoded.error();
   BakedImage baked;
   baked.originalWidth = decoded->width;
@@ -189,6 +198,8 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     return makeError(ErrorCode::InvalidArgument, fmt::format("maxTextureSize {} must be a power of two in [1, {}]",
                                                              options.maxTextureSize, kMaxTextureSize));
   }
+  if (options.maxImagePixels < 1)
+    return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be at least 1");
   scene->textures.clear();
   scene->textureClasses.clear();
   auto keys = assignTextures(imported, scene);
@@ -197,11 +208,13 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   for (size_t t = 0; t < keys->size(); ++t) {
     const auto [imageIndex, colorSpace] = (*keys)[t];
     const ImportedImage& image = imported.images[size_t(imageIndex)];
-    const std::string name = fmt::format("{}: image {} '{}'", imported.name, imageIndex, image.name);
+    const std::string name =
+        fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), imageIndex, quoteForMessage(image.name));
     Result<std::vector<uint8_t>> file = image.path.empty() ? Result<std::vector<uint8_t>>(image.bytes)
                                                            : readImageFile(image);
     if (!file) return makeError(file.error().code, imported.name + ": " + file.error().message);
-    Result<BakedImage> b = bakeImage(file->data(), file->size(), name, colorSpace, options.maxTextureSize);
+    Result<BakedImage> b =
+        bakeImage(file->data(), file->size(), name, colorSpace, options.maxTextureSize, options.maxImagePixels);
     if (!b) return b.error();
     if (report && !b->resizeNote.empty()) report->notes.push_back(fmt::format("{}: {}", name, b->resizeNote));
     scene->textures.push_back({image.name, imageIndex, colorSpace, 0, 0, b->originalWidth, b->originalHeight});

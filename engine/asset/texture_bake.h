@@ -25,14 +25,23 @@
 #include <string>
 #include <vector>
 
-#include "asset/gltf_import.h"
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 
+// Default pixel budget of one image (TextureBakeOptions::maxImagePixels, `--max-image-pixels`): 64 Mpixel
+// (8192 x 8192), checked from the image header before any pixel is decoded.
+inline constexpr uint64_t kDefaultMaxImagePixels = uint64_t{64} << 20;
+// Largest encoded image file read (external images): 1 GiB.
+inline constexpr uint64_t kMaxImageFileBytes = uint64_t{1} << 30;
+
 struct TextureBakeOptions {
   uint32_t maxTextureSize = 2048;  // power of two in [1, 16384]; larger images are downscaled to it
+  // Images whose header declares more than this many pixels (width x height) are refused before decoding
+  // (CapacityExceeded): a 1 MiB PNG can declare 16384 x 16384 and would take 4 GiB once decoded.
+  uint64_t maxImagePixels = kDefaultMaxImagePixels;
 };
 
 // A decoded image in linear light: width x height RGBA floats, row-major from the top row.
@@ -63,9 +72,14 @@ struct TextureBakeReport {
 // first use (materials in order; slots base colour, metallic-roughness, normal, occlusion, emissive); classes
 // in order of first use, at most 256 layers each (Vulkan's guaranteed maxImageArrayLayers: a 257th image of
 // the same size and colour space opens a second class).
-// Errors (each names the glTF image): InvalidArgument (bad maxTextureSize), FileNotFound / IoError (an
-// external image file), MalformedInput (bytes that are not a decodable PNG/JPEG, an image index out of range,
-// an empty embedded image), CapacityExceeded (a side over 16384), Unsupported (a build without OpenImageIO).
+// External image files are read only when they are regular files (opened without blocking and with
+// O_NOFOLLOW, at most kMaxImageFileBytes: core/file_read.h); their paths were checked and made link-free by
+// the importer's URI rule (ImportedImage::path).
+// Errors (each names the glTF image): InvalidArgument (bad maxTextureSize / maxImagePixels, an external image
+// that is not a regular file), FileNotFound / IoError (an external image file that is missing or unreadable),
+// MalformedInput (bytes that are not a decodable PNG/JPEG, a truncated or corrupt image, an image index out of
+// range, an empty embedded image), CapacityExceeded (a side over 16384, more pixels than maxImagePixels, a file over
+// kMaxImageFileBytes), Unsupported (a build without OpenImageIO).
 Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& options, Scene* scene,
                     TextureBakeReport* report = nullptr, const TextureBakeProgress& progress = {});
 
@@ -85,11 +99,15 @@ std::vector<LinearImage> buildMipChain(LinearImage level0);
 std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace);
 
 // Decodes an encoded PNG/JPEG (`name` starts error messages); RGB converted to linear when colorSpace is Srgb.
-Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace);
+// The header's width x height is checked against `maxPixels` (and each side against 16384) before any pixel
+// is decoded (CapacityExceeded). Any error the decoder reports, a truncated file included ("Premature end of
+// JPEG file"), is MalformedInput: no partially decoded image is ever returned.
+Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
+                                uint64_t maxPixels = kDefaultMaxImagePixels);
 // Resamples (OpenImageIO resize, linear light) to width x height.
 Result<LinearImage> resizeImage(const LinearImage& image, uint32_t width, uint32_t height);
 // Steps 1-4 for one encoded image.
 Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
-                             uint32_t maxTextureSize);
+                             uint32_t maxTextureSize, uint64_t maxPixels = kDefaultMaxImagePixels);
 
 }  // namespace visbuf

@@ -1,6 +1,6 @@
 // Texture decoding for builds without OpenImageIO (-DVISBUF_WITH_OIIO=OFF): baking textures fails with a
 // message saying so (bake with --no-textures, or on a machine with OpenImageIO).
-#include "asset/texture_bake.h"
+#include "visbuf/asset/texture_bake.h"
 
 namespace visbuf {
 
@@ -12,7 +12,7 @@ Error unavailable(const std::string& name) {
 }
 }  // namespace
 
-Result<LinearImage> decodeImage(const uint8_t*, size_t, const std::string& name, ColorSpace) {
+Result<LinearImage> decodeImage(const uint8_t*, size_t, const std::string& name, ColorSpace, uint64_t) {
   return unavailable(name);
 }
 Result<LinearImage> resizeImage(const LinearImage&, uint32_t, uint32_t) { return unavailable("resize"); }

@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
+#include <vector>
 
-#include "asset/texture_bake.h"
+#include "visbuf/asset/texture_bake.h"
 
 namespace visbuf {
 
@@ -54,12 +56,83 @@ std::string readerError(OIIO::ImageInput* in) {
   return message;
 }
 
+// The budgets of decodeImage(), from a declared size: the pixel budget, then the side limit.
+std::optional<Error> overBudget(const std::string& name, uint64_t width, uint64_t height, uint64_t maxPixels) {
+  const uint64_t pixels = width * height;
+  if (pixels > maxPixels) {
+    return makeError(ErrorCode::CapacityExceeded,
+                     name + ": " + std::to_string(width) + "x" + std::to_string(height) + " = " +
+                         std::to_string(pixels) + " pixels exceeds the image pixel budget of " +
+                         std::to_string(maxPixels) + " (raise it with --max-image-pixels)");
+  }
+  if (width > uint64_t(kMaxSide) || height > uint64_t(kMaxSide)) {
+    return makeError(ErrorCode::CapacityExceeded, name + ": " + std::to_string(width) + "x" +
+                                                      std::to_string(height) + " exceeds the " +
+                                                      std::to_string(kMaxSide) + "-texel side limit");
+  }
+  return std::nullopt;
+}
+
+// A JPEG as decodeImage() hands it to OpenImageIO, and the frame size its header declares.
+struct PreparedJpeg {
+  std::vector<uint8_t> bytes;      // the file, metadata segments relabelled (below)
+  bool hasFrame = false;           // a frame header (SOFn) comes before the first scan
+  uint32_t width = 0, height = 0;  // as that frame header declares them
+};
+
+// Two workarounds for OpenImageIO 2.4 (Debian 12), both found by tests/fuzz/fuzz_image_decode:
+//  - It trusts the sizes inside JPEG metadata: a Photoshop / IPTC block (APP13) whose resource or dataset
+//    length runs past its segment makes JpgInput::open() read past the end of a heap buffer (decode_iptc_iim;
+//    fixed upstream in OpenImageIO 3.1). A texture needs no metadata, so APP1..APP13 (Exif, XMP, ICC profile,
+//    Photoshop / IPTC, ...) are relabelled APP15, which libjpeg skips unread and OpenImageIO does not parse.
+//    APP0 (JFIF) and APP14 (Adobe: the colour transform) stay.
+//  - JpgInput::open() already starts decompressing, and for a progressive JPEG libjpeg then allocates the
+//    coefficients of the whole declared frame (a 381-byte file declaring 52232 x 16392 took 2.6 GB and 7 s),
+//    before the budgets below open() could refuse it. The declared size is read here, so the budgets are
+//    checked before OpenImageIO sees the file.
+// Markers are walked as libjpeg walks them (stray and fill bytes skipped, a length below 2 skips the length
+// only) up to the first scan; anything malformed is left to libjpeg to report.
+PreparedJpeg prepareJpeg(const uint8_t* bytes, size_t size) {
+  PreparedJpeg out;
+  out.bytes.assign(bytes, bytes + size);
+  std::vector<uint8_t>& b = out.bytes;
+  size_t i = 2;  // after SOI
+  while (i < b.size()) {
+    while (i < b.size() && b[i] != 0xFF) ++i;  // stray bytes
+    while (i < b.size() && b[i] == 0xFF) ++i;  // fill bytes
+    if (i >= b.size()) break;
+    const uint8_t marker = b[i++];
+    if (marker == 0x00 || marker == 0x01 || marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7)) continue;
+    if (marker == 0xDA || marker == 0xD9) break;  // start of scan, end of image
+    if (i + 2 > b.size()) break;
+    const size_t length = size_t(b[i]) << 8 | b[i + 1];
+    if (marker >= 0xE1 && marker <= 0xED) b[i - 1] = 0xEF;
+    const bool frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (frame && !out.hasFrame && length >= 7 && i + 7 <= b.size()) {  // length, precision, height, width
+      out.hasFrame = true;
+      out.height = uint32_t(b[i + 3]) << 8 | b[i + 4];
+      out.width = uint32_t(b[i + 5]) << 8 | b[i + 6];
+    }
+    i += std::max<size_t>(length, 2);
+  }
+  return out;
+}
+
 }  // namespace
 
-Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace) {
+Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
+                                uint64_t maxPixels) {
   if (bytes == nullptr || size == 0) return malformed(name, "image data is empty");
   const char* format = formatName(bytes, size);
   if (!format) return malformed(name, "not a PNG or JPEG file (unrecognised signature)");
+  PreparedJpeg jpeg;  // JPEG: metadata hidden and the declared size checked first (prepareJpeg)
+  if (std::strcmp(format, "jpeg") == 0) {
+    jpeg = prepareJpeg(bytes, size);
+    bytes = jpeg.bytes.data();
+    if (jpeg.hasFrame) {
+      if (std::optional<Error> over = overBudget(name, jpeg.width, jpeg.height, maxPixels)) return *over;
+    }
+  }
   OIIO::Filesystem::IOMemReader reader(bytes, size);
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);  // glTF alpha is straight: do not premultiply
@@ -71,15 +144,30 @@ Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::st
     return malformed(name, "cannot decode: " + readerError(in.get()));
   if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1)
     return malformed(name, "image has no pixels");
-  if (spec.width > kMaxSide || spec.height > kMaxSide) {
-    return makeError(ErrorCode::CapacityExceeded, name + ": " + std::to_string(spec.width) + "x" +
-                                                      std::to_string(spec.height) + " exceeds the " +
-                                                      std::to_string(kMaxSide) + "-texel side limit");
+  // Budgets, from the header alone: nothing below is allocated for an image that fails them.
+  const uint64_t pixels = uint64_t(spec.width) * uint64_t(spec.height);
+  if (std::optional<Error> over = overBudget(name, uint64_t(spec.width), uint64_t(spec.height), maxPixels)) {
+    (void)readerError(in.get());
+    return *over;
   }
   const int channels = std::min(spec.nchannels, 4);
-  std::vector<float> decoded(size_t(spec.width) * size_t(spec.height) * size_t(channels));
+  std::vector<float> decoded;
+  try {
+    decoded.resize(size_t(pixels) * size_t(channels));
+  } catch (const std::bad_alloc&) {
+    (void)readerError(in.get());
+    return makeError(ErrorCode::CapacityExceeded, name + ": out of memory decoding " + std::to_string(spec.width) +
+                                                      "x" + std::to_string(spec.height) + " pixels");
+  }
   if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, decoded.data()))
     return malformed(name, "cannot decode: " + readerError(in.get()));
+  // A truncated or corrupt stream can still "succeed": libjpeg pads a truncated JPEG with grey and only
+  // warns ("Premature end of JPEG file"), which OpenImageIO keeps as a pending error. Any such message means
+  // the pixels are not the file's: refuse rather than bake half an image.
+  if (std::string pending = readerError(in.get()); !pending.empty()) {
+    while (!pending.empty() && (pending.back() == '\n' || pending.back() == ' ')) pending.pop_back();
+    return malformed(name, "truncated or corrupt image: " + pending);
+  }
   LinearImage image;
   image.width = uint32_t(spec.width);
   image.height = uint32_t(spec.height);

@@ -1,4 +1,4 @@
-#include "core/image_compare.h"
+#include "visbuf/core/image_compare.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "core/image_io.h"
+#include "visbuf/core/image_io.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/result.h"
+#include "visbuf/core/result.h"
 
 namespace visbuf {
 

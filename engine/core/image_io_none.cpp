@@ -1,6 +1,6 @@
 // Image I/O for builds without OpenImageIO (-DVISBUF_WITH_OIIO=OFF, used to carry a self-contained
 // binary to a GPU machine): every call fails with a message saying so; nothing is written.
-#include "core/image_io.h"
+#include "visbuf/core/image_io.h"
 
 #include <filesystem>
 

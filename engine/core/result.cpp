@@ -1,4 +1,4 @@
-#include "core/result.h"
+#include "visbuf/core/result.h"
 
 namespace visbuf {
 

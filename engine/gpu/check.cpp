@@ -1,4 +1,4 @@
-#include "gpu/check.h"
+#include "visbuf/gpu/check.h"
 
 #include <cstdio>
 #include <cstdlib>

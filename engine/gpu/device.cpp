@@ -1,4 +1,4 @@
-#include "gpu/device.h"
+#include "visbuf/gpu/device.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "gpu/check.h"
+#include "visbuf/gpu/check.h"
 
 namespace visbuf::gpu {
 

@@ -9,7 +9,7 @@
 
 #include <vulkan/vulkan.h>
 
-#include "core/result.h"
+#include "visbuf/core/result.h"
 
 namespace visbuf::gpu {
 

@@ -1,10 +1,10 @@
-#include "gpu/pipeline.h"
+#include "visbuf/gpu/pipeline.h"
 
 #include <cstdio>
 #include <cstdlib>
 #include <utility>
 
-#include "gpu/check.h"
+#include "visbuf/gpu/check.h"
 
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"

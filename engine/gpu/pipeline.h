@@ -9,7 +9,7 @@
 
 #include <vulkan/vulkan.h>
 
-#include "gpu/device.h"
+#include "visbuf/gpu/device.h"
 
 namespace visbuf::gpu {
 

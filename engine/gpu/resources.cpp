@@ -1,10 +1,10 @@
-#include "gpu/resources.h"
+#include "visbuf/gpu/resources.h"
 
 #include <algorithm>
 #include <cstring>
 #include <utility>
 
-#include "gpu/check.h"
+#include "visbuf/gpu/check.h"
 
 namespace visbuf::gpu {
 

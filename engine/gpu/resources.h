@@ -8,7 +8,7 @@
 
 #include <vulkan/vulkan.h>
 
-#include "gpu/device.h"
+#include "visbuf/gpu/device.h"
 
 namespace visbuf::gpu {
 

@@ -3,7 +3,7 @@
 // compare member offsets with the ones glslang reflects.
 #include <cstddef>
 
-#include "shared/types.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::gpu {
 

@@ -1,9 +1,9 @@
-#include "passes/classify_pass.h"
+#include "visbuf/passes/classify_pass.h"
 
 #include <algorithm>
 
-#include "shared/types.h"
-#include "shared/config.h"
+#include "visbuf/shared/types.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf::passes {
 

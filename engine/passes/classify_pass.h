@@ -16,8 +16,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 

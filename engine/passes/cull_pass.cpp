@@ -1,6 +1,6 @@
-#include "passes/cull_pass.h"
+#include "visbuf/passes/cull_pass.h"
 
-#include "shared/types.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 

@@ -3,8 +3,8 @@
 // list's region per phase). Writes: draws (indirect arguments), stats (counters, one draw count per list).
 #pragma once
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 

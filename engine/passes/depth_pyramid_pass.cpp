@@ -1,9 +1,9 @@
-#include "passes/depth_pyramid_pass.h"
+#include "visbuf/passes/depth_pyramid_pass.h"
 
 #include <bit>
 
-#include "gpu/check.h"
-#include "shared/types.h"
+#include "visbuf/gpu/check.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 

@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 

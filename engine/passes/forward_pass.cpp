@@ -1,8 +1,8 @@
-#include "passes/forward_pass.h"
+#include "visbuf/passes/forward_pass.h"
 
 #include <string>
 
-#include "passes/visibility_pass.h"
+#include "visbuf/passes/visibility_pass.h"
 
 namespace visbuf::passes {
 

@@ -1,6 +1,6 @@
-#include "passes/gbuffer_lighting_pass.h"
+#include "visbuf/passes/gbuffer_lighting_pass.h"
 
-#include "shared/config.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf::passes {
 

@@ -5,7 +5,7 @@
 // also writes the rebuilt position and depth to BINDING_ATTRIBUTES (slots 0..3 of config.h's record, 7 = 1).
 #pragma once
 
-#include "gpu/pipeline.h"
+#include "visbuf/gpu/pipeline.h"
 
 namespace visbuf::passes {
 

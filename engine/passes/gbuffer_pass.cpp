@@ -1,6 +1,6 @@
-#include "passes/gbuffer_pass.h"
+#include "visbuf/passes/gbuffer_pass.h"
 
-#include "shared/types.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 

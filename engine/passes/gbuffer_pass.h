@@ -6,10 +6,10 @@
 
 #include <array>
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
-#include "passes/visibility_pass.h"
-#include "shared/config.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
+#include "visbuf/passes/visibility_pass.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf::passes {
 

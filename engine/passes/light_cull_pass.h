@@ -8,8 +8,8 @@
 
 #include <cstdint>
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 

@@ -1,6 +1,6 @@
-#include "passes/shade_pass.h"
+#include "visbuf/passes/shade_pass.h"
 
-#include "shared/config.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf::passes {
 

@@ -3,7 +3,7 @@
 // attributes variant also the per-pixel reconstruction record (BINDING_ATTRIBUTES, config.h's layout).
 #pragma once
 
-#include "gpu/pipeline.h"
+#include "visbuf/gpu/pipeline.h"
 
 namespace visbuf::passes {
 

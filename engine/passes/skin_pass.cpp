@@ -1,9 +1,9 @@
-#include "passes/skin_pass.h"
+#include "visbuf/passes/skin_pass.h"
 
 #include <array>
 
-#include "gpu/check.h"
-#include "shared/types.h"
+#include "visbuf/gpu/check.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 

@@ -11,9 +11,9 @@
 
 #include <array>
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
-#include "shared/config.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf::passes {
 

@@ -1,9 +1,9 @@
-#include "passes/sw_raster_pass.h"
+#include "visbuf/passes/sw_raster_pass.h"
 
 #include <algorithm>
 
-#include "passes/visibility_pass.h"
-#include "shared/types.h"
+#include "visbuf/passes/visibility_pass.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 

@@ -7,8 +7,8 @@
 // (cleared by the early/only phase), ID target, depth.
 #pragma once
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 

@@ -1,8 +1,8 @@
-#include "passes/transparent_pass.h"
+#include "visbuf/passes/transparent_pass.h"
 
 #include <algorithm>
 
-#include "passes/visibility_pass.h"
+#include "visbuf/passes/visibility_pass.h"
 
 namespace visbuf::passes {
 

@@ -8,9 +8,9 @@
 #include <array>
 #include <vector>
 
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
-#include "passes/forward_pass.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
+#include "visbuf/passes/forward_pass.h"
 
 namespace visbuf::passes {
 

@@ -1,8 +1,8 @@
-#include "passes/visibility_pass.h"
+#include "visbuf/passes/visibility_pass.h"
 
 #include <string>
 
-#include "shared/types.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 

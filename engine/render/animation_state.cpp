@@ -1,4 +1,4 @@
-#include "render/animation_state.h"
+#include "visbuf/render/animation_state.h"
 
 #include <algorithm>
 #include <chrono>
@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "scene/animation.h"
+#include "visbuf/scene/animation.h"
 
 namespace visbuf {
 

@@ -14,9 +14,9 @@
 
 #include <glm/glm.hpp>
 
-#include "gpu/resources.h"
-#include "scene/gpu_scene.h"
-#include "scene/scene.h"
+#include "visbuf/gpu/resources.h"
+#include "visbuf/scene/gpu_scene.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

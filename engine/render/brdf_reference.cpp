@@ -1,10 +1,10 @@
-#include "render/brdf_reference.h"
+#include "visbuf/render/brdf_reference.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-#include "shared/config.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf {
 

@@ -9,7 +9,7 @@
 
 #include <glm/glm.hpp>
 
-#include "scene/scene.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

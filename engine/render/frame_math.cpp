@@ -1,4 +1,4 @@
-#include "render/frame_math.h"
+#include "visbuf/render/frame_math.h"
 
 #include <algorithm>
 #include <cmath>

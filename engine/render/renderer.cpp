@@ -9,7 +9,7 @@
 //
 // Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
 // crashed on a dispatch + barrier + timestamps in one command buffer).
-#include "render/renderer.h"
+#include "visbuf/render/renderer.h"
 
 #include <algorithm>
 #include <array>
@@ -22,24 +22,24 @@
 #include <fmt/ranges.h>
 #include <glm/gtc/packing.hpp>
 
-#include "gpu/check.h"
-#include "gpu/pipeline.h"
-#include "gpu/resources.h"
-#include "passes/classify_pass.h"
-#include "passes/cull_pass.h"
-#include "passes/depth_pyramid_pass.h"
-#include "passes/forward_pass.h"
-#include "passes/gbuffer_lighting_pass.h"
-#include "passes/gbuffer_pass.h"
-#include "passes/light_cull_pass.h"
-#include "passes/shade_pass.h"
-#include "passes/skin_pass.h"
-#include "passes/sw_raster_pass.h"
-#include "passes/transparent_pass.h"
-#include "render/animation_state.h"
-#include "passes/visibility_pass.h"
-#include "render/frame_math.h"
-#include "scene/gpu_scene.h"
+#include "visbuf/gpu/check.h"
+#include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
+#include "visbuf/passes/classify_pass.h"
+#include "visbuf/passes/cull_pass.h"
+#include "visbuf/passes/depth_pyramid_pass.h"
+#include "visbuf/passes/forward_pass.h"
+#include "visbuf/passes/gbuffer_lighting_pass.h"
+#include "visbuf/passes/gbuffer_pass.h"
+#include "visbuf/passes/light_cull_pass.h"
+#include "visbuf/passes/shade_pass.h"
+#include "visbuf/passes/skin_pass.h"
+#include "visbuf/passes/sw_raster_pass.h"
+#include "visbuf/passes/transparent_pass.h"
+#include "visbuf/render/animation_state.h"
+#include "visbuf/passes/visibility_pass.h"
+#include "visbuf/render/frame_math.h"
+#include "visbuf/scene/gpu_scene.h"
 
 namespace visbuf {
 

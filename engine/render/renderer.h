@@ -14,9 +14,9 @@
 #include <utility>
 #include <vector>
 
-#include "core/result.h"
-#include "gpu/device.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/gpu/device.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

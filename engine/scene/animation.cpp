@@ -1,6 +1,6 @@
 // Skeletal animation on the CPU (animation.h): validation, keyframe sampling (glTF 2.0 appendix C),
 // hierarchy evaluation in double precision, reference skinning and conservative skinned bounds.
-#include "scene/animation.h"
+#include "visbuf/scene/animation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "scene/scene.h"  // maxScaleOf
+#include "visbuf/scene/scene.h"  // maxScaleOf
 
 namespace visbuf {
 

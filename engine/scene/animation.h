@@ -20,8 +20,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "core/result.h"
-#include "scene/skin_vertex.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/skin_vertex.h"
 
 namespace visbuf {
 

@@ -1,4 +1,4 @@
-#include "scene/generate.h"
+#include "visbuf/scene/generate.h"
 
 #include <algorithm>
 #include <cmath>

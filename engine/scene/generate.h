@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <optional>
 
-#include "core/result.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

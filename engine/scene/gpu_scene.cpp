@@ -1,4 +1,4 @@
-#include "scene/gpu_scene.h"
+#include "visbuf/scene/gpu_scene.h"
 
 #include <algorithm>
 

@@ -5,9 +5,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/result.h"
-#include "gpu/resources.h"
-#include "scene/scene.h"
+#include "visbuf/core/result.h"
+#include "visbuf/gpu/resources.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

@@ -1,8 +1,8 @@
 // Baked texture classes (scene/texture.h) to GPU images: one sampled 2D array per class, every mip level.
 #include <cstring>
 
-#include "gpu/check.h"
-#include "scene/gpu_scene.h"
+#include "visbuf/gpu/check.h"
+#include "visbuf/scene/gpu_scene.h"
 
 namespace visbuf {
 

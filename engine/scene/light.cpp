@@ -1,4 +1,4 @@
-#include "scene/light.h"
+#include "visbuf/scene/light.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "scene/generate.h"
-#include "scene/scene.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

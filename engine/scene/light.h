@@ -7,7 +7,7 @@
 
 #include <glm/glm.hpp>
 
-#include "core/result.h"
+#include "visbuf/core/result.h"
 
 namespace visbuf {
 

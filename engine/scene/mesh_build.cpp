@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 #include <meshoptimizer.h>
 
-#include "scene/mesh_error.h"
-#include "scene/scene.h"
+#include "visbuf/scene/mesh_error.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

@@ -1,4 +1,4 @@
-#include "scene/mesh_error.h"
+#include "visbuf/scene/mesh_error.h"
 
 #include <algorithm>
 #include <cmath>

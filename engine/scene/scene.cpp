@@ -1,4 +1,4 @@
-#include "scene/scene.h"
+#include "visbuf/scene/scene.h"
 
 #include <algorithm>
 #include <cmath>

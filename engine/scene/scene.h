@@ -10,13 +10,13 @@
 
 #include <glm/glm.hpp>
 
-#include "core/result.h"
-#include "scene/animation.h"
-#include "scene/light.h"
-#include "scene/mesh.h"
-#include "scene/texture.h"
-#include "scene/skin_vertex.h"
-#include "shared/types.h"
+#include "visbuf/core/result.h"
+#include "visbuf/scene/animation.h"
+#include "visbuf/scene/light.h"
+#include "visbuf/scene/mesh.h"
+#include "visbuf/scene/texture.h"
+#include "visbuf/scene/skin_vertex.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf {
 

@@ -5,8 +5,8 @@
 
 #include <fmt/format.h>
 
-#include "scene/animation.h"
-#include "scene/scene.h"
+#include "visbuf/scene/animation.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 

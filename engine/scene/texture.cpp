@@ -1,4 +1,4 @@
-#include "scene/texture.h"
+#include "visbuf/scene/texture.h"
 
 #include <algorithm>
 #include <bit>

@@ -5,9 +5,9 @@
 
 #include <vulkan/vulkan.h>
 
-#include "gpu/device.h"
-#include "render/renderer.h"
-#include "scene/generate.h"
+#include <visbuf/gpu/device.h>
+#include <visbuf/render/renderer.h>
+#include <visbuf/scene/generate.h>
 
 namespace {
 struct HostVulkan {

@@ -9,10 +9,10 @@
 
 #include <gtest/gtest.h>
 
-#include "core/image_compare.h"
-#include "core/image_io.h"
-#include "gpu/device.h"
-#include "render/renderer.h"
+#include "visbuf/core/image_compare.h"
+#include "visbuf/core/image_io.h"
+#include "visbuf/gpu/device.h"
+#include "visbuf/render/renderer.h"
 
 namespace visbuf::test {
 

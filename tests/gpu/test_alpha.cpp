@@ -14,12 +14,13 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "asset/gltf_import.h"
-#include "asset/scene_bake.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/scene_bake.h"
+#include "../unit/test_assets.h"
 #include "gpu_test_util.h"
-#include "render/brdf_reference.h"
-#include "render/frame_math.h"
-#include "scene/generate.h"
+#include "visbuf/render/brdf_reference.h"
+#include "visbuf/render/frame_math.h"
+#include "visbuf/scene/generate.h"
 
 using namespace visbuf;
 
@@ -417,9 +418,7 @@ TEST(Transparency, BackToFrontMatchesCpuComposite) {
 
 namespace {
 
-std::filesystem::path assetPath(const char* relative) {
-  return std::filesystem::path(VISBUF_SHARED_ASSETS_DIR) / relative;
-}
+std::filesystem::path assetPath(const char* relative) { return test::assetPath(relative); }
 
 int materialNamed(const Scene& s, const std::string& name) {
   for (size_t i = 0; i < s.materials.size(); ++i)
@@ -435,7 +434,7 @@ int materialNamed(const Scene& s, const std::string& name) {
 // render; MatCutoff75 (cutoff 0.75 > 0.5) is cut out entirely, MatCutoff25 (0.25) is not.
 TEST(Transparency, AlphaBlendModeTestBlendsAndCutsOut) {
   const std::filesystem::path file = assetPath("AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf");
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "asset not found: " << file;
+  REQUIRE_ASSET(file);
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   Result<ImportedScene> imported = importGltfScene(file.string());

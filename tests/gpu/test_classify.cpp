@@ -13,10 +13,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gpu_test_util.h"
-#include "render/renderer.h"
-#include "scene/generate.h"
-#include "scene/scene.h"
-#include "shared/config.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/scene/scene.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf {
 namespace {

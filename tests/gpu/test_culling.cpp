@@ -8,8 +8,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gpu_test_util.h"
-#include "render/frame_math.h"
-#include "scene/generate.h"
+#include "visbuf/render/frame_math.h"
+#include "visbuf/scene/generate.h"
 
 using namespace visbuf;
 

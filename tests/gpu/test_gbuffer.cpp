@@ -9,8 +9,8 @@
 #include <glm/glm.hpp>
 
 #include "gpu_test_util.h"
-#include "scene/generate.h"
-#include "shared/config.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/shared/config.h"
 
 using namespace visbuf;
 

@@ -7,9 +7,9 @@
 #include <fmt/format.h>
 
 #include "gpu_test_util.h"
-#include "render/brdf_reference.h"
-#include "scene/generate.h"
-#include "shared/config.h"
+#include "visbuf/render/brdf_reference.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/shared/config.h"
 
 using namespace visbuf;
 

@@ -7,12 +7,12 @@
 #include <cstdio>
 #include <vector>
 
-#include "asset/texture_bake.h"
+#include "visbuf/asset/texture_bake.h"
 #include "gpu_test_util.h"
-#include "render/frame_math.h"
-#include "render/renderer.h"
+#include "visbuf/render/frame_math.h"
+#include "visbuf/render/renderer.h"
 #include <glm/gtc/matrix_transform.hpp>
-#include "scene/scene.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 namespace {

@@ -5,7 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gpu_test_util.h"
-#include "scene/generate.h"
+#include "visbuf/scene/generate.h"
 
 using namespace visbuf;
 

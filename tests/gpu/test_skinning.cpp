@@ -5,18 +5,19 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "asset/gltf_import.h"
-#include "asset/scene_bake.h"
-#include "asset/texture_bake.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/asset/texture_bake.h"
+#include "../unit/test_assets.h"
 #include "gpu_test_util.h"
-#include "scene/animation.h"
-#include "scene/generate.h"
+#include "visbuf/scene/animation.h"
+#include "visbuf/scene/generate.h"
 
 using namespace visbuf;
 
 namespace {
 
-std::string assetPath(const std::string& rel) { return std::string(VISBUF_SHARED_ASSETS_DIR) + "/" + rel; }
+std::string assetPath(const std::string& rel) { return test::assetPath(rel).string(); }
 
 Result<Scene> loadAsset(const std::string& rel) {
   auto imported = importGltfScene(assetPath(rel));
@@ -157,7 +158,7 @@ const std::vector<std::string> kMorphAssets = {"AnimatedMorphCube/glTF/AnimatedM
 TEST(Skinning, MatchesCpuSkinnedForwardReference) {
   const std::vector<std::string> assets = {"CesiumMan/glTF/CesiumMan.gltf", "Fox/glTF-Binary/Fox.glb",
                                            "RiggedFigure/glTF/RiggedFigure.gltf"};
-  if (!std::filesystem::exists(assetPath(assets[0]))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath(assets[0]));
   const uint32_t before = test::testDevice().validationMessages();
   for (const std::string& a : assets) {
     auto scene = loadAsset(a);
@@ -171,7 +172,7 @@ TEST(Skinning, MatchesCpuSkinnedForwardReference) {
 // meshes, skinned by their one-joint skin): GPU-morphed visbuf against the CPU-morphed meshes (double precision)
 // on the forward path and on visbuf, same bounds as above.
 TEST(Skinning, MorphTargetsMatchCpuMorphedForwardReference) {
-  if (!std::filesystem::exists(assetPath(kMorphAssets[0]))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath(kMorphAssets[0]));
   const uint32_t before = test::testDevice().validationMessages();
   for (const std::string& a : kMorphAssets) {
     auto scene = loadMorphAsset(a);
@@ -191,7 +192,7 @@ TEST(Skinning, MorphTargetsMatchCpuMorphedForwardReference) {
 // TangentsMatchCpuDoubleSkinning). The weights must move the mesh: some vertex at some time at least 1 % of
 // that radius away from the unmorphed base, or the comparison could not tell morphing from no morphing.
 TEST(Skinning, MorphTargetsMatchCpuDoubleReference) {
-  if (!std::filesystem::exists(assetPath(kMorphAssets[0]))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath(kMorphAssets[0]));
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   for (const std::string& a : kMorphAssets) {
@@ -267,7 +268,7 @@ TEST(Skinning, MorphTargetsMatchCpuDoubleReference) {
 // with no culling on every frame (a bound that missed a skinned vertex would drop pixels here), with either
 // kind of skinned bounds (joint reach, GPU AABB).
 TEST(Skinning, IdImageUnchangedByCullingOnAnimatedPath) {
-  if (!std::filesystem::exists(assetPath("Fox/glTF-Binary/Fox.glb"))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath("Fox/glTF-Binary/Fox.glb"));
   auto fox = loadAsset("Fox/glTF-Binary/Fox.glb");
   ASSERT_TRUE(fox.ok());
   auto field = makeAnimatedField(*fox, {.instances = 60, .seed = 3, .spacing = 1.6});
@@ -321,7 +322,7 @@ TEST(Skinning, StaticScenesAndPausedPosesRecordNoSkinning) {
   EXPECT_FALSE(fs->stats.skinned);
   for (const auto& [name, ms] : fs->stats.passMs) EXPECT_NE(name, "skin");
 
-  if (!std::filesystem::exists(assetPath("Fox/glTF-Binary/Fox.glb"))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath("Fox/glTF-Binary/Fox.glb"));
   auto fox = loadAsset("Fox/glTF-Binary/Fox.glb");
   ASSERT_TRUE(fox.ok());
   auto ra = Renderer::create(dev, *fox, {.width = 96, .height = 96});
@@ -350,7 +351,7 @@ TEST(Skinning, StaticScenesAndPausedPosesRecordNoSkinning) {
 // vertices). Every region must land where its mesh slot says: IDs equal to the reference's, and the shading
 // within the first test's bound.
 TEST(Skinning, PoolAcrossVertexWindowsMatchesCpuSkinning) {
-  if (!std::filesystem::exists(assetPath("Fox/glTF-Binary/Fox.glb"))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath("Fox/glTF-Binary/Fox.glb"));
   auto fox = loadAsset("Fox/glTF-Binary/Fox.glb");
   ASSERT_TRUE(fox.ok());
   auto field = makeAnimatedField(*fox, {.instances = 3000, .seed = 5, .spacing = 1.5});
@@ -412,7 +413,7 @@ void addTangents(Scene& scene) {
 // (two octahedral quantisations of about 5e-5 each -- the rest tangent's and the result's -- plus float
 // blending); the positions are checked against the same reference to 1e-5 of the mesh's radius.
 TEST(Skinning, TangentsMatchCpuDoubleSkinning) {
-  if (!std::filesystem::exists(assetPath("CesiumMan/glTF/CesiumMan.gltf"))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath("CesiumMan/glTF/CesiumMan.gltf"));
   auto man = loadAsset("CesiumMan/glTF/CesiumMan.gltf");
   ASSERT_TRUE(man.ok());
   addTangents(*man);
@@ -460,7 +461,7 @@ TEST(Skinning, TangentsMatchCpuDoubleSkinning) {
 // for 24 Foxes, CesiumMan, RiggedFigure, 24 AnimatedMorphCubes and 24 SparseMorphTargets cubes at 5 times each. Also prints how tight each kind is: the mean of radius / (the largest distance of the instance's
 // vertices from their AABB centre), which is 1 for the tightest sphere about that centre.
 TEST(Skinning, BoundsContainEverySkinnedVertex) {
-  if (!std::filesystem::exists(assetPath("Fox/glTF-Binary/Fox.glb"))) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(assetPath("Fox/glTF-Binary/Fox.glb"));
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   std::vector<std::pair<std::string, Scene>> scenes;
@@ -526,7 +527,7 @@ TEST(Skinning, BoundsContainEverySkinnedVertex) {
 // such pixels, max 2e-3. The normal map must matter: without it the image differs by more than 0.05.
 TEST(Skinning, NormalMappedSkinnedMeshMatchesCpuSkinning) {
   const std::string file = assetPath("CesiumMan/glTF/CesiumMan.gltf");
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared assets not present";
+  REQUIRE_ASSET(file);
   auto imported = importGltfScene(file);
   ASSERT_TRUE(imported.ok());
   auto man = buildImportedScene(*imported);

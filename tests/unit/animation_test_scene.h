@@ -7,8 +7,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
-#include "scene/animation.h"
-#include "scene/scene.h"
+#include "visbuf/scene/animation.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf::test {
 

@@ -14,10 +14,10 @@
 
 #include "test_assets.h"
 #include "temp_dir_test.h"
-#include "asset/gltf_import.h"
-#include "asset/scene_bake.h"
-#include "scene/animation.h"
-#include "scene/generate.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/scene/animation.h"
+#include "visbuf/scene/generate.h"
 
 namespace visbuf {
 namespace {

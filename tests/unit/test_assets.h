@@ -1,9 +1,12 @@
-// Where the unit tests find the team's shared glTF assets (../shared/assets, through the
-// VISBUF_SHARED_ASSETS_DIR define), and the skip when one is absent.
+// Where the tests find glTF assets: the repository's own assets/ (VISBUF_ASSETS_DIR, complete in every
+// clone), then any larger corpus named by the environment variable VISBUF_EXTRA_ASSETS (folders separated
+// by ':', e.g. ../shared/assets; scripts/test.sh sets it when that folder exists).
 #pragma once
 
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,12 +14,52 @@
 
 namespace visbuf::test {
 
-inline std::filesystem::path assetPath(const std::string& relative) {
-#ifdef VISBUF_SHARED_ASSETS_DIR
-  return std::filesystem::path(VISBUF_SHARED_ASSETS_DIR) / relative;
+// The repository's assets/ folder.
+inline std::filesystem::path repoAssetsDir() {
+#ifdef VISBUF_ASSETS_DIR
+  return std::filesystem::path(VISBUF_ASSETS_DIR);
 #else
-  return std::filesystem::path(relative);
+  return std::filesystem::path("assets");
 #endif
+}
+
+// The folders of VISBUF_EXTRA_ASSETS that exist (none when it is unset).
+inline std::vector<std::filesystem::path> extraAssetDirs() {
+  std::vector<std::filesystem::path> dirs;
+  const char* env = std::getenv("VISBUF_EXTRA_ASSETS");
+  if (!env) return dirs;
+  std::string list = env;
+  size_t start = 0;
+  while (start <= list.size()) {
+    const size_t end = std::min(list.find(':', start), list.size());
+    const std::string dir = list.substr(start, end - start);
+    if (!dir.empty() && std::filesystem::is_directory(dir)) dirs.emplace_back(dir);
+    start = end + 1;
+  }
+  return dirs;
+}
+
+// Every asset folder to sweep: assets/ first, then the extra corpora.
+inline std::vector<std::filesystem::path> assetDirs() {
+  std::vector<std::filesystem::path> dirs{repoAssetsDir()};
+  for (const auto& d : extraAssetDirs()) dirs.push_back(d);
+  return dirs;
+}
+
+// An asset of the extra corpus only (nullopt when no extra folder has it).
+inline std::optional<std::filesystem::path> extraAsset(const std::string& relative) {
+  for (const auto& d : extraAssetDirs())
+    if (std::filesystem::exists(d / relative)) return d / relative;
+  return std::nullopt;
+}
+
+// An asset by its path relative to an asset folder: assets/ when it has it, else the first extra
+// corpus that does, else the (missing) path under assets/ so that REQUIRE_ASSET names it.
+inline std::filesystem::path assetPath(const std::string& relative) {
+  const std::filesystem::path repo = repoAssetsDir() / relative;
+  if (std::filesystem::exists(repo)) return repo;
+  if (auto extra = extraAsset(relative)) return *extra;
+  return repo;
 }
 
 // Base64 (RFC 4648, padded) for the data: URIs of generated glTF fixtures.
@@ -36,9 +79,39 @@ inline std::string base64(const std::vector<uint8_t>& data) {
   return out;
 }
 
+// Registers `suite.name` only when an extra corpus has `relative` (so a clone without one runs the test
+// neither as a pass nor as a skip); the body receives the asset's path. ctest discovers the tests when it
+// runs them (DISCOVERY_MODE PRE_TEST), so VISBUF_EXTRA_ASSETS is read from ctest's environment.
+template <class Body>
+bool registerExtraAssetTest(const char* suite, const char* name, const char* relative, const char* file, int line,
+                            Body body) {
+  const std::optional<std::filesystem::path> path = extraAsset(relative);
+  if (!path) return false;
+  class ExtraAssetTest : public ::testing::Test {
+   public:
+    ExtraAssetTest(Body b, std::filesystem::path p) : body_(b), path_(std::move(p)) {}
+    void TestBody() override { body_(path_); }
+
+   private:
+    Body body_;
+    std::filesystem::path path_;
+  };
+  ::testing::RegisterTest(suite, name, nullptr, relative, file, line,
+                          [body, p = *path]() -> ::testing::Test* { return new ExtraAssetTest(body, p); });
+  return true;
+}
+
 }  // namespace visbuf::test
 
-#define REQUIRE_ASSET(path)                                                              \
-  do {                                                                                   \
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << "asset not found: " << (path);   \
+// EXTRA_ASSET_TEST(Suite, Name, "DamagedHelmet/glTF-Binary/DamagedHelmet.glb") { ... use `asset` ... }
+#define EXTRA_ASSET_TEST(suite, name, relative)                                                             \
+  static void suite##_##name##_Body(const std::filesystem::path& asset);                                    \
+  [[maybe_unused]] static const bool suite##_##name##_Registered = ::visbuf::test::registerExtraAssetTest( \
+      #suite, #name, relative, __FILE__, __LINE__, &suite##_##name##_Body);                                \
+  static void suite##_##name##_Body(const std::filesystem::path& asset)
+
+// An asset the repository ships: its absence is a broken checkout, so the test fails (never skips).
+#define REQUIRE_ASSET(path)                                                                            \
+  do {                                                                                                 \
+    if (!std::filesystem::exists(path)) FAIL() << "asset missing from the checkout's assets/: " << (path); \
   } while (0)

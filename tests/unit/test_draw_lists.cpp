@@ -4,8 +4,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "passes/transparent_pass.h"
-#include "scene/gpu_scene.h"
+#include "visbuf/passes/transparent_pass.h"
+#include "visbuf/scene/gpu_scene.h"
 
 using namespace visbuf;
 

@@ -17,8 +17,8 @@
 
 #include <glm/glm.hpp>
 
-#include "asset/gltf_import.h"
-#include "asset/scene_bake.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/scene_bake.h"
 #include "temp_dir_test.h"
 #include "test_assets.h"
 

@@ -4,7 +4,7 @@
 // must return (ok, or an Error with a message), counts printed; scripts/test.sh also runs it under ASan/UBSan.
 //
 // Seeds: two small files written here (a .glb with an indexed, skinned, morphed, animated, textured mesh, and a
-// .gltf whose buffer is a data: URI), plus a few small sample assets from VISBUF_SHARED_ASSETS_DIR when they
+// .gltf whose buffer is a data: URI), plus a few small sample assets of the repository's assets/ when they
 // are present (their external .bin files are copied next to the mutated file).
 #include <gtest/gtest.h>
 
@@ -25,10 +25,10 @@
 
 #include "test_assets.h"
 #include "temp_dir_test.h"
-#include "asset/gltf_import.h"
-#include "asset/scene_bake.h"
-#include "scene/generate.h"
-#include "scene/scene.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/scene/scene.h"
 
 namespace visbuf {
 namespace {
@@ -523,8 +523,7 @@ Counts fuzzSeed(const Seed& seed, const fs::path& dir, uint64_t rngSeed) {
 
 // A sample asset (and the external buffers its JSON names) as a seed; nullopt when it is not there.
 std::optional<Seed> assetSeed(const std::string& relative, int iterations) {
-#ifdef VISBUF_SHARED_ASSETS_DIR
-  const fs::path path = fs::path(VISBUF_SHARED_ASSETS_DIR) / relative;
+  const fs::path path = test::assetPath(relative);
   if (!fs::is_regular_file(path)) return std::nullopt;
   Seed seed;
   seed.label = path.stem().string() + (path.extension() == ".glb" ? "_glb" : "_gltf");
@@ -542,11 +541,6 @@ std::optional<Seed> assetSeed(const std::string& relative, int iterations) {
     }
   }
   return seed;
-#else
-  (void)relative;
-  (void)iterations;
-  return std::nullopt;
-#endif
 }
 
 class GltfFuzz : public test::TempDirTest {};

@@ -2,7 +2,7 @@
 //
 // Most tests write a tiny .gltf into a temporary folder: JSON built with nlohmann::json and one buffer
 // embedded as a base64 data URI, so every byte of the input is visible in the test. The tests at the end read
-// the third-party sample assets from VISBUF_SHARED_ASSETS_DIR (set by the build to <repo>/../shared/assets)
+// the third-party sample assets of the repository's assets/ (test_assets.h)
 // and skip when that is not defined or the file is missing.
 #include <gtest/gtest.h>
 #include <meshoptimizer.h>
@@ -23,7 +23,7 @@
 
 #include "test_assets.h"
 #include "temp_dir_test.h"
-#include "asset/gltf_import.h"
+#include "visbuf/asset/gltf_import.h"
 
 namespace visbuf {
 namespace {
@@ -764,21 +764,11 @@ TEST_F(GltfImportTest, MeshoptCompressedBufferViews) {
 }
 
 // --------------------------------------------------------------------------------------------------------
-// Third-party sample assets (../shared/assets)
+// Third-party sample assets (the repository's assets/)
 
-std::optional<std::string> sharedAsset(const std::string& relative) {
-#ifdef VISBUF_SHARED_ASSETS_DIR
-  const fs::path path = fs::path(VISBUF_SHARED_ASSETS_DIR) / relative;
-  if (fs::exists(path)) return path.string();
-#else
-  (void)relative;
-#endif
-  return std::nullopt;
-}
-
-#define REQUIRE_SHARED_ASSET(var, relative)                            \
-  const std::optional<std::string> var = sharedAsset(relative); \
-  if (!var) GTEST_SKIP() << "shared asset not available: " << (relative)
+#define REQUIRE_SHARED_ASSET(var, relative)                              \
+  const std::optional<std::string> var = test::assetPath(relative).string(); \
+  REQUIRE_ASSET(*var)
 
 // Every triangle's counter-clockwise normal agrees with its vertices' stored normals (flat-shaded boxes).
 void expectFlatNormalsMatchWinding(const MeshSource& m) {

@@ -15,7 +15,7 @@
 
 #include "test_assets.h"
 #include "temp_dir_test.h"
-#include "asset/gltf_import.h"
+#include "visbuf/asset/gltf_import.h"
 
 namespace visbuf {
 namespace {

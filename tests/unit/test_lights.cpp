@@ -8,10 +8,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "asset/gltf_import.h"
-#include "render/brdf_reference.h"
-#include "scene/generate.h"
-#include "scene/light.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/render/brdf_reference.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/scene/light.h"
 #include "temp_dir_test.h"
 #include "test_assets.h"
 

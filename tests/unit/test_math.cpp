@@ -8,12 +8,12 @@
 #include <filesystem>
 #include <span>
 
-#include "asset/gltf_import.h"
-#include "render/frame_math.h"
-#include "render/renderer.h"
-#include "scene/generate.h"
-#include "scene/scene.h"
-#include "shared/barycentrics.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/render/frame_math.h"
+#include "visbuf/render/renderer.h"
+#include "visbuf/scene/generate.h"
+#include "visbuf/scene/scene.h"
+#include "visbuf/shared/barycentrics.h"
 #include "test_assets.h"
 
 using namespace visbuf;
@@ -206,7 +206,7 @@ TEST(Scene, ValidationRejectsNonFiniteAndZeroScale) {
   EXPECT_NE(validateScene(bad).error().message.find("zero-scale"), std::string::npos);
 }
 
-#include "scene/mesh_error.h"
+#include "visbuf/scene/mesh_error.h"
 
 // The recorded LOD error is a real bound: every vertex of the full mesh lies within it of the level's
 // surface, checked by brute force over all triangles (independent of the grid used to measure it).

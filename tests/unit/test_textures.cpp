@@ -16,12 +16,12 @@
 
 #include "test_assets.h"
 #include "temp_dir_test.h"
-#include "asset/gltf_import.h"
-#include "asset/pack_reader.h"
-#include "asset/pack_writer.h"
-#include "asset/scene_bake.h"
-#include "asset/texture_bake.h"
-#include "core/image_io.h"
+#include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/pack_writer.h"
+#include "visbuf/asset/scene_bake.h"
+#include "visbuf/asset/texture_bake.h"
+#include "visbuf/core/image_io.h"
 
 // LeakSanitizer (sanitizer build): OpenImageIO 2.4 loses an error string allocated in ImageInput::geterror when
 // libpng aborts a corrupt PNG (about 31 bytes per corrupt file, CorruptImagesAreRejectedWithTheirName only; not
@@ -577,10 +577,10 @@ TEST(MeshBuildStreams, DifferentTangentsOrSecondUvsAreDifferentVertices) {
 
 // --- sample assets ------------------------------------------------------------------------------------
 
-TEST(GltfTextures, DamagedHelmetHasFiveTexturesWithTheRightColourSpaces) {
-  const fs::path path = assetPath("DamagedHelmet/glTF-Binary/DamagedHelmet.glb");
-  REQUIRE_ASSET(path);
-  Result<ImportedScene> imported = importGltfScene(path.string());
+// DamagedHelmet is not redistributable: this test exists only when VISBUF_EXTRA_ASSETS has it.
+EXTRA_ASSET_TEST(GltfTextures, DamagedHelmetHasFiveTexturesWithTheRightColourSpaces,
+                 "DamagedHelmet/glTF-Binary/DamagedHelmet.glb") {
+  Result<ImportedScene> imported = importGltfScene(asset.string());
   ASSERT_TRUE(imported) << imported.error().message;
   ASSERT_EQ(imported->materials.size(), 1u);
   const Material& m = imported->materials[0];

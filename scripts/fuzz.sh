@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Runs one libFuzzer target of tests/fuzz for a bounded time under ASan + UBSan (+ LeakSanitizer):
+#   scripts/fuzz.sh TARGET SECONDS      e.g. scripts/fuzz.sh fuzz_pack_reader 60
+# TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode.
+#
+# Configures and builds the clang build (build-clang/: clang, RelWithDebInfo, -Werror, ASan + UBSan, libFuzzer
+# instrumentation; the same configuration as scripts/test.sh) when needed, then fuzzes a COPY of the committed
+# seed corpus tests/fuzz/corpus/TARGET/ (new inputs are thrown away: the committed corpus never grows), with the
+# target's dictionary when there is one. Prints the executions per second and the coverage reached (libFuzzer's
+# final cov: / ft: and its -print_final_stats). Exits non-zero on any crash, sanitizer report, leak, timeout
+# (an input running past 20 s) or out-of-memory (-rss_limit_mb=2048); the crashing input is kept in
+# build-clang/fuzz/TARGET-artifacts/ and printed (base64), the full log is build-clang/fuzz/TARGET.log.
+# Reproduce a crash: build-clang/tests/fuzz/TARGET build-clang/fuzz/TARGET-artifacts/crash-...
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+usage() {
+  echo "usage: scripts/fuzz.sh TARGET SECONDS   (TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode)" >&2
+  exit 2
+}
+[ $# -eq 2 ] || usage
+target=$1
+seconds=$2
+case "$target" in
+  fuzz_gltf_import) max_len=32768 ;;   # the seeds are up to 15 KB (a skinned, animated GLB)
+  fuzz_pack_reader) max_len=32768 ;;   # the seed packs are up to 17 KB
+  fuzz_image_decode) max_len=8192 ;;   # tiny PNG / JPEG seeds; the pixel budget is in the target
+  *) usage ;;
+esac
+[[ "$seconds" =~ ^[1-9][0-9]*$ ]] || usage
+
+build=build-clang
+out=$build/fuzz
+mkdir -p "$out"
+if ! CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISBUF_WERROR=ON \
+       -DVISBUF_SANITIZE=ON -DVISBUF_FUZZ=ON >"$out/configure.log" 2>&1; then
+  cat "$out/configure.log" >&2
+  exit 1
+fi
+cmake --build "$build" -j "$(nproc)" --target "$target"
+
+corpus=$(mktemp -d "${TMPDIR:-/tmp}/visbuf-$target-corpus.XXXXXX")
+trap 'rm -rf "$corpus"' EXIT
+cp tests/fuzz/corpus/"$target"/* "$corpus"/
+seeds=$(find "$corpus" -type f | wc -l)
+dict=()
+[ -f tests/fuzz/"$target".dict ] && dict=(-dict=tests/fuzz/"$target".dict)
+artifacts=$out/$target-artifacts
+mkdir -p "$artifacts"
+log=$out/$target.log
+
+echo "== $target: ${seconds}s on a copy of tests/fuzz/corpus/$target ($seeds seeds), log $log"
+status=0
+ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 \
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 LSAN_OPTIONS=print_suppressions=0 \
+  "$build/tests/fuzz/$target" "$corpus" "${dict[@]}" -max_total_time="$seconds" -max_len="$max_len" \
+  -rss_limit_mb=2048 -timeout=20 -print_final_stats=1 -artifact_prefix="$artifacts/" >"$log" 2>&1 || status=$?
+
+# libFuzzer's last status line (#N DONE cov: ... ft: ... corp: ... exec/s: ...) and final statistics.
+grep -E '^#[0-9]+[[:space:]]+(DONE|INITED)' "$log" | tail -n 2 || true
+grep -E '^stat::' "$log" || true
+if [ "$status" -ne 0 ] || ! grep -qE '^#[0-9]+[[:space:]]+DONE' "$log"; then
+  echo "== $target FAILED (exit $status): the report, from the log:" >&2
+  grep -nE 'ERROR: |WARNING: |runtime error|deadly signal|fuzz contract violated|libFuzzer: ' "$log" | head -n 5 >&2 || true
+  tail -n 60 "$log" >&2
+  exit 1
+fi
+echo "== $target passed"

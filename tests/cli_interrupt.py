@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""A bake interrupted while it writes its pack leaves the old pack intact and no temporary file.
+
+  SIGINT, SIGTERM: the signal handler of the pack writer removes ".NAME.tmpPID.N" before the process ends
+                   with the signal; the old pack is byte-identical, and no temporary file is left.
+  SIGKILL:         no handler runs, so the temporary file stays; the old pack is byte-identical; the next bake
+                   to the same output removes it (its PID is dead), and keeps a temporary file of a live PID.
+
+The input is generated: a glTF quad with two 4096x4096 PNG textures (tiny files, one colour each), baked at
+--max-texture-size 4096 into a pack of about 180 MB, so that the temporary file exists for a while (the test
+waits for it to appear, then signals). The old pack is baked at --max-texture-size 1024, so it differs from
+what the interrupted bake would write. Should a bake finish before the signal lands, the attempt is repeated.
+
+usage: cli_interrupt.py VISBUF OUT_FOLDER
+"""
+import base64
+import hashlib
+import json
+import os
+import signal
+import struct
+import subprocess
+import sys
+import time
+import zlib
+
+ATTEMPTS = 5
+
+
+def write_png(path, width, height, rgb):
+    row = b"\x00" + bytes(rgb) * width
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+                chunk(b"IDAT", zlib.compress(row * height, 6)) + chunk(b"IEND", b""))
+
+
+def write_gltf(folder):
+    write_png(os.path.join(folder, "a.png"), 4096, 4096, (200, 100, 50))
+    write_png(os.path.join(folder, "b.png"), 4096, 4096, (20, 100, 250))
+    data = struct.pack("<12f", 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0) + struct.pack("<8f", 0, 0, 1, 0, 1, 1, 0, 1) + \
+        struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    gltf = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"name": "quad", "primitives": [
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+                       "emissiveTexture": {"index": 1}, "emissiveFactor": [1, 1, 1]}],
+        "textures": [{"source": 0}, {"source": 1}], "images": [{"uri": "a.png"}, {"uri": "b.png"}],
+        "buffers": [{"byteLength": len(data),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                        {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]},
+                      {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                      {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+    }
+    path = os.path.join(folder, "big.gltf")
+    with open(path, "w") as f:
+        json.dump(gltf, f)
+    return path
+
+
+def sha256(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def temp_files(folder, name):
+    return sorted(f for f in os.listdir(folder) if f.startswith("." + name + ".tmp"))
+
+
+def default_signals():
+    # The child starts with the default disposition whatever the test runner ignores (a shell's background
+    # jobs ignore SIGINT): the pack writer only installs its handler over the default one.
+    for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, signal.SIG_DFL)
+
+
+def main():
+    visbuf, out = sys.argv[1], sys.argv[2]
+    os.makedirs(out, exist_ok=True)
+    for f in os.listdir(out):
+        p = os.path.join(out, f)
+        if os.path.isfile(p) or os.path.islink(p):
+            os.remove(p)
+    gltf = write_gltf(out)
+    pack = os.path.join(out, "big.vbp")
+    name = os.path.basename(pack)
+    failures = []
+
+    def bake(size, extra=()):
+        return subprocess.run([visbuf, "bake", gltf, "-o", pack, "--max-texture-size", str(size), *extra],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
+
+    r = bake(1024)
+    if r.returncode != 0:
+        sys.exit(f"the first bake failed ({r.returncode}): {r.stderr}")
+    old = sha256(pack)
+
+    def interrupt(sig):
+        """Bakes at 4096 and sends `sig` once the temporary file exists; returns the temporary files seen."""
+        for attempt in range(ATTEMPTS):
+            p = subprocess.Popen([visbuf, "bake", gltf, "-o", pack, "--max-texture-size", "4096"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                 preexec_fn=default_signals)
+            seen = []
+            deadline = time.monotonic() + 300
+            while p.poll() is None and time.monotonic() < deadline:
+                seen = temp_files(out, name)
+                if seen:
+                    p.send_signal(sig)
+                    break
+                time.sleep(0.002)
+            _, err = p.communicate(timeout=300)
+            if seen and p.returncode == -sig:
+                return seen
+            if p.returncode == 0:  # finished before the signal landed: the new pack is in place; start over
+                print(f"  attempt {attempt + 1}: the bake finished before {sig.name} landed; again")
+                r = bake(1024)
+                if r.returncode != 0 or sha256(pack) != old:
+                    sys.exit(f"re-baking the old pack failed ({r.returncode}): {r.stderr}")
+                continue
+            sys.exit(f"the bake interrupted by {sig.name} ended with {p.returncode} "
+                     f"(expected {-sig}, temporary files seen: {seen}): {err}")
+        sys.exit(f"no bake could be interrupted by {sig.name} while writing in {ATTEMPTS} attempts")
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        t0 = time.monotonic()
+        seen = interrupt(sig)
+        left = temp_files(out, name)
+        if sha256(pack) != old:
+            failures.append(f"{sig.name}: the old pack changed")
+        if left:
+            failures.append(f"{sig.name}: temporary files left: {left}")
+        print(f"{sig.name}: interrupted while {seen[0]} existed; old pack intact: {sha256(pack) == old}; "
+              f"left: {left or 'nothing'} ({time.monotonic() - t0:.1f} s)")
+
+    # SIGKILL: the temporary file stays (no handler can run); the next bake removes it.
+    seen = interrupt(signal.SIGKILL)
+    left = temp_files(out, name)
+    if sha256(pack) != old:
+        failures.append("SIGKILL: the old pack changed")
+    if not left:
+        failures.append("SIGKILL: no temporary file was left (the test did not interrupt the write)")
+    print(f"SIGKILL: interrupted while {seen[0]} existed; old pack intact: {sha256(pack) == old}; left: {left}")
+    # Beside it: a temporary file of a live process (this test's own PID) must be kept; one of a dead one removed.
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    live_file = os.path.join(out, f".{name}.tmp{os.getpid()}.0")
+    dead_file = os.path.join(out, f".{name}.tmp{dead.pid}.7")
+    for f in (live_file, dead_file):
+        with open(f, "wb") as h:
+            h.write(b"partial")
+    r = bake(1024, ["--no-textures"])
+    after = temp_files(out, name)
+    if r.returncode != 0:
+        failures.append(f"the bake after SIGKILL failed ({r.returncode}): {r.stderr}")
+    if any(f in after for f in left) or os.path.basename(dead_file) in after:
+        failures.append(f"after the next bake, stale temporary files are still there: {after}")
+    if os.path.basename(live_file) not in after:
+        failures.append("the next bake removed the temporary file of a live process")
+    print(f"next bake: temporary files left: {after} (the live process's, kept)")
+    os.remove(live_file)
+
+    if failures:
+        sys.exit("cli_interrupt: " + "; ".join(failures))
+    print("cli_interrupt: ok")
+
+
+if __name__ == "__main__":
+    main()
