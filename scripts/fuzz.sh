@@ -11,6 +11,8 @@
 # (an input running past 20 s) or out-of-memory (-rss_limit_mb=2048); the crashing input is kept in
 # build-clang/fuzz/TARGET-artifacts/ and printed (base64), the full log is build-clang/fuzz/TARGET.log.
 # Reproduce a crash: build-clang/tests/fuzz/TARGET build-clang/fuzz/TARGET-artifacts/crash-...
+# FUZZ_SEED=N fixes libFuzzer's random seed (scripts/test.sh uses 1, so that CI explores the same inputs on
+# every run and a red run can be replayed); unset, every run explores from a new seed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -54,7 +56,8 @@ status=0
 ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 LSAN_OPTIONS=print_suppressions=0 \
   "$build/tests/fuzz/$target" "$corpus" "${dict[@]}" -max_total_time="$seconds" -max_len="$max_len" \
-  -rss_limit_mb=2048 -timeout=20 -print_final_stats=1 -artifact_prefix="$artifacts/" >"$log" 2>&1 || status=$?
+  -rss_limit_mb=2048 -timeout=20 -print_final_stats=1 -artifact_prefix="$artifacts/" ${FUZZ_SEED:+-seed="$FUZZ_SEED"} \
+  >"$log" 2>&1 || status=$?
 
 # libFuzzer's last status line (#N DONE cov: ... ft: ... corp: ... exec/s: ...) and final statistics.
 grep -E '^#[0-9]+[[:space:]]+(DONE|INITED)' "$log" | tail -n 2 || true

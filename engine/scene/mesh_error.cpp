@@ -64,8 +64,12 @@ TriangleGrid::TriangleGrid(std::span<const glm::vec3> positions, std::span<const
 }
 
 glm::ivec3 TriangleGrid::cellOf(const glm::dvec3& p) const {
-  glm::ivec3 c = glm::ivec3(glm::floor((p - origin_) / cell_));
-  return glm::clamp(c, glm::ivec3(0), dims_ - 1);
+  // Clamped in double before the conversion: a point far outside the grid (a simplified mesh's vertex on a
+  // huge input, found by fuzz_gltf_import) gives a cell index beyond int, and converting it is undefined.
+  const glm::dvec3 f = glm::floor((p - origin_) / cell_);
+  glm::ivec3 c;
+  for (int k = 0; k < 3; ++k) c[k] = f[k] >= 0.0 ? int(std::min(f[k], double(dims_[k] - 1))) : 0;  // NaN -> 0
+  return c;
 }
 
 double TriangleGrid::distance(const glm::dvec3& p) const {

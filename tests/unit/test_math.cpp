@@ -240,6 +240,20 @@ TEST(MeshError, PointTriangleDistanceRegions) {
   EXPECT_NEAR(pointTriangleDistance({1, 1, 0}, a, b, c), std::sqrt(0.5), 1e-12);  // edge bc
 }
 
+// A point far outside the grid (1e16 cells away: its cell index is beyond int) is clamped to the grid's edge
+// in double, not converted out of range (undefined; found by fuzz_gltf_import, caught by UBSan), and its
+// distance is still exact against the double-precision point-triangle distance.
+TEST(MeshError, GridDistanceFarOutsideTheGrid) {
+  const std::vector<glm::vec3> positions{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  const std::vector<uint32_t> indices{0, 1, 2, 1, 3, 2};
+  const TriangleGrid grid(positions, indices);
+  for (const glm::dvec3 p : {glm::dvec3(3e16, 0.5, 0.0), glm::dvec3(-3e16, -2e16, 5.0), glm::dvec3(0.5, 0.5, 1e17)}) {
+    const double exact = std::min(pointTriangleDistance(p, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}),
+                                  pointTriangleDistance(p, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}));
+    EXPECT_DOUBLE_EQ(grid.distance(p), exact);
+  }
+}
+
 // Slivers: triangles 1000x longer than wide, seen in perspective. The reconstruction must stay close to
 // the double-precision solve where a pixel centre actually lies inside.
 TEST(Barycentrics, SliverTrianglesStayAccurate) {
