@@ -96,7 +96,7 @@ bool registerExtraAssetTest(const char* suite, const char* name, const char* rel
     Body body_;
     std::filesystem::path path_;
   };
-  ::testing::RegisterTest(suite, name, nullptr, relative, file, line,
+  ::testing::RegisterTest(suite, name, nullptr, nullptr, file, line,
                           [body, p = *path]() -> ::testing::Test* { return new ExtraAssetTest(body, p); });
   return true;
 }
