@@ -1,7 +1,6 @@
 // Pack writer: serialise every section into memory, lay them out 16-byte aligned, checksum, write atomically.
 #include "visbuf/asset/pack_writer.h"
 
-#include <dirent.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/stat.h>
@@ -11,19 +10,16 @@
 #include <atomic>
 #include <bit>
 #include <cerrno>
-#include <climits>
 #include <cmath>
-#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <limits>
-#include <mutex>
-#include <string_view>
 #include <utility>
 
 #include "visbuf/asset/pack_animation.h"
 #include "visbuf/asset/pack_format.h"
 #include "visbuf/core/image_io.h"
+#include "visbuf/core/temp_file.h"
 
 namespace visbuf {
 
@@ -497,131 +493,6 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
 Status writePack(const Scene& scene, const std::string& path, PackWriteReport* report) {
   return writePack(scene, path, PackWriteOptions{}, report);
 }
-
-namespace {
-
-// ---- temporary files: removed on SIGINT / SIGTERM / SIGHUP, and when a dead writer left them -----------------
-
-// The temporary files being written, for the signal handler: fixed buffers, so that the handler neither
-// allocates nor locks (async-signal-safe: it only reads lock-free atomics and calls unlink, signal, raise).
-// One slot per concurrent writer of this process; state 0 free, 1 being filled, 2 active (unlinked on a signal).
-constexpr int kTempSlots = 8;
-struct TempSlot {
-  std::atomic<int> state{0};
-  char path[PATH_MAX];
-};
-TempSlot gTempSlots[kTempSlots];
-static_assert(std::atomic<int>::is_always_lock_free, "the signal handler reads the slots' state");
-
-constexpr int kCleanupSignals[] = {SIGINT, SIGTERM, SIGHUP};
-constexpr size_t kSignalCount = sizeof(kCleanupSignals) / sizeof(kCleanupSignals[0]);
-
-extern "C" void removeTempFilesOnSignal(int sig) {
-  const int savedErrno = errno;
-  for (TempSlot& slot : gTempSlots)
-    if (slot.state.load() == 2) ::unlink(slot.path);
-  // Then the signal's own default action (the process ends as the signal asked, exit status 128 + sig): the
-  // signal is blocked while this handler runs, so it is delivered again as soon as the handler returns.
-  ::signal(sig, SIG_DFL);
-  ::raise(sig);
-  errno = savedErrno;
-}
-
-// The handler is installed while at least one pack is being written, and only for signals whose disposition
-// is the default one: a host's own handler, or SIG_IGN, is left alone (and the host then owns the cleanup).
-std::mutex gHandlerMutex;
-int gWriters = 0;
-struct sigaction gPrevious[kSignalCount];
-bool gInstalled[kSignalCount] = {};
-
-class TempFileGuard {
- public:
-  // Registers `path` (before the file is created, so that no instant exists where it is on disk unregistered).
-  explicit TempFileGuard(const std::string& path) {
-    {
-      std::lock_guard<std::mutex> lock(gHandlerMutex);
-      if (gWriters++ == 0) {
-        for (size_t i = 0; i < kSignalCount; ++i) {
-          struct sigaction current {};
-          gInstalled[i] = false;
-          if (::sigaction(kCleanupSignals[i], nullptr, &current) != 0) continue;
-          if ((current.sa_flags & SA_SIGINFO) != 0 || current.sa_handler != SIG_DFL) continue;
-          struct sigaction ours {};
-          ours.sa_handler = removeTempFilesOnSignal;
-          sigemptyset(&ours.sa_mask);
-          for (int other : kCleanupSignals) sigaddset(&ours.sa_mask, other);  // one handler run at a time
-          ours.sa_flags = 0;
-          if (::sigaction(kCleanupSignals[i], &ours, &gPrevious[i]) == 0) gInstalled[i] = true;
-        }
-      }
-    }
-    if (path.size() >= PATH_MAX) return;  // (open() would fail with ENAMETOOLONG anyway)
-    for (TempSlot& slot : gTempSlots) {
-      int expected = 0;
-      if (slot.state.compare_exchange_strong(expected, 1)) {
-        std::memcpy(slot.path, path.c_str(), path.size() + 1);
-        slot.state.store(2);
-        slot_ = &slot;
-        break;
-      }
-    }
-  }
-  ~TempFileGuard() {
-    if (slot_) slot_->state.store(0);
-    std::lock_guard<std::mutex> lock(gHandlerMutex);
-    if (--gWriters == 0) {
-      for (size_t i = 0; i < kSignalCount; ++i) {
-        if (!gInstalled[i]) continue;
-        struct sigaction current {};
-        // Restored only where ours is still installed (a host may have installed its own meanwhile).
-        if (::sigaction(kCleanupSignals[i], nullptr, &current) == 0 && (current.sa_flags & SA_SIGINFO) == 0 &&
-            current.sa_handler == removeTempFilesOnSignal)
-          ::sigaction(kCleanupSignals[i], &gPrevious[i], nullptr);
-        gInstalled[i] = false;
-      }
-    }
-  }
-  TempFileGuard(const TempFileGuard&) = delete;
-  TempFileGuard& operator=(const TempFileGuard&) = delete;
-
- private:
-  TempSlot* slot_ = nullptr;
-};
-
-// Removes the ".<name>.tmp<pid>.<n>" files next to `target` that a writer which no longer exists left behind
-// (killed with SIGKILL, or by a crash or power loss, where no handler runs): regular files of this user whose
-// <pid> is no live process (kill(pid, 0) fails with ESRCH). Files of live processes, of other users (kill:
-// EPERM), and of this process are kept. Best effort: errors are ignored.
-void removeStaleTempFiles(const std::filesystem::path& target) {
-  const std::filesystem::path folder = target.parent_path().empty() ? std::filesystem::path(".") : target.parent_path();
-  const std::string prefix = "." + target.filename().string() + ".tmp";
-  DIR* dir = ::opendir(folder.c_str());
-  if (!dir) return;
-  const pid_t self = ::getpid();
-  while (const dirent* entry = ::readdir(dir)) {
-    const std::string_view name(entry->d_name);
-    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-    // <pid>.<n>: decimal digits, a dot, decimal digits, nothing else.
-    size_t i = prefix.size();
-    long long pid = 0;
-    size_t digits = 0;
-    for (; i < name.size() && name[i] >= '0' && name[i] <= '9' && digits < 10; ++i, ++digits)
-      pid = pid * 10 + (name[i] - '0');
-    if (digits == 0 || i >= name.size() || name[i] != '.') continue;
-    size_t counterDigits = 0;
-    for (++i; i < name.size() && name[i] >= '0' && name[i] <= '9'; ++i) ++counterDigits;
-    if (counterDigits == 0 || i != name.size()) continue;
-    if (pid <= 0 || pid > std::numeric_limits<pid_t>::max() || pid_t(pid) == self) continue;
-    if (!(::kill(pid_t(pid), 0) == -1 && errno == ESRCH)) continue;  // alive (or not ours to judge)
-    struct stat st {};
-    if (::fstatat(::dirfd(dir), entry->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
-    if (!S_ISREG(st.st_mode) || st.st_uid != ::geteuid()) continue;
-    ::unlinkat(::dirfd(dir), entry->d_name, 0);
-  }
-  ::closedir(dir);
-}
-
-}  // namespace
 
 Status writePack(const Scene& scene, const std::string& path, const PackWriteOptions& options,
                  PackWriteReport* report) {
