@@ -81,7 +81,7 @@ struct Rendered {
 
 // Renders one frame of `scene` with LOD off and IDs (and optionally attributes) read back.
 Result<Rendered> renderOnce(gpu::Device& device, const Scene& scene, const Camera& camera, uint32_t w, uint32_t h,
-                            bool attributes, RendererConfig config = {}) {
+                            bool attributes, RendererConfig config = {}, SwRasterMode swRaster = SwRasterMode::Auto) {
   config.width = w;
   config.height = h;
   auto r = Renderer::create(device, scene, config);
@@ -90,6 +90,7 @@ Result<Rendered> renderOnce(gpu::Device& device, const Scene& scene, const Camer
   fo.readIds = true;
   fo.readAttributes = attributes;
   fo.lodErrorPixels = 0.0f;
+  fo.swRaster = swRaster;
   auto f = (*r)->renderFrame(camera, fo);
   if (!f) return f.error();
   return Rendered{std::move(*r), std::move(*f)};
@@ -495,6 +496,11 @@ StressCase capacity(const StressContext& ctx) {
   auto ref = renderOnce(ctx.device, *s, s->defaultCamera, w, h, false);
   if (!ref) return c.rows.push_back(errorRow("reference", ref.error())), c;
   const uint32_t cap = std::max<uint32_t>(1, ref->frame.stats.drawsRendered / 10);
+  // A capped draw list never uses the micro-raster (FrameOptions::swRaster): the capped frames are compared
+  // with a reference from the hardware raster alone, so that a pixel where the two rasterisers break a tie
+  // differently (about 1 pixel in 1 of 6 runs, on whichever objects survive the cap) is not counted as wrong.
+  auto refHw = renderOnce(ctx.device, *s, s->defaultCamera, w, h, false, {}, SwRasterMode::Off);
+  if (!refHw) return c.rows.push_back(errorRow("reference (hardware raster)", refHw.error())), c;
   for (CullMode mode : {CullMode::None, CullMode::Frustum, CullMode::Occlusion}) {
     const std::string label = fmt::format("capacity {} ({}), cull {}", cap, "10% of the visible set",
                                           cullModeName(mode));
@@ -516,9 +522,9 @@ StressCase capacity(const StressContext& ctx) {
     for (uint32_t o : f->drawnObjects) drawn[o] = true;
     size_t invalid = 0, wrong = 0, vanished = 0;
     for (size_t i = 0; i < size_t(w) * h; ++i) {
-      const uint32_t got = f->ids[2 * i], want = ref->frame.ids[2 * i];
+      const uint32_t got = f->ids[2 * i], want = refHw->frame.ids[2 * i];
       if (got == 0xFFFFFFFFu || (got != 0 && !drawn[got - 1])) ++invalid;
-      if (want != 0 && drawn[want - 1] && (got != want || f->ids[2 * i + 1] != ref->frame.ids[2 * i + 1])) ++wrong;
+      if (want != 0 && drawn[want - 1] && (got != want || f->ids[2 * i + 1] != refHw->frame.ids[2 * i + 1])) ++wrong;
       if (want != 0 && !drawn[want - 1]) ++vanished;
     }
     const FrameStats& st = f->stats;
