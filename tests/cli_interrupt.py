@@ -13,36 +13,22 @@ what the interrupted bake would write. Should a bake finish before the signal la
 
 usage: cli_interrupt.py VISBUF OUT_FOLDER
 """
-import base64
 import hashlib
 import json
 import os
 import signal
-import struct
 import subprocess
 import sys
 import time
-import zlib
+
+from gltf_fixtures import quad_buffers, write_png
 
 ATTEMPTS = 5
-
-
-def write_png(path, width, height, rgb):
-    row = b"\x00" + bytes(rgb) * width
-
-    def chunk(kind, data):
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress(row * height, 6)) + chunk(b"IEND", b""))
 
 
 def write_gltf(folder):
     write_png(os.path.join(folder, "a.png"), 4096, 4096, (200, 100, 50))
     write_png(os.path.join(folder, "b.png"), 4096, 4096, (20, 100, 250))
-    data = struct.pack("<12f", 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0) + struct.pack("<8f", 0, 0, 1, 0, 1, 1, 0, 1) + \
-        struct.pack("<6H", 0, 1, 2, 0, 2, 3)
     gltf = {
         "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
         "meshes": [{"name": "quad", "primitives": [
@@ -50,15 +36,7 @@ def write_gltf(folder):
         "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
                        "emissiveTexture": {"index": 1}, "emissiveFactor": [1, 1, 1]}],
         "textures": [{"source": 0}, {"source": 1}], "images": [{"uri": "a.png"}, {"uri": "b.png"}],
-        "buffers": [{"byteLength": len(data),
-                     "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                        {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                        {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-                       "min": [0, 0, 0], "max": [1, 1, 0]},
-                      {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-                      {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+        **quad_buffers(),
     }
     path = os.path.join(folder, "big.gltf")
     with open(path, "w") as f:

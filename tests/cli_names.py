@@ -8,14 +8,13 @@ name must appear escaped as \\xNN (one per byte); plain UTF-8 names are printed 
 
 usage: cli_names.py VISBUF OUT_FOLDER
 """
-import base64
 import json
 import os
 import re
-import struct
 import subprocess
 import sys
-import zlib
+
+from gltf_fixtures import quad_buffers, write_png
 
 MESH = "evil\u001b[31m\nmesh"
 MESH_ESCAPED = r"evil\x1b[31m\x0amesh"
@@ -32,19 +31,8 @@ FILE = "n\u001b[1m.gltf"
 FILE_ESCAPED = r"n\x1b[1m.gltf"
 
 
-def write_png(path, width, height, rgb):
-    def chunk(kind, data):
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress((b"\x00" + bytes(rgb) * width) * height)) + chunk(b"IEND", b""))
-
-
 def write_gltf(folder):
     write_png(os.path.join(folder, "t.png"), 4, 4, (10, 200, 30))
-    data = struct.pack("<12f", 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0) + struct.pack("<8f", 0, 0, 1, 0, 1, 1, 0, 1) + \
-        struct.pack("<6H", 0, 1, 2, 0, 2, 3)
     triangles = {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}
     points = {"attributes": {"POSITION": 0}, "mode": 0}  # skipped with a warning naming the mesh
     gltf = {
@@ -58,15 +46,7 @@ def write_gltf(folder):
         "materials": [{"name": MATERIAL, "alphaMode": ALPHA,  # unknown alphaMode: a warning naming both
                        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
         "textures": [{"source": 0}], "images": [{"uri": "t.png", "name": IMAGE}],
-        "buffers": [{"byteLength": len(data),
-                     "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                        {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                        {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-                       "min": [0, 0, 0], "max": [1, 1, 0]},
-                      {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-                      {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+        **quad_buffers(),
     }
     path = os.path.join(folder, FILE)
     with open(path, "w", encoding="utf-8") as f:
