@@ -1,12 +1,13 @@
 #version 460
 // Tiled light culling: one thread per LIGHT_TILE_SIZE^2 screen tile (8x8 tiles per workgroup). The thread
 // takes the tile's depth bounds from the nearest and farthest *covered* pixel of the visibility depth
-// (background pixels are never shaded), then walks every point light in ascending index and appends those
-// whose sphere of influence (its range, where the glTF window reaches zero) overlaps the tile's frustum between
-// those bounds, so the shading loop sums in the same order as the all-lights loop. Conservative: the side
-// planes pass through the tile's pixel edges, and the radius and the depth bounds are widened by a relative
-// 1e-4 (float rounding of the planes, the depth and the shading pass's reconstructed position). Lights beyond
-// LIGHTS_PER_TILE are dropped and counted in the header.
+// (background pixels are never shaded), then walks every KHR_lights_punctual light in ascending index and
+// appends those whose sphere of influence (its range, where the glTF window reaches zero) overlaps the tile's
+// frustum between those bounds (directional lights and lights of infinite range: every covered tile), so the
+// shading loop sums in the same order as the all-lights loop. Conservative: the side planes pass through the
+// tile's pixel edges, and the radius and the depth bounds are widened by a relative 1e-4 (float rounding of
+// the planes, the depth and the shading pass's reconstructed position). Lights beyond LIGHTS_PER_TILE are
+// dropped and counted in the header.
 //
 // One thread per tile rather than one workgroup: on lavapipe a workgroup barrier costs microseconds (its
 // invocations run as fibres), and a barrier-free serial walk vectorises across neighbouring tiles, which all
@@ -65,7 +66,9 @@ void main() {
   uint count = 0u;
   for (uint i = 0u; i < frame.pointLightCount; ++i) {
     vec4 pr = pointLights[i].positionRange;
-    bool inside = pr.w <= 0.0;  // infinite range: every tile
+    // Infinite range and directional lights: every tile. A spot light is culled by its range sphere, which
+    // contains its cone.
+    bool inside = pr.w <= 0.0 || pointLights[i].type == LIGHT_DIRECTIONAL;
     if (!inside) {
       vec3 c = (frame.view * vec4(pr.xyz + frame.cameraOffset.xyz, 1.0)).xyz;
       float r = pr.w * (1.0 + 1e-4) + 1e-4 * (abs(c.x) + abs(c.y) + abs(c.z));

@@ -5,9 +5,10 @@
 // BRDF: glTF 2.0 metallic-roughness (glTF 2.0 specification, appendix B): Trowbridge-Reitz/GGX D, Smith
 // height-correlated visibility V, Schlick Fresnel F, Lambertian diffuse (1 - F) c_diff / pi, alpha =
 // roughness^2. Lights: the scene's directional light (FrameData.lightDir: direction towards the light,
-// intensity in w) and KHR_lights_punctual point lights (inverse-square falloff windowed to zero at the
-// range). Plus a uniform ambient environment AMBIENT_RADIANCE x (c_diff + f0), scaled by occlusion, and the
-// emissive radiance. engine/render/brdf_reference.cpp is the double-precision CPU twin the tests compare with.
+// intensity in w) and KHR_lights_punctual point and spot lights (inverse-square falloff windowed to zero at the
+// range; spot: times the cone attenuation) and directional lights (engine/scene/light.h). Plus a uniform
+// ambient environment AMBIENT_RADIANCE x (c_diff + f0), scaled by occlusion, and the emissive radiance.
+// engine/render/brdf_reference.cpp is the double-precision CPU twin the tests compare with.
 #ifndef VISBUF_LIGHTING_GLSL
 #define VISBUF_LIGHTING_GLSL
 
@@ -60,8 +61,13 @@ vec3 brdfCosine(Surface s, vec3 v, vec3 l) {
   return ((vec3(1.0) - f) * cDiff / kPi + f * (d * vis)) * ndotl;
 }
 
-// One point light's reflected radiance (exactly zero beyond the light's range: the tiled lists rely on it).
+// One KHR_lights_punctual light's reflected radiance. Point and spot lights: exactly zero beyond the light's
+// range (the tiled lists rely on it); a spot light is the point light's radiance times the extension's smooth
+// cone attenuation of cd = dot(direction, -l). Directional: illuminance along -direction, no falloff. The point
+// light's arithmetic is its own branch, so adding the other types does not change a point light's rounding.
 vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
+  if (light.type == LIGHT_DIRECTIONAL)
+    return brdfCosine(s, v, -light.direction.xyz) * light.colorIntensity.rgb * light.colorIntensity.w;
   vec3 toLight = light.positionRange.xyz + frame.cameraOffset.xyz - s.position;
   float d2 = max(dot(toLight, toLight), 1e-12);
   float range = light.positionRange.w;
@@ -73,6 +79,11 @@ vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
     if (window <= 0.0) return vec3(0.0);
   }
   vec3 l = toLight * inversesqrt(d2);
+  if (light.type == LIGHT_SPOT) {
+    float cone = clamp(dot(light.direction.xyz, -l) * light.angleScale + light.angleOffset, 0.0, 1.0);
+    window *= cone * cone;
+    if (window <= 0.0) return vec3(0.0);
+  }
   return brdfCosine(s, v, l) * light.colorIntensity.rgb * (light.colorIntensity.w * window / d2);
 }
 

@@ -174,6 +174,9 @@ Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
     bool second = ((ns.samplerBits >> TEXTURE_SAMPLER_TEXCOORD_SHIFT) & 0xffu) == 1u;
     if (tangentFrame(si, n, second, t, b)) {
       vec3 tn = texel[TEXTURE_SLOT_NORMAL].xyz * 2.0 - 1.0;
+      // A two-channel (BC5) normal map stores x and y of a unit vector: z is rebuilt before the normal scale.
+      if ((ns.samplerBits & TEXTURE_SAMPLER_TWO_CHANNEL) != 0u)
+        tn.z = sqrt(max(0.0, 1.0 - tn.x * tn.x - tn.y * tn.y));
       tn.xy *= m.emissive.w;  // normal scale
       vec3 mapped = side * (t * tn.x + b * tn.y + n * tn.z);
       n = dot(mapped, mapped) > 0.0 ? normalize(mapped) : side * n;

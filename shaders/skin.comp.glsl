@@ -79,10 +79,9 @@ void main() {
 }
 #else
 
-struct SkinVertexData {  // scene/skin_vertex.h: 4 x uint16 joints, 4 x float weights (24 bytes)
-  uint joints01;
-  uint joints23;
-  float w0, w1, w2, w3;
+struct SkinVertexData {  // scene/skin_vertex.h: 8 x uint16 joints, 8 x float weights (48 bytes)
+  uint joints[4];         // two 16-bit joint indices each, slot 2k in the low half
+  float weights[8];
 };
 
 layout(std430, set = 0, binding = SKIN_BINDING_VERTICES) readonly buffer VertexBlock0 { Vertex vertices0[]; };
@@ -130,15 +129,17 @@ void main() {
   if (v >= si.vertexCount) return;
   Vertex rest = loadVertex(si.sourceVertex + v);
   SkinVertexData s = skin[si.skinVertex + v];
-  uint j[4] = uint[](s.joints01 & 0xFFFFu, s.joints01 >> 16, s.joints23 & 0xFFFFu, s.joints23 >> 16);
-  float w[4] = float[](s.w0, s.w1, s.w2, s.w3);
+  // All 8 influences (glTF JOINTS_0/1, WEIGHTS_0/1) in slot order; slots of weight 0 (every slot past the 4th
+  // of a 4-influence mesh) fetch no joint.
   vec4 r0 = vec4(0.0), r1 = vec4(0.0), r2 = vec4(0.0);
-  for (int i = 0; i < 4; ++i) {
-    if (w[i] == 0.0) continue;
-    uint base = 3u * (si.firstJoint + j[i]);
-    r0 += w[i] * jointRows[base];
-    r1 += w[i] * jointRows[base + 1u];
-    r2 += w[i] * jointRows[base + 2u];
+  for (int i = 0; i < 8; ++i) {
+    float w = s.weights[i];
+    if (w == 0.0) continue;
+    uint j = (s.joints[i >> 1] >> (16u * uint(i & 1))) & 0xFFFFu;
+    uint base = 3u * (si.firstJoint + j);
+    r0 += w * jointRows[base];
+    r1 += w * jointRows[base + 1u];
+    r2 += w * jointRows[base + 2u];
   }
   vec4 p = vec4(rest.px, rest.py, rest.pz, 1.0);
   vec3 n = octDecode(rest.normal);

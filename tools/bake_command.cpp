@@ -1,7 +1,9 @@
 // visbuf bake: glTF 2.0 -> pack (engine/asset/pack_format.h). Import keeps the node hierarchy as instances
 // (importGltfScene), every mesh is optimised with its LOD chain (buildImportedScene -> buildMesh), the scene
-// is framed by a default camera, the materials' images are baked into size classes with mip chains
-// (bakeTextures; skipped with --no-textures), and the pack is written atomically (writePack: temporary file +
+// is framed by a default camera, the materials' images are baked into size classes with mip chains, block-
+// compressed by default (bakeTextures, on other threads while the meshes are built; --textures rgba8 stores them
+// uncompressed, --texture-quality picks the BC colour fit; skipped with --no-textures), and the pack is written
+// atomically (writePack: temporary file +
 // rename). --quantize stores 20-byte quantised vertices (PackWriteOptions::quantize); the summary then reports
 // the measured position / normal / uv error and the bytes saved, and the LOD errors as recorded (quantisation
 // error included).
@@ -11,13 +13,17 @@
 // output that is the input itself -- both checked before any work; the old OUT, if any, is untouched); 2 usage
 // (option values out of range, refused by the option validators with the option's name).
 #include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/task_group.h>
 #include <unistd.h>
 
 #include <bit>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "visbuf/asset/gltf_import.h"
@@ -52,6 +58,15 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
       ->check(powerOfTwo(16384))
       ->capture_default_str();
   sub->add_flag("--no-textures", c.noTextures, "do not bake texture pixels (materials keep their references)");
+  sub->add_option("--textures", c.textures,
+                  "texture storage: bc (block-compressed: BC1 colour, BC3 colour with alpha, BC4 occlusion, BC5 "
+                  "normal maps) or rgba8 (uncompressed, 4 bytes a texel)")
+      ->check(CLI::IsMember({"bc", "rgba8"}))
+      ->capture_default_str();
+  sub->add_option("--texture-quality", c.textureQuality,
+                  "BC colour fit: fast (range fit), normal (cluster fit, ~5x slower), high (iterative cluster fit)")
+      ->check(CLI::IsMember({"fast", "normal", "high"}))
+      ->capture_default_str();
   sub->add_option("--allow-uri-root", c.allowUriRoots,
                   "also let the glTF's buffer / image uris point into this folder (repeatable; by default only "
                   "files inside the glTF's own folder are read: docs/security.md)")
@@ -61,6 +76,10 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
   sub->add_option("--json", c.json, "also write the summary as JSON");
+  sub->add_option("--threads", c.threads,
+                  "threads building meshes and textures (0: all cores); the pack is the same byte for byte at any count")
+      ->check(unsignedIn(0, 4096))
+      ->capture_default_str();
 }
 
 namespace {
@@ -90,6 +109,7 @@ class Progress {
   Progress() : tty_(isatty(STDERR_FILENO) != 0) {}
   // `stage` names what was done: "built mesh", "baked texture".
   void update(const char* stage, size_t done, size_t total, const std::string& what) {
+    std::lock_guard<std::mutex> lock(mutex_);  // meshes and textures are baked at the same time
     const auto now = Clock::now();
     if (done < total && now - last_ < std::chrono::milliseconds(250)) return;
     last_ = now;
@@ -100,6 +120,7 @@ class Progress {
 
  private:
   bool tty_;
+  std::mutex mutex_;
   Clock::time_point last_{};
 };
 
@@ -111,16 +132,21 @@ void printTextureSummary(const Scene& scene, const TextureBakeReport& report, bo
     std::printf("  textures: not baked (--no-textures)\n");
     return;
   }
-  std::printf("  textures: %zu in %zu size class(es), %llu bytes with mips\n", scene.textures.size(),
-              scene.textureClasses.size(), static_cast<unsigned long long>(report.texelBytes));
-  json["textures"] = {
-      {"count", scene.textures.size()}, {"bytes", report.texelBytes}, {"classes", nlohmann::json::array()}};
+  std::printf("  textures: %zu in %zu size class(es), %llu bytes with mips (%llu as RGBA8)\n", scene.textures.size(),
+              scene.textureClasses.size(), static_cast<unsigned long long>(report.texelBytes),
+              static_cast<unsigned long long>(report.rgba8Bytes));
+  json["textures"] = {{"count", scene.textures.size()},
+                      {"bytes", report.texelBytes},
+                      {"rgba8Bytes", report.rgba8Bytes},
+                      {"classes", nlohmann::json::array()}};
   for (size_t i = 0; i < scene.textureClasses.size(); ++i) {
     const TextureClass& cls = scene.textureClasses[i];
-    std::printf("    class %zu: %ux%u %s, %u layer(s), %u mips, %zu bytes\n", i, cls.size, cls.size,
-                colorSpaceName(cls.colorSpace), cls.layers, cls.mipCount, cls.texels.size());
+    std::printf("    class %zu: %ux%u %s %s, %u layer(s), %u mips, %zu bytes\n", i, cls.size, cls.size,
+                colorSpaceName(cls.colorSpace), textureFormatName(cls.format), cls.layers, cls.mipCount,
+                cls.texels.size());
     json["textures"]["classes"].push_back({{"size", cls.size},
                                            {"srgb", cls.colorSpace == ColorSpace::Srgb},
+                                           {"format", textureFormatName(cls.format)},
                                            {"layers", cls.layers},
                                            {"mips", cls.mipCount},
                                            {"bytes", cls.texels.size()}});
@@ -137,6 +163,10 @@ int runBake(const BakeCommand& c) {
   if (c.lodMinTriangles < 1) return badValue("--lod-min-triangles must be at least 1");
   if (c.maxTextureSize < 1 || c.maxTextureSize > 16384 || !std::has_single_bit(c.maxTextureSize))
     return badValue(fmt::format("--max-texture-size {}: must be a power of two in 1..16384", c.maxTextureSize));
+  if (c.textures != "bc" && c.textures != "rgba8")
+    return badValue(fmt::format("--textures '{}': must be bc or rgba8", c.textures));
+  if (c.textureQuality != "fast" && c.textureQuality != "normal" && c.textureQuality != "high")
+    return badValue(fmt::format("--texture-quality '{}': must be fast, normal or high", c.textureQuality));
   // The output paths before any work (bad input, exit 1): their folders exist and are writable (nothing is
   // created yet), and neither is the input itself (also through a symlink or a hard link).
   if (Status s = checkOutputFile("-o", c.output); !s) return badInput(s.error());
@@ -175,28 +205,50 @@ int runBake(const BakeCommand& c) {
   MeshBuildOptions options;
   options.maxLods = c.lodCount;
   options.minTriangles = c.lodMinTriangles;
+  // --threads: limits every oneTBB algorithm of this bake (mesh builds, texture bakes) while it lives; 0 keeps
+  // oneTBB's default (all cores). The pack does not depend on it (buildImportedScene keeps the mesh order).
+  std::optional<tbb::global_control> threadLimit;
+  if (c.threads > 0) threadLimit.emplace(tbb::global_control::max_allowed_parallelism, size_t{c.threads});
   Progress progress;
+  // Textures bake beside the meshes (they only read the import): on their own scene, whose materials are the
+  // imported ones the build copies, so only the references' `baked` indices and the textures move across.
+  Scene textureScene;
+  textureScene.materials = imported->materials;
+  TextureBakeReport textureReport;
+  Status textureStatus;
+  double textureSeconds = 0.0;
+  tbb::task_group textureTask;
+  if (!c.noTextures) {
+    textureTask.run([&] {
+      const auto textureStart = Clock::now();
+      TextureBakeOptions textureOptions;
+      textureOptions.maxTextureSize = c.maxTextureSize;
+      textureOptions.maxImagePixels = c.maxImagePixels;
+      textureOptions.encoding = c.textures == "rgba8" ? TextureEncoding::Rgba8 : TextureEncoding::Bc;
+      textureOptions.quality = c.textureQuality == "high"     ? TextureQuality::High
+                               : c.textureQuality == "normal" ? TextureQuality::Normal
+                                                              : TextureQuality::Fast;
+      textureStatus = bakeTextures(*imported, textureOptions, &textureScene, &textureReport,
+                                   [&](size_t done, size_t total, const std::string& name) {
+                                     progress.update("baked texture", done, total, name);
+                                   });
+      textureSeconds = secondsSince(textureStart);
+    });
+  }
   const auto buildStart = Clock::now();
   Result<Scene> scene = buildImportedScene(
       *imported, options,
       [&](size_t done, size_t total, const std::string& mesh) { progress.update("built mesh", done, total, mesh); });
-  if (!scene) return badInput(scene.error());
   const double buildSeconds = secondsSince(buildStart);
-
-  const auto textureStart = Clock::now();
-  TextureBakeReport textureReport;
-  if (!c.noTextures) {
-    TextureBakeOptions textureOptions;
-    textureOptions.maxTextureSize = c.maxTextureSize;
-    textureOptions.maxImagePixels = c.maxImagePixels;
-    Status baked = bakeTextures(*imported, textureOptions, &scene.value(), &textureReport,
-                                [&](size_t done, size_t total, const std::string& name) {
-                                  progress.update("baked texture", done, total, name);
-                                });
-    for (const std::string& note : textureReport.notes) std::fprintf(stderr, "bake: resized %s\n", printable(note).c_str());
-    if (!baked) return badInput(baked.error());
+  textureTask.wait();
+  if (!scene) return badInput(scene.error());
+  for (const std::string& note : textureReport.notes) std::fprintf(stderr, "bake: resized %s\n", printable(note).c_str());
+  if (!textureStatus) return badInput(textureStatus.error());
+  if (!c.noTextures && !imported->materials.empty()) {
+    scene->materials = std::move(textureScene.materials);
+    scene->textures = std::move(textureScene.textures);
+    scene->textureClasses = std::move(textureScene.textureClasses);
   }
-  const double textureSeconds = secondsSince(textureStart);
 
   std::fprintf(stderr, "bake: writing %s\n", printable(c.output).c_str());
   const auto writeStart = Clock::now();
@@ -285,7 +337,8 @@ int runBake(const BakeCommand& c) {
   } else {
     json["quantization"] = nullptr;
   }
-  std::printf("  time: import %.3f s, build %.3f s, textures %.3f s, write %.3f s, total %.3f s\n", importSeconds,
+  std::printf("  time: import %.3f s, build %.3f s, textures %.3f s (beside the build), write %.3f s, total %.3f s\n",
+              importSeconds,
               buildSeconds, textureSeconds, writeSeconds, totalSeconds);
   json["objects"] = scene->objects.size();
   json["materials"] = scene->materials.size();

@@ -5,15 +5,18 @@
 //   import    importGltfScene (parse, decode accessors, node hierarchy, materials, skins, animations)
 //   geometry  buildImportedScene (meshoptimizer dedup / cache / overdraw / fetch optimisation + LOD chain with
 //             its measured error)
-//   textures  bakeTextures (decode, resize to a power of two within --max-texture-size, mips, RGBA8)
+//   textures  bakeTextures (decode, resize to a power of two within --max-texture-size, mips, BC compression)
 //   write     writePack (serialise + checksums + temporary file + fsync + rename)
 //   load      readPack (read + bounds checks + checksums + validateScene): what `render --scene X.vbp` does
-//   upload    uploadScene (geometry pool, mesh / object / material tables to the GPU; the engine does not
-//             upload texture pixels yet, so they are not in it)
+//   upload    uploadScene (geometry pool, mesh / object / material tables and the texture classes' BC blocks,
+//             through a bounded staging buffer, to the GPU)
 // and with --quantize the same write / load / upload for a pack of 20-byte quantised vertices. Medians over the
 // repeats, with the median absolute deviation beside each. Beside the times, what the bake costs: the LOD
 // chain's recorded error (the coarsest level's, relative to the mesh's bounding-sphere radius), the measured
-// quantisation error, and the textures resized (non-power-of-two or over the cap).
+// quantisation error, and the textures resized (non-power-of-two or over the cap). For files with textures, once
+// (untimed): the pack size and GPU texture bytes with BC textures (the default) and with RGBA8 ones
+// (`bake --textures rgba8`), and the error of the BC pack's image against the RGBA8 pack's (the default camera,
+// 384x384, visbuf path: PSNR and largest channel difference), so the bytes saved stand beside what they cost.
 // Files that fail to import or bake are listed with their error and skipped.
 // Writes bench-bake.json and bench-bake.md to the output folder, each atomically. Exit codes: 0 ok, 1 failure
 // (output folder, device), 2 usage, 3 validation messages.
@@ -27,6 +30,7 @@
 #include <time.h>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -36,10 +40,12 @@
 #include "visbuf/asset/pack_writer.h"
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/asset/texture_bake.h"
+#include "visbuf/core/image_compare.h"
 #include "cli_checks.h"
 #include "commands.h"
 #include "invocation.h"
 #include "visbuf/gpu/device.h"
+#include "visbuf/render/renderer.h"
 #include "visbuf/scene/gpu_scene.h"
 #include "stats_output.h"
 
@@ -160,12 +166,18 @@ struct AssetRow {
   std::string file;  // relative to the assets folder
   std::string error; // non-empty: skipped
   uint64_t sourceBytes = 0, packBytes = 0, quantizedPackBytes = 0, texelBytes = 0;
+  // BC against RGBA8 textures (measureTextureEncodings); rgba8PackBytes 0: the file has no baked textures.
+  uint64_t gpuTextureBytes = 0, rgba8PackBytes = 0, rgba8GpuTextureBytes = 0;
+  double bcPsnr = 0.0, bcMaxError = 0.0;
   uint64_t trianglesIn = 0, trianglesAllLods = 0, vertices = 0;
   size_t meshes = 0, objects = 0, textures = 0, texturesResized = 0, lodLevels = 0;
   double maxRelativeLodError = 0.0;  // coarsest level's recorded error / mesh radius, max over meshes
   double maxQuantizationError = 0.0, maxRelativeQuantizationError = 0.0;
   std::vector<std::string> resizeNotes;
   Timing import, geometry, textureBake, write, load, upload, qWrite, qLoad, qUpload;
+  // Host memory of loading besides the Scene (docs/pack-format.md, "Reading"): the largest section as stored,
+  // the reader's largest decode buffer, the upload's staging buffer and all its transient host buffers.
+  uint64_t largestSection = 0, readScratchBytes = 0, stagingBytes = 0, uploadHostBytes = 0;
   double bakeMs() const { return import.median + geometry.median + textureBake.median + write.median; }
 };
 
@@ -196,7 +208,8 @@ Status runOnce(const fs::path& file, const fs::path& scratch, const BenchBakeCom
   t.stop(samples[3]);
 
   t = StageTimer();
-  Result<Scene> loaded = readPack(packPath);
+  PackReadStats readStats;
+  Result<Scene> loaded = readPack(packPath, &readStats);
   if (!loaded) return loaded.error();
   t.stop(samples[4]);
 
@@ -204,8 +217,13 @@ Status runOnce(const fs::path& file, const fs::path& scratch, const BenchBakeCom
   {
     Result<GpuScene> gpuScene = uploadScene(device, *loaded);
     if (!gpuScene) return gpuScene.error();
+    row.gpuTextureBytes = gpuScene->textureBytes;
+    row.stagingBytes = gpuScene->stagingBytes;
+    row.uploadHostBytes = gpuScene->uploadHostBytes;
   }
   t.stop(samples[5]);
+  row.largestSection = readStats.largestSection;
+  row.readScratchBytes = readStats.peakScratchBytes;
 
   PackWriteReport qWritten;
   if (c.quantize) {
@@ -252,6 +270,46 @@ Status runOnce(const fs::path& file, const fs::path& scratch, const BenchBakeCom
   }
   row.maxQuantizationError = qWritten.quantization.maxPositionError;
   row.maxRelativeQuantizationError = qWritten.quantization.maxRelativePositionError;
+  return {};
+}
+
+// The file's textures baked both ways: pack sizes, GPU texture bytes, and the BC pack's rendered image against
+// the RGBA8 pack's. Both scenes go through serializePack + parsePack, as the packs on disk would.
+Status measureTextureEncodings(const fs::path& file, const BenchBakeCommand& c, gpu::Device& device, AssetRow& row) {
+  Result<ImportedScene> imported = importGltfScene(file.string());
+  if (!imported) return imported.error();
+  Result<Scene> built = buildImportedScene(*imported);
+  if (!built) return built.error();
+  std::optional<Scene> loaded[2];  // BC, RGBA8
+  uint64_t packBytes[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    Scene scene = *built;
+    TextureBakeOptions to;
+    to.maxTextureSize = c.maxTextureSize;
+    to.encoding = k == 0 ? TextureEncoding::Bc : TextureEncoding::Rgba8;
+    if (Status s = bakeTextures(*imported, to, &scene); !s) return s.error();
+    if (scene.textures.empty()) return {};
+    Result<std::vector<uint8_t>> bytes = serializePack(scene);
+    if (!bytes) return bytes.error();
+    packBytes[k] = bytes->size();
+    Result<Scene> back = parsePack(bytes->data(), bytes->size(), file.string());
+    if (!back) return back.error();
+    loaded[k] = std::move(back.value());
+  }
+  row.rgba8PackBytes = packBytes[1];
+  row.rgba8GpuTextureBytes = 0;
+  for (const TextureClass& cls : loaded[1]->textureClasses) row.rgba8GpuTextureBytes += cls.totalBytes();
+  FrameResult frames[2];
+  for (int k = 0; k < 2; ++k) {
+    auto renderer = Renderer::create(device, *loaded[k], {.width = 384, .height = 384});
+    if (!renderer) return renderer.error();
+    Result<FrameResult> frame = (*renderer)->renderFrame(loaded[k]->defaultCamera, FrameOptions{});
+    if (!frame) return frame.error();
+    frames[k] = std::move(frame.value());
+  }
+  const ImageError e = compareColor(frames[0].color, frames[1].color);
+  row.bcPsnr = e.psnr;
+  row.bcMaxError = e.maxAbs;
   return {};
 }
 
@@ -319,6 +377,12 @@ int runBenchBake(const BenchBakeCommand& c) {
       rows.push_back(std::move(row));
       continue;
     }
+    if (Status s = measureTextureEncodings(file, c, **device, row); !s) {
+      row.error = fmt::format("{}: {}", errorCodeName(s.error().code), s.error().message);
+      std::printf("  %-60s skipped: %s\n", printable(row.file).c_str(), printable(row.error).c_str());
+      rows.push_back(std::move(row));
+      continue;
+    }
     Timing* stages[] = {&row.import, &row.geometry, &row.textureBake, &row.write, &row.load,
                         &row.upload, &row.qWrite,   &row.qLoad,       &row.qUpload};
     for (size_t i = 0; i < 9; ++i) *stages[i] = timing(samples[i]);
@@ -327,6 +391,18 @@ int runBenchBake(const BenchBakeCommand& c) {
                 printable(row.file).c_str(), static_cast<unsigned long long>(row.trianglesIn), row.import.median,
                 row.geometry.median, row.textureBake.median, row.write.median, row.load.median, row.upload.median,
                 mb(row.packBytes));
+    // Loading's transient host memory: the read's decode scratch and the upload's buffers are never held
+    // together (the read has finished when the upload starts), so the peak is the larger of the two.
+    const uint64_t transient = std::max(row.readScratchBytes, row.uploadHostBytes);
+    std::printf("  %-60s load memory: largest section %.3f MB, read scratch %.3f MB, upload staging %.3f MB "
+                "(all upload host buffers %.3f MB): peak transient %.2fx the largest section\n",
+                "", mb(row.largestSection), mb(row.readScratchBytes), mb(row.stagingBytes), mb(row.uploadHostBytes),
+                row.largestSection ? double(transient) / double(row.largestSection) : 0.0);
+    if (row.rgba8PackBytes)
+      std::printf("  %-60s textures: pack %.2f MB (rgba8 %.2f MB), GPU %.2f MB (rgba8 %.2f MB), bc vs rgba8 image "
+                  "PSNR %.1f dB, max %.3f\n",
+                  "", mb(row.packBytes), mb(row.rgba8PackBytes), mb(row.gpuTextureBytes), mb(row.rgba8GpuTextureBytes),
+                  row.bcPsnr, row.bcMaxError);
     std::fflush(stdout);
     rows.push_back(std::move(row));
   }
@@ -397,13 +473,22 @@ int runBenchBake(const BenchBakeCommand& c) {
     x["trianglesAllLods"] = r.trianglesAllLods;
     x["lodLevelsMax"] = r.lodLevels;
     x["maxRelativeLodError"] = r.maxRelativeLodError;
-    x["textures"] = {{"count", r.textures}, {"texelBytes", r.texelBytes}, {"resized", r.resizeNotes}};
+    x["textures"] = {{"count", r.textures}, {"texelBytes", r.texelBytes}, {"resized", r.resizeNotes},
+                     {"gpuBytes", r.gpuTextureBytes}};
+    if (r.rgba8PackBytes) {
+      x["textures"]["rgba8"] = {{"packBytes", r.rgba8PackBytes}, {"gpuBytes", r.rgba8GpuTextureBytes}};
+      // JSON has no infinity: identical images give psnrDb null.
+      x["textures"]["bcVsRgba8Image"] = {
+          {"psnrDb", std::isfinite(r.bcPsnr) ? nlohmann::json(r.bcPsnr) : nlohmann::json()}, {"maxAbs", r.bcMaxError}};
+    }
     x["import"] = r.import.json();
     x["geometry"] = r.geometry.json();
     x["textureBake"] = r.textureBake.json();
     x["write"] = r.write.json();
     x["load"] = r.load.json();
     x["upload"] = r.upload.json();
+    x["loadMemory"] = {{"largestSectionBytes", r.largestSection}, {"readScratchBytes", r.readScratchBytes},
+                       {"stagingBytes", r.stagingBytes}, {"uploadHostBytes", r.uploadHostBytes}};
     x["geometryTrianglesPerSecond"] = perSecond(double(r.trianglesIn), r.geometry.median);
     x["geometryTrianglesPerCpuSecond"] = perSecond(double(r.trianglesIn), r.geometry.cpu);
     x["bakeTrianglesPerSecond"] = perSecond(double(r.trianglesIn), r.bakeMs());
@@ -476,6 +561,22 @@ int runBenchBake(const BenchBakeCommand& c) {
       md += fmt::format(" {:.3f} | {} | {} | {:.3g} ({:.2g}) |", mb(r.quantizedPackBytes), r.qLoad.text(),
                         r.qUpload.text(), r.maxQuantizationError, r.maxRelativeQuantizationError);
     md += "\n";
+  }
+  // Textures: what BC saves against RGBA8 and what it costs in the image.
+  bool anyTextures = false;
+  for (const AssetRow& r : rows) anyTextures |= r.error.empty() && r.rgba8PackBytes > 0;
+  if (anyTextures) {
+    md += "\nTextures, BC (the default) against RGBA8 (`bake --textures rgba8`): pack and GPU texture bytes, and the "
+          "BC pack's image against the RGBA8 pack's (default camera, 384x384, visbuf path; upload above includes "
+          "the BC texture classes).\n\n| file | pack MB | rgba8 pack MB | GPU texture MB | rgba8 GPU texture MB | "
+          "PSNR | max |\n|---|---|---|---|---|---|---|\n";
+    for (const AssetRow& r : rows) {
+      if (!r.error.empty() || r.rgba8PackBytes == 0) continue;
+      md += fmt::format("| {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {} | {:.3f} |\n", r.file, mb(r.packBytes),
+                        mb(r.rgba8PackBytes), mb(r.gpuTextureBytes), mb(r.rgba8GpuTextureBytes),
+                        std::isfinite(r.bcPsnr) ? fmt::format("{:.1f} dB", r.bcPsnr) : std::string("identical"),
+                        r.bcMaxError);
+    }
   }
   md += fmt::format(
       "\nTotal over {} file(s): {:.1f} MB of glTF in, {} triangles, {:.2f} MB of packs out. Import {:.1f} ms + "

@@ -60,8 +60,11 @@ struct BakeCommand {
   std::string json;                                    // summary as JSON; empty: none
   uint32_t maxTextureSize = 2048;                      // power of two, 1..16384
   bool noTextures = false;                             // skip texture baking (materials keep their references)
+  std::string textures = "bc";                         // --textures bc|rgba8 (TextureBakeOptions::encoding)
+  std::string textureQuality = "fast";                 // --texture-quality fast|normal|high
   std::vector<std::string> allowUriRoots;              // --allow-uri-root: more folders uris may point into
   uint64_t maxImagePixels = uint64_t{64} << 20;        // --max-image-pixels (TextureBakeOptions::maxImagePixels)
+  uint32_t threads = 0;                                // --threads: mesh build threads, 0 = all cores
 };
 
 void addBakeCommand(CLI::App& app, BakeCommand& cmd);

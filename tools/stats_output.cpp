@@ -42,12 +42,12 @@ std::string formatStats(const FrameStats& s) {
     out += fmt::format("skinning      {} instances, {} vertices, {} (poses {:.3f} ms CPU), {} bounds\n",
                        s.skinnedInstances, s.skinnedVertices, s.skinned ? "re-skinned" : "pose unchanged: skipped",
                        s.animationCpuMs, s.skinBounds);
-  out += s.pointLights == 0 ? std::string("lights        directional only (no point lights: no light cull pass)\n")
+  out += s.pointLights == 0 ? std::string("lights        directional only (no punctual lights: no light cull pass)\n")
          : s.lightsCulled
-             ? fmt::format("lights        {} point lights, tiles: {:.1f} mean / {} max per tile, overflow {} tiles{}\n",
+             ? fmt::format("lights        {} punctual lights, tiles: {:.1f} mean / {} max per tile, overflow {} tiles{}\n",
                            s.pointLights, s.meanLightsPerTile, s.maxLightsPerTile, s.lightTileOverflow,
                            s.lightTileOverflow ? fmt::format("  (WARNING: {} tile lights dropped)", s.lightsDropped) : "")
-             : fmt::format("lights        {} point lights, every light at every pixel (no tiles)\n", s.pointLights);
+             : fmt::format("lights        {} punctual lights, every light at every pixel (no tiles)\n", s.pointLights);
   if (s.path == RenderPath::Visbuf)
     out += s.shading == ShadingMode::Classified
                ? fmt::format("shading       classified: {} of {} materials present, {} (tile, material) pairs for {} "
@@ -60,6 +60,13 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
   out += fmt::format("memory        scene {:.1f} MiB, targets {} B/pixel\n", s.sceneBytes / 1048576.0,
                      s.targetBytesPerPixel);
+  if (s.textureClasses)
+    out += fmt::format("textures      {} classes, {:.1f} MiB on the GPU{}\n", s.textureClasses, s.textureBytes / 1048576.0,
+                       s.texturesDecompressed
+                           ? fmt::format("; {} BC classes decompressed to RGBA8 at load (the device lacks "
+                                         "textureCompressionBC)",
+                                         s.texturesDecompressed)
+                           : std::string());
   if (s.msaaSamples > 1)
     out += s.path == RenderPath::Visbuf
                ? fmt::format("msaa          {}x: {} pixels ({:.2f}%) shaded per distinct sample ID\n", s.msaaSamples,
@@ -121,6 +128,7 @@ nlohmann::json statsToJson(const FrameStats& s) {
                              {"materialTiles", s.materialTiles}, {"materialPixels", s.materialPixels}};
   }
   j["sceneBytes"] = s.sceneBytes;
+  j["textures"] = {{"classes", s.textureClasses}, {"bytes", s.textureBytes}, {"decompressed", s.texturesDecompressed}};
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
   j["msaa"] = {{"samples", s.msaaSamples}, {"perSamplePixels", s.perSamplePixels}};
   j["rasterBytesPerFragment"] = s.rasterBytesPerFragment;

@@ -263,32 +263,37 @@ Status importAnimation(const tinygltf::Model& model, size_t index, const std::st
 
 }  // namespace
 
-Status convertSkinAttributes(const std::vector<float>& joints, const std::vector<float>& weights,
-                             const std::string& where, const Warn& warn, std::vector<glm::u16vec4>* jointsOut,
-                             std::vector<glm::vec4>* weightsOut) {
-  const size_t count = std::min(joints.size(), weights.size()) / 4;
-  jointsOut->resize(count);
-  weightsOut->resize(count);
+Status convertSkinAttributes(const std::vector<float>& joints, const std::vector<float>& weights, int influences,
+                             const std::string& where, const Warn& warn, SkinStreams* out) {
+  const size_t n = static_cast<size_t>(influences);  // 4 or 8
+  const size_t count = std::min(joints.size(), weights.size()) / n;
+  out->joints.resize(count);
+  out->weights.resize(count);
+  out->joints1.assign(n == 8 ? count : 0, glm::u16vec4(0));
+  out->weights1.assign(n == 8 ? count : 0, glm::vec4(0.0f));
   size_t unbound = 0;
+  double w[8];
   for (size_t v = 0; v < count; ++v) {
-    glm::dvec4 w;
-    for (int i = 0; i < 4; ++i) {
-      w[i] = weights[4 * v + static_cast<size_t>(i)];
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      w[i] = weights[n * v + i];
       if (!std::isfinite(w[i]) || w[i] < -1e-6)  // tiny negatives are exporter rounding: clamp them to 0
         return malformed(where + ": vertex " + str(uint64_t{v}) + " has a negative or non-finite weight");
       w[i] = std::max(w[i], 0.0);
+      sum += w[i];
     }
-    const double sum = w.x + w.y + w.z + w.w;
+    // Normalised over every influence the vertex has (all 8 with JOINTS_1 / WEIGHTS_1), as glTF requires.
     if (sum > 0.0) {
-      w /= sum;
+      for (size_t i = 0; i < n; ++i) w[i] /= sum;
     } else {
-      w = glm::dvec4(1.0, 0.0, 0.0, 0.0);
+      for (size_t i = 0; i < n; ++i) w[i] = i == 0 ? 1.0 : 0.0;
       ++unbound;
     }
-    for (int i = 0; i < 4; ++i) {
-      (*weightsOut)[v][i] = static_cast<float>(w[i]);
-      (*jointsOut)[v][i] =
-          w[i] > 0.0 ? static_cast<uint16_t>(joints[4 * v + static_cast<size_t>(i)]) : uint16_t{0};
+    for (size_t i = 0; i < n; ++i) {
+      const uint16_t joint = w[i] > 0.0 ? static_cast<uint16_t>(joints[n * v + i]) : uint16_t{0};
+      const int slot = static_cast<int>(i % 4);
+      (i < 4 ? out->weights[v] : out->weights1[v])[slot] = static_cast<float>(w[i]);
+      (i < 4 ? out->joints[v] : out->joints1[v])[slot] = joint;
     }
   }
   if (unbound > 0)
@@ -320,11 +325,15 @@ Status checkSkinnedInstances(const ImportedScene& scene, const std::string& path
                               str(inst.skin) + named(skin.name);
     if (m.joints.empty()) return malformed(where + ": the skinned mesh has no JOINTS_0 / WEIGHTS_0");
     for (size_t v = 0; v < m.joints.size(); ++v)
-      for (int i = 0; i < 4; ++i)
-        if (m.weights[v][i] > 0.0f && m.joints[v][i] >= skin.joints.size())
-          return malformed(where + ": vertex " + str(uint64_t{v}) + " uses joint index " +
-                           str(int{m.joints[v][i]}) + ", not below the skin's joint count " +
-                           str(uint64_t{skin.joints.size()}));
+      for (int i = 0; i < 8; ++i) {
+        if (i >= 4 && m.joints1.empty()) break;
+        const float weight = i < 4 ? m.weights[v][i] : m.weights1[v][i - 4];
+        const int joint = i < 4 ? m.joints[v][i] : m.joints1[v][i - 4];
+        if (weight > 0.0f && static_cast<size_t>(joint) >= skin.joints.size())
+          return malformed(where + ": vertex " + str(uint64_t{v}) + " uses joint index " + str(joint) +
+                           ", not below the skin's joint count " + str(uint64_t{skin.joints.size()}) +
+                           (i < 4 ? " (JOINTS_0)" : " (JOINTS_1)"));
+      }
   }
   return {};
 }

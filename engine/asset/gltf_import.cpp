@@ -33,6 +33,7 @@
 #include <glm/glm.hpp>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -51,6 +52,10 @@ using namespace gltf_detail;  // rangeFits, str, named, malformed, loadModel
 static_assert(std::endian::native == std::endian::little, "glTF data is little-endian; add byte swapping");
 
 constexpr const char* kQuantizationExt = "KHR_mesh_quantization";
+constexpr const char* kInstancingExt = "EXT_mesh_gpu_instancing";
+// EXT_mesh_gpu_instancing: instances per node. Each becomes an object (importGltfScene) or a copy of the mesh
+// (importGltfMesh), so the count is bounded like a viewless accessor's.
+constexpr uint64_t kMaxInstancesPerNode = uint64_t{1} << 24;
 
 // Accessors without a bufferView are all zeros (plus sparse substitutions). Nothing in the file bounds their
 // count, so cap it to keep a hostile file from requesting terabytes.
@@ -147,7 +152,19 @@ uint64_t indexComponentSize(int type) {
 }
 
 // What an attribute accessor may contain (glTF 2.0 core + KHR_mesh_quantization).
-enum class AttributeKind { Position, Normal, TexCoord, Color, MorphDelta, Tangent, Joints, Weights, Unchecked };
+enum class AttributeKind {
+  Position,
+  Normal,
+  TexCoord,
+  Color,
+  MorphDelta,
+  Tangent,
+  Joints,
+  Weights,
+  InstanceVec3,      // EXT_mesh_gpu_instancing TRANSLATION / SCALE
+  InstanceRotation,  // EXT_mesh_gpu_instancing ROTATION
+  Unchecked
+};
 
 // Returns "" when the accessor's type/componentType/normalized combination suits `kind`, else the reason.
 std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a) {
@@ -201,6 +218,16 @@ std::string checkAttributeFormat(AttributeKind kind, const tinygltf::Accessor& a
       typeOk = a.type == TINYGLTF_TYPE_VEC4;
       componentOk = isFloat || (isUnsigned8or16 && a.normalized);
       expected = "VEC4 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT";
+      break;
+    case AttributeKind::InstanceVec3:  // the extension's table: TRANSLATION and SCALE are FLOAT only
+      typeOk = a.type == TINYGLTF_TYPE_VEC3;
+      componentOk = isFloat;
+      expected = "VEC3 of FLOAT";
+      break;
+    case AttributeKind::InstanceRotation:  // FLOAT, or normalized BYTE / SHORT
+      typeOk = a.type == TINYGLTF_TYPE_VEC4;
+      componentOk = isFloat || (isSigned8or16 && a.normalized);
+      expected = "VEC4 of FLOAT or normalized BYTE/SHORT";
       break;
     case AttributeKind::Unchecked:  // the caller checks (skins, animations: gltf_animation.cpp)
       typeOk = componentOk = true;
@@ -257,6 +284,13 @@ glm::vec4 transformTangent(const glm::dmat3& linear, double det, const glm::vec4
   return glm::vec4(glm::vec3(d / len), det < 0.0 ? -t.w : t.w);
 }
 
+// The rotation matrix of a unit quaternion (x, y, z, w), glTF's order.
+glm::dmat3 quaternionMatrix(double x, double y, double z, double w) {
+  return glm::dmat3(1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w),   // column 0
+                    2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w),   // column 1
+                    2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y));  // column 2
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // Importer
 
@@ -293,6 +327,8 @@ struct DecodedPrimitive {
   std::vector<glm::vec4> tangents; // xyz unit, w = +-1; empty: none (or dropped as invalid)
   std::vector<glm::u16vec4> joints;  // JOINTS_0 / WEIGHTS_0, empty: none (see convertSkinAttributes)
   std::vector<glm::vec4> weights;
+  std::vector<glm::u16vec4> joints1;  // JOINTS_1 / WEIGHTS_1 (influences 5-8), empty: none
+  std::vector<glm::vec4> weights1;
   // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
   std::vector<std::vector<glm::vec3>> positionDeltas;
   std::vector<std::vector<glm::vec3>> normalDeltas;
@@ -358,6 +394,10 @@ class Importer {
   template <typename Visit>
   Status walkScene(Visit&& visit, std::string* sceneLabel);
   Status emitSceneNode(int node, const glm::dmat4& world, ImportedScene* scene);
+  Status emitSceneMesh(int node, const glm::dmat4& world, ImportedScene* scene);
+  // EXT_mesh_gpu_instancing: the world transforms of the node's mesh instances, world x T_i x R_i x S_i, or
+  // just {world} when the node does not use the extension (or uses it where it cannot apply: see the .cpp).
+  Result<std::vector<glm::dmat4>> meshInstances(int node, const glm::dmat4& world, bool sceneImport);
   Status emitNodeLight(int node, const glm::dmat4& world, ImportedScene* scene);
 
   // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights, morphed,
@@ -380,6 +420,7 @@ class Importer {
   std::vector<std::string>* warnings_;
   std::set<std::string> warned_;  // de-duplicates warnings of instanced meshes
   bool meshoptRequired_ = false;
+  bool instancingRequired_ = false;
   std::map<int, std::vector<uint8_t>> decodedViews_;  // meshopt scratch, by bufferView index
   std::vector<std::optional<std::vector<DecodedPrimitive>>> meshCache_;
   bool warnedZeroNormals_ = false;
@@ -396,6 +437,10 @@ Status Importer::checkRequiredExtensions() {
       continue;
     }
     if (ext == kQuantizationExt) continue;
+    if (ext == kInstancingExt) {
+      instancingRequired_ = true;
+      continue;
+    }
     const bool ignorable = std::any_of(std::begin(kIgnorablePrefixes), std::end(kIgnorablePrefixes),
                                        [&](const char* prefix) { return ext.rfind(prefix, 0) == 0; });
     if (ignorable) continue;
@@ -888,7 +933,8 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
   return out;
 }
 
-// JOINTS_0 + WEIGHTS_0 (both or neither); JOINTS_1+ are ignored: the skinning pass takes 4 influences.
+// JOINTS_0 + WEIGHTS_0 (both or neither), and JOINTS_1 + WEIGHTS_1 (both or neither, only beside set 0): up to 8
+// influences, normalised together. JOINTS_2+ are ignored with a warning (the skinning pass takes 8).
 Status Importer::decodeSkinAttributes(const tinygltf::Primitive& prim, const std::string& where,
                                       DecodedPrimitive* out) {
   auto joints = prim.attributes.find("JOINTS_0");
@@ -898,22 +944,50 @@ Status Importer::decodeSkinAttributes(const tinygltf::Primitive& prim, const std
     warn(where + ": JOINTS_0 and WEIGHTS_0 must come together; skinning attributes ignored");
     return {};
   }
-  if (prim.attributes.count("JOINTS_1") != 0)
-    warn(where + ": JOINTS_1 / WEIGHTS_1 ignored (at most 4 influences per vertex)");
+  auto joints1 = prim.attributes.find("JOINTS_1");
+  auto weights1 = prim.attributes.find("WEIGHTS_1");
+  const bool second = joints1 != prim.attributes.end() && weights1 != prim.attributes.end();
+  if (!second && (joints1 != prim.attributes.end() || weights1 != prim.attributes.end()))
+    return malformed(where + ": JOINTS_1 and WEIGHTS_1 must come together");
+  if (prim.attributes.count("JOINTS_2") != 0 || prim.attributes.count("WEIGHTS_2") != 0)
+    warn(where + ": JOINTS_2+ / WEIGHTS_2+ ignored (at most 8 influences per vertex); the weights of sets 0 and 1 "
+                 "are renormalised without them");
+  const int influences = second ? 8 : 4;
+  const size_t vertices = out->positions.size();
+  // Joint and weight values, `influences` per vertex: set 0's four, then set 1's.
   std::vector<float> flat[2];
-  for (auto [it, kind, k] :
-       {std::tuple{joints, AttributeKind::Joints, 0}, std::tuple{weights, AttributeKind::Weights, 1}}) {
+  flat[0].resize(vertices * static_cast<size_t>(influences));
+  flat[1].resize(vertices * static_cast<size_t>(influences));
+  using It = std::map<std::string, int>::const_iterator;
+  const std::tuple<It, AttributeKind, int, int> sets[] = {
+      {joints, AttributeKind::Joints, 0, 0}, {weights, AttributeKind::Weights, 1, 0},
+      {joints1, AttributeKind::Joints, 0, 1}, {weights1, AttributeKind::Weights, 1, 1}};
+  for (const auto& [it, kind, k, set] : sets) {
+    if (set == 1 && !second) continue;
     const std::string w = where + " accessor " + str(it->second) + " (" + it->first + ")";
+    std::vector<float> values;
     int n = 0;
-    if (Status s = readFloats(it->second, kind, w, &flat[k], &n); !s) return s;
-    if (flat[k].size() != out->positions.size() * 4) {
-      return malformed(w + ": count " + str(uint64_t{flat[k].size() / 4}) + " differs from POSITION count " +
-                       str(uint64_t{out->positions.size()}));
+    if (Status s = readFloats(it->second, kind, w, &values, &n); !s) return s;
+    if (values.size() != vertices * 4) {
+      return malformed(w + ": count " + str(uint64_t{values.size() / 4}) + " differs from POSITION count " +
+                       str(uint64_t{vertices}));
     }
+    for (size_t v = 0; v < vertices; ++v)
+      for (size_t c = 0; c < 4; ++c)
+        flat[k][v * static_cast<size_t>(influences) + static_cast<size_t>(set) * 4 + c] = values[v * 4 + c];
   }
-  const std::string w = where + " accessor " + str(weights->second) + " (WEIGHTS_0)";
-  return convertSkinAttributes(flat[0], flat[1], w, [this](const std::string& m) { warn(m); }, &out->joints,
-                               &out->weights);
+  const std::string w = where + " accessor " + str(weights->second) + " (WEIGHTS_0" +
+                        (second ? " + WEIGHTS_1 accessor " + str(weights1->second) : std::string()) + ")";
+  SkinStreams streams;
+  if (Status s = convertSkinAttributes(flat[0], flat[1], influences, w, [this](const std::string& m) { warn(m); },
+                                       &streams);
+      !s)
+    return s;
+  out->joints = std::move(streams.joints);
+  out->weights = std::move(streams.weights);
+  out->joints1 = std::move(streams.joints1);
+  out->weights1 = std::move(streams.weights1);
+  return {};
 }
 
 Result<const std::vector<DecodedPrimitive>*> Importer::decodedMesh(int mesh) {
@@ -960,10 +1034,7 @@ Result<glm::dmat4> Importer::localMatrix(int nodeIndex) {
     if (!(len > 0.0) || !std::isfinite(len)) {
       warn(where + ": zero-length or out-of-range rotation quaternion treated as identity");
     } else {
-      x /= len, y /= len, z /= len, w /= len;
-      rs = glm::dmat3(1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w),   // column 0
-                      2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w),   // column 1
-                      2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y));  // column 2
+      rs = quaternionMatrix(x / len, y / len, z / len, w / len);
     }
   }
   if (!node.scale.empty()) {
@@ -1007,6 +1078,7 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
   if (!prim.colors.empty()) perVertex += sizeof(uint32_t);
   if (!prim.tangents.empty()) perVertex += sizeof(glm::vec4);
   if (!prim.joints.empty()) perVertex += sizeof(glm::u16vec4) + sizeof(glm::vec4);
+  if (!prim.joints1.empty()) perVertex += sizeof(glm::u16vec4) + sizeof(glm::vec4);
   perVertex += (prim.positionDeltas.size() + prim.normalDeltas.size()) * sizeof(glm::vec3);
   if (Status s = budget_->charge(count * perVertex + prim.triangles.size() * sizeof(uint32_t), where); !s) return s;
 
@@ -1276,7 +1348,14 @@ Result<MeshSource> Importer::run() {
   out.name = std::filesystem::path(path_).stem().string();
   std::string sceneLabel;
   Status walked = walkScene(
-      [&](int nodeIndex, const glm::dmat4& world) { return emitNode(nodeIndex, world, &out); }, &sceneLabel);
+      [&](int nodeIndex, const glm::dmat4& world) -> Status {
+        auto worlds = meshInstances(nodeIndex, world, false);
+        if (!worlds) return worlds.error();
+        for (const glm::dmat4& w : *worlds)
+          if (Status s = emitNode(nodeIndex, w, &out); !s) return s;
+        return {};
+      },
+      &sceneLabel);
   if (!walked) return walked.error();
 
   if (out.indices.empty()) {
@@ -1315,6 +1394,14 @@ void appendSkinStreams(const DecodedPrimitive& prim, size_t base, MeshSource* ou
   const size_t end = std::max(out->positions.size(), out->joints.size());
   out->joints.resize(end, glm::u16vec4(0));
   out->weights.resize(end, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+  // Influences 5-8: zero weight (joint 0) for the vertices of primitives with 4 or none, once any has 8.
+  if (prim.joints1.empty() && out->joints1.empty()) return;
+  out->joints1.resize(base, glm::u16vec4(0));
+  out->weights1.resize(base, glm::vec4(0.0f));
+  out->joints1.insert(out->joints1.end(), prim.joints1.begin(), prim.joints1.end());
+  out->weights1.insert(out->weights1.end(), prim.weights1.begin(), prim.weights1.end());
+  out->joints1.resize(end, glm::u16vec4(0));
+  out->weights1.resize(end, glm::vec4(0.0f));
 }
 
 // Appends a primitive's morph deltas (its vertices start at `base` in `out`) for the mesh's `targetCount`
@@ -1337,36 +1424,167 @@ void appendMorphStreams(const DecodedPrimitive& prim, size_t base, size_t target
   }
 }
 
-// Adds one instance of node `nodeIndex` (with a mesh) to `scene`: one per material group of its mesh.
-// KHR_lights_punctual: a node's {"extensions": {"KHR_lights_punctual": {"light": i}}} places model.lights[i].
+// KHR_lights_punctual: a node's {"extensions": {"KHR_lights_punctual": {"light": i}}} places model.lights[i] at
+// the node's world position; spot and directional lights shine along the node's -Z (through the world matrix's
+// linear part, renormalised: the extension ignores the node's scale).
 Status Importer::emitNodeLight(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
   const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
   auto ext = node.extensions.find("KHR_lights_punctual");
   if (ext == node.extensions.end() || !ext->second.Has("light")) return {};
+  const std::string nodeWhere = path_ + ": node " + str(nodeIndex) + named(node.name);
   const int index = ext->second.Get("light").GetNumberAsInt();
   if (index < 0 || static_cast<size_t>(index) >= model_.lights.size())
-    return makeError(ErrorCode::MalformedInput,
-                     "node " + std::to_string(nodeIndex) + ": KHR_lights_punctual light " + std::to_string(index) +
-                         " out of range");
+    return malformed(nodeWhere + ": KHR_lights_punctual light " + str(index) + " out of range");
   const tinygltf::Light& l = model_.lights[static_cast<size_t>(index)];
-  if (l.type != "point") {
-    warn("node " + std::to_string(nodeIndex) + ": KHR_lights_punctual '" + l.type +
-         "' light skipped (only point lights are supported)");
+  const std::string where = nodeWhere + ": KHR_lights_punctual light " + str(index) + named(l.name);
+  PointLight p;
+  if (l.type == "point") {
+    p.type = LightType::Point;
+  } else if (l.type == "spot") {
+    p.type = LightType::Spot;
+  } else if (l.type == "directional") {
+    p.type = LightType::Directional;
+  } else {
+    warn(where + ": unknown type '" + l.type + "'; light skipped");
     return {};
   }
-  PointLight p;
   p.position = glm::dvec3(world[3]);
+  if (!l.color.empty() && l.color.size() != 3) return malformed(where + ": color must have 3 elements");
   if (l.color.size() == 3) p.color = glm::vec3(float(l.color[0]), float(l.color[1]), float(l.color[2]));
   p.intensity = float(l.intensity);
-  p.range = float(l.range);
-  if (Status s = validatePointLights({p}); !s)
-    return makeError(ErrorCode::MalformedInput, "node " + std::to_string(nodeIndex) + ": " + s.error().message);
+  // A directional light has no position, so no range (the extension says range is for point and spot lights).
+  p.range = p.type == LightType::Directional ? 0.0f : float(l.range);
+  if (!(l.range >= 0.0)) return malformed(where + ": negative or non-finite range " + fmtCoord(l.range));
+  if (p.type != LightType::Point) {
+    const glm::dvec3 d = glm::dmat3(world) * glm::dvec3(0.0, 0.0, -1.0);
+    const double len = glm::length(d);
+    if (!(len > 0.0) || !std::isfinite(len))
+      return malformed(where + ": the node's transform maps -Z to a zero or non-finite direction");
+    p.direction = glm::vec3(d / len);
+  }
+  if (p.type == LightType::Spot) {
+    const double inner = l.spot.innerConeAngle, outer = l.spot.outerConeAngle;
+    if (!(inner >= 0.0 && inner < outer && outer <= std::numbers::pi / 2))
+      return malformed(where + ": spot innerConeAngle " + fmtCoord(inner) + " / outerConeAngle " + fmtCoord(outer) +
+                       " (need 0 <= inner < outer <= pi/2)");
+    p.innerConeAngle = float(inner);
+    p.outerConeAngle = float(outer);
+  }
+  if (Status s = validatePointLights({p}); !s) return malformed(where + ": " + s.error().message);
   scene->pointLights.push_back(p);
   return {};
 }
 
+// A node's light (once, at the node) and its mesh: once, or once per EXT_mesh_gpu_instancing instance.
 Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
   if (Status s = emitNodeLight(nodeIndex, world, scene); !s) return s;
+  auto worlds = meshInstances(nodeIndex, world, true);
+  if (!worlds) return worlds.error();
+  for (const glm::dmat4& w : *worlds)
+    if (Status s = emitSceneMesh(nodeIndex, w, scene); !s) return s;
+  return {};
+}
+
+Result<std::vector<glm::dmat4>> Importer::meshInstances(int nodeIndex, const glm::dmat4& world, bool sceneImport) {
+  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
+  auto ext = node.extensions.find(kInstancingExt);
+  if (ext == node.extensions.end()) return std::vector<glm::dmat4>{world};
+  const std::string where = path_ + ": node " + str(nodeIndex) + named(node.name) + " " + kInstancingExt;
+  // A mesh index that does not exist is reported by nodeMesh (emitNode / emitSceneMesh), with the node.
+  if (node.mesh >= 0 && static_cast<size_t>(node.mesh) >= model_.meshes.size()) return std::vector<glm::dmat4>{world};
+  // The extension instances a mesh; on a node without one it has nothing to instance.
+  if (node.mesh < 0) {
+    warn(where + ": the node has no mesh; extension ignored");
+    return std::vector<glm::dmat4>{world};
+  }
+  // Skinned and animated nodes are drawn through a skin whose joints carry the node's transform, which has no
+  // place for a per-instance one: such a node is imported once, as the extension's fallback (the plain node).
+  const bool animated = node.skin >= 0 || (sceneImport && (movingNodes_.count(nodeIndex) > 0 ||
+                                                           morphAnimatedNodes_.count(nodeIndex) > 0));
+  if (animated) {
+    const std::string why = "instancing a skinned or animated node is not supported";
+    if (instancingRequired_) return makeError(ErrorCode::Unsupported, where + ": " + why);
+    warn(where + ": " + why + "; the node is imported once, without its instances");
+    return std::vector<glm::dmat4>{world};
+  }
+  if (!ext->second.IsObject() || !ext->second.Get("attributes").IsObject())
+    return malformed(where + ": 'attributes' must be an object");
+  const tinygltf::Value& attributes = ext->second.Get("attributes");
+  struct Stream {
+    const char* semantic;
+    AttributeKind kind;
+    int components;
+    std::vector<float> values;
+    int accessor = -1;
+  };
+  Stream streams[3] = {{"TRANSLATION", AttributeKind::InstanceVec3, 3, {}},
+                       {"ROTATION", AttributeKind::InstanceRotation, 4, {}},
+                       {"SCALE", AttributeKind::InstanceVec3, 3, {}}};
+  std::optional<uint64_t> count;
+  int countAccessor = -1;
+  const char* countSemantic = "";
+  for (Stream& st : streams) {
+    if (!attributes.Has(st.semantic)) continue;
+    const tinygltf::Value& index = attributes.Get(st.semantic);
+    if (!index.IsNumber()) return malformed(where + ": attribute " + st.semantic + " is not an accessor index");
+    st.accessor = index.GetNumberAsInt();
+    const std::string aw = where + " accessor " + str(st.accessor) + " (" + st.semantic + ")";
+    if (st.accessor < 0 || static_cast<size_t>(st.accessor) >= model_.accessors.size())
+      return malformed(aw + ": accessor does not exist");
+    const uint64_t n = model_.accessors[static_cast<size_t>(st.accessor)].count;
+    if (n == 0 || n > kMaxInstancesPerNode)
+      return malformed(aw + ": instance count " + str(n) + " is not in [1, " + str(kMaxInstancesPerNode) + "]");
+    if (count && *count != n)
+      return malformed(aw + ": count " + str(n) + " differs from accessor " + str(countAccessor) + " (" +
+                       countSemantic + ") count " + str(*count) + " (every instance attribute has one per instance)");
+    count = n;
+    countAccessor = st.accessor;
+    countSemantic = st.semantic;
+    int components = 0;
+    if (Status s = readFloats(st.accessor, st.kind, aw, &st.values, &components); !s) return s.error();
+    for (size_t i = 0; i < st.values.size(); ++i)
+      if (!std::isfinite(st.values[i]))
+        return malformed(aw + ": instance " + str(uint64_t{i / static_cast<size_t>(st.components)}) +
+                         " has a non-finite value (NaN or Inf)");
+  }
+  if (!count) {  // only custom (underscore) attributes, or none: nothing moves the instances
+    warn(where + ": no TRANSLATION, ROTATION or SCALE attribute; the node is imported once");
+    return std::vector<glm::dmat4>{world};
+  }
+  // The transforms here, then (scene import) one ImportedInstance per instance and material group; the
+  // flattened import charges its vertex copies in emitPrimitive.
+  const uint64_t groups = model_.meshes[static_cast<size_t>(node.mesh)].primitives.size();
+  const uint64_t perInstance = sizeof(glm::dmat4) + (sceneImport ? groups * sizeof(ImportedInstance) : 0);
+  if (Status s = budget_->charge(*count * perInstance, where); !s) return s.error();
+  std::vector<glm::dmat4> out(*count);
+  for (uint64_t i = 0; i < *count; ++i) {
+    // Each instance's T * R * S, composed like a node's TRS (localMatrix), after the node's world transform.
+    glm::dmat3 rs(1.0);
+    if (!streams[1].values.empty()) {
+      const float* q = &streams[1].values[i * 4];
+      const double x = q[0], y = q[1], z = q[2], w = q[3];
+      const double len = std::sqrt(x * x + y * y + z * z + w * w);
+      if (!(len > 0.0))
+        return malformed(where + " accessor " + str(streams[1].accessor) + " (ROTATION): instance " + str(i) +
+                         " has a zero-length rotation quaternion");
+      rs = quaternionMatrix(x / len, y / len, z / len, w / len);  // exporters write slightly non-unit values
+    }
+    if (!streams[2].values.empty())
+      for (int c = 0; c < 3; ++c) rs[c] *= double(streams[2].values[i * 3 + static_cast<uint64_t>(c)]);
+    glm::dmat4 local(rs);
+    if (!streams[0].values.empty()) {
+      const float* t = &streams[0].values[i * 3];
+      local[3] = glm::dvec4(t[0], t[1], t[2], 1.0);
+    }
+    out[i] = world * local;
+    if (!isFinite(out[i]))
+      return malformed(where + ": instance " + str(i) + " has a non-finite transform after the node's");
+  }
+  return out;
+}
+
+// Adds one instance of node `nodeIndex`'s mesh at `world` to `scene`: one per material group of its mesh.
+Status Importer::emitSceneMesh(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
   auto resolved = nodeMesh(nodeIndex);
   if (!resolved) return resolved.error();
   if (!resolved->mesh) return {};
@@ -1460,6 +1678,8 @@ Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedS
       if (oneJoint) {  // every vertex follows joint 0 of the node's one-joint skin
         im.source.joints.assign(im.source.positions.size(), glm::u16vec4(0));
         im.source.weights.assign(im.source.positions.size(), glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+        im.source.joints1.clear();
+        im.source.weights1.clear();
       }
       padOptionalStreams(&im.source);
       if (mirrored) {

@@ -35,6 +35,19 @@
 //     Zero-length normals in the file are replaced the same way (with a warning).
 //   - EXT_meshopt_compression (vertex codec v0, index buffer / index sequence codecs, OCTAHEDRAL, QUATERNION
 //     and EXPONENTIAL filters), including fallback buffers without a uri.
+//   - EXT_mesh_gpu_instancing (also when required): a node's TRANSLATION / ROTATION / SCALE accessors (any
+//     subset; the extension's table: TRANSLATION and SCALE VEC3 of FLOAT, ROTATION VEC4 of FLOAT or normalized
+//     BYTE / SHORT, decoded as glTF normalized integers) give one instance per element, at
+//     world(node) x T_i x R_i x S_i (composed like a node's TRS, in double precision; rotations renormalised):
+//     importGltfMesh bakes one copy of the mesh per instance, importGltfScene emits one ImportedInstance per
+//     instance (all with `node` set to the instanced node; mirrored and zero-scale instances are handled one
+//     by one, as separate nodes would be). The node's own light and children are not instanced.
+//     MalformedInput, naming the node, the extension and the accessor: attributes that are not an object, an
+//     accessor that does not exist or has another format, counts that differ between the attributes or are
+//     outside [1, 2^24], NaN / Inf values, a zero-length rotation, a non-finite composed transform. A node
+//     without a mesh, or with only custom ("_NAME") attributes, is imported once with a warning. A skinned or
+//     animated node (its skin carries the node's transform, with no room for a per-instance one) is imported
+//     once with a warning, or refused (Unsupported) when the file requires the extension.
 //
 // Untrusted files (docs/security.md): the file and its external buffers are read only when they are regular
 // files (opened without blocking, so a FIFO or device fails at once); every external buffer / image uri must
@@ -55,18 +68,23 @@
 //     an external uri outside the allowed folders or with a scheme other than data:;
 //     JSON nested deeper than 512 levels; a scene that produces no triangles ("no triangle geometry").
 //   - Unsupported: a required extension that changes geometry and is not handled (e.g.
-//     KHR_draco_mesh_compression), an EXT_meshopt_compression view that cannot be decoded while the extension
+//     KHR_draco_mesh_compression; required extensions of the KHR_materials_ / KHR_texture_ / EXT_texture_ /
+//     KHR_lights_ / MSFT_texture_ families only concern shading and are imported as far as supported, with
+//     warnings for what is dropped), EXT_mesh_gpu_instancing on a skinned or animated node while the file
+//     requires the extension, an EXT_meshopt_compression view that cannot be decoded while the extension
 //     is required, GLB versions other than 2, asset.version other than 2.x (or minVersion other than 2.0),
 //     files of 4 GiB or more.
 //   - CapacityExceeded: more than 2^32-1 vertices, memory exhausted, or more than options.maxMemoryBytes.
 // Nothing in the file's contents can make the importer assert or crash.
 //
-// Not supported: KHR_draco_mesh_compression and EXT_mesh_gpu_instancing (Unsupported when required; when only
-// used, the plain nodes are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas of baked
-// targets (the base tangents are kept; animated targets keep them, see importGltfScene), JOINTS_1 / WEIGHTS_1 (more than 4 influences per vertex: ignored with a warning),
-// KHR_animation_pointer channels (ignored with a warning). KHR_texture_transform is read into each TextureRef
-// (scene import), never applied to the vertex uvs (quantized uvs that rely on it come out in their raw integer
-// range).
+// Not supported: KHR_draco_mesh_compression (Unsupported when required; when only used, the plain primitives
+// are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas of baked targets (the base
+// tangents are kept; animated targets keep them, see importGltfScene), JOINTS_2+ / WEIGHTS_2+ (more than 8
+// influences per vertex: ignored with a warning, the first 8 renormalised), KHR_animation_pointer channels
+// (ignored with a warning), KHR_texture_basisu images (KTX2 / Basis Universal: the texture's fallback `source`
+// is used; without one the texture is dropped with a warning naming the extension and the texture).
+// KHR_texture_transform is read into each TextureRef (scene import), never applied to the vertex uvs
+// (quantized uvs that rely on it come out in their raw integer range).
 #pragma once
 
 #include <cstdint>
@@ -146,7 +164,9 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     cutoff, double-sided; and five texture references (base colour, metallic-roughness, normal, occlusion,
 //     emissive), each with texture index, image index, image URI, TEXCOORD set (0 or 1; higher sets warn and
 //     use 0), sampler (wrap S/T, mag/min/mip filter; undefined filters are trilinear) and
-//     KHR_texture_transform as a 3x2 matrix (its texCoord overrides the set). Primitives without a material
+//     KHR_texture_transform as a 3x2 matrix (its texCoord overrides the set). A KHR_texture_basisu texture
+//     refers to its fallback `source` image (its KTX2 image is never used); with none, the reference has no
+//     image and a warning names the extension and the texture. Primitives without a material
 //     use a "default" material (glTF's: white, opaque, metallic 1, roughness 1) appended after the file's
 //     materials, only when needed.
 //   - Images: every glTF image, in file order (glTF image i is images[i]), NOT decoded: the encoded bytes of
@@ -154,9 +174,11 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     by the URI rule (uri_resolver.h; a uri outside the allowed folders fails the import) (the file is not
 //     opened here; texture_bake.h decodes all of them).
 //   - Skinning: JOINTS_0 (VEC4 u8/u16) and WEIGHTS_0 (VEC4 float or normalized u8/u16) become
-//     MeshSource::joints / weights. Weights are renormalised to sum 1; a vertex whose weights are all 0 gets
-//     weight 1 on its first slot (warning); slots with weight 0 get joint 0. Meshes stay in rest pose (bind
-//     shape) in object space.
+//     MeshSource::joints / weights; JOINTS_1 / WEIGHTS_1 (same formats; both or neither, MalformedInput
+//     otherwise) become joints1 / weights1, influences 5-8. Weights are renormalised to sum 1 over all of a
+//     vertex's influences (4 or 8); a vertex whose weights are all 0 gets weight 1 on its first slot (warning);
+//     slots with weight 0 get joint 0. A mesh whose primitives mix 4 and 8 influences pads the 4-influence
+//     vertices' slots 5-8 with weight 0. Meshes stay in rest pose (bind shape) in object space.
 //   - Skins (only when the file has skins or animations, else nodes/skins/animations stay empty):
 //     ImportedScene::nodes is every glTF node in file order (parent, rest TRS or matrix), so joint and
 //     channel node indices are glTF node indices. Skins keep their joints, inverse bind matrices (identity
@@ -221,9 +243,13 @@ struct ImportedScene {
   std::vector<SceneNode> nodes;  // every glTF node, in file order
   std::vector<Skin> skins;
   std::vector<AnimationClip> animations;
-  // KHR_lights_punctual point lights of the default scene's nodes, at their node's world position (range and
-  // intensity are not scaled by the node, as the extension says). Spot and directional lights are skipped
-  // with a warning.
+  // KHR_lights_punctual lights of the default scene's nodes (scene/light.h): point, spot and directional, at
+  // their node's world position, spot and directional ones shining along the node's -Z (the world matrix's
+  // linear part, renormalised); range and intensity are not scaled by the node, as the extension says; a
+  // directional light's range is ignored. MalformedInput, naming the node and the light: a light index that
+  // does not exist, a colour without 3 elements, a negative or non-finite range, intensity or colour, spot cone
+  // angles outside 0 <= innerConeAngle < outerConeAngle <= pi/2, a node transform that maps -Z to a zero
+  // direction. Lights of unknown type are skipped with a warning.
   std::vector<PointLight> pointLights;
 };
 

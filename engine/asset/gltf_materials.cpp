@@ -12,6 +12,7 @@ namespace visbuf::gltf_detail {
 namespace {
 
 constexpr const char* kTextureTransformExt = "KHR_texture_transform";
+constexpr const char* kBasisuExt = "KHR_texture_basisu";
 constexpr const char* kEmissiveStrengthExt = "KHR_materials_emissive_strength";
 
 bool allFinite(const std::vector<double>& v) {
@@ -130,9 +131,15 @@ Result<TextureRef> textureRef(const tinygltf::Model& model, const Info& info, co
   const tinygltf::Texture& texture = model.textures[static_cast<size_t>(info.index)];
   ref.texture = info.index;
   ref.texCoord = info.texCoord > 0 ? static_cast<uint32_t>(info.texCoord) : 0;
+  // KHR_texture_basisu keeps its KTX2 image in the extension and the optional plain `source` as the fallback
+  // for readers without a Basis Universal transcoder (this one): the fallback is what a texture offers us.
+  const bool basisu = texture.extensions.count(kBasisuExt) != 0;
   if (texture.source >= 0 && static_cast<size_t>(texture.source) < model.images.size()) {
     ref.image = texture.source;
     ref.uri = model.images[static_cast<size_t>(texture.source)].uri;
+  } else if (basisu) {
+    warn(where + ": texture " + str(info.index) + named(texture.name) + " has only a " + kBasisuExt +
+         " (KTX2 / Basis Universal) image, which is not supported, and no fallback `source`; texture dropped");
   } else {
     warn(where + ": texture " + str(info.index) + " has no usable image source");
   }

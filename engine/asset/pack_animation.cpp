@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "visbuf/asset/pack_animation_format.h"
+#include "visbuf/asset/pack_geometry.h"
 
 namespace visbuf::pack {
 
@@ -105,19 +106,20 @@ Status writeSkins(const Scene& scene, Writer& w) {
 
 void writeSkinnedMeshes(const Scene& scene, Writer& w) {
   std::vector<uint8_t> meshes, vertices, objects;
-  uint64_t meshCount = 0, vertexTotal = 0;
+  uint64_t meshCount = 0;
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
     const std::vector<SkinVertex>& sv = scene.meshes[m].skinVertices;
     if (sv.empty()) continue;
-    append(meshes, SkinnedMeshRecord{uint32_t(m), 0, vertexTotal});
-    appendArray(vertices, sv.data(), sv.size());
+    const std::vector<uint8_t> encoded = encodeVertexStream(sv.data(), sv.size(), sizeof(SkinVertex));
+    append(meshes, SkinnedMeshRecord{uint32_t(m), 0, vertices.size(), encoded.size()});
+    vertices.insert(vertices.end(), encoded.begin(), encoded.end());
     ++meshCount;
-    vertexTotal += sv.size();
   }
   for (const SkinnedObject& so : scene.skinnedObjects)
     append(objects, SkinnedObjectRecord{so.object, so.skin});
   w.section(kSkinnedMeshesSection, sizeof(SkinnedMeshRecord), meshCount, std::move(meshes));
-  w.section(kSkinVerticesSection, sizeof(SkinVertex), vertexTotal, std::move(vertices));
+  const uint64_t encodedBytes = vertices.size();
+  w.section(kSkinVerticesSection, 1, encodedBytes, std::move(vertices));
   w.section(kSkinnedObjectsSection, sizeof(SkinnedObjectRecord), scene.skinnedObjects.size(),
             std::move(objects));
 }
@@ -286,26 +288,31 @@ Status Reader::readSkins() {
 Status Reader::readSkinnedMeshes() {
   const SectionBytes s = find_(kSkinnedMeshesSection);
   const SectionBytes vertices = find_(kSkinVerticesSection);
-  uint64_t used = 0;
   for (uint64_t i = 0; i < s.count; ++i) {
     const auto r = record<SkinnedMeshRecord>(s, i);
     const std::string where = fmt::format("section 'skinnedMeshes' record {}", i);
     if (r.mesh >= scene_.meshes.size())
       return fail(
           fmt::format("{}: field 'mesh' {} out of range ({} meshes)", where, r.mesh, scene_.meshes.size()));
+    if (r.reserved != 0) return fail(where + ": field 'reserved' must be 0");
     Mesh& mesh = scene_.meshes[r.mesh];
     if (!mesh.skinVertices.empty()) return fail(fmt::format("{}: mesh {} is listed twice", where, r.mesh));
-    const uint64_t count = mesh.vertices.size();
-    if (Status st = checkRange(where, "firstSkinVertex", r.firstSkinVertex, "mesh vertexCount", count,
-                               kSkinVerticesSection);
-        !st)
+    if (r.byteCount == 0) return fail(where + ": field 'byteCount' is 0");
+    if (Status st = checkRange(where, "firstByte", r.firstByte, "byteCount", r.byteCount, kSkinVerticesSection); !st)
       return st;
-    used += count;
-    if (used > vertices.count)
-      return fail(where + ": meshes reference more skin vertices than section 'skinVertices' holds");
+    const uint64_t count = mesh.vertices.size();
+    // The vertex codec expands its input at most 64x (pack_reader.cpp): a stream that claims more is refused
+    // before the allocation, so a small hostile section cannot ask for gigabytes. byteCount fits in the file.
+    if (count * sizeof(SkinVertex) > r.byteCount * 64)
+      return fail(fmt::format("{}: {} encoded bytes cannot hold the mesh's {} skin vertices", where, r.byteCount,
+                              count));
     mesh.skinVertices.resize(count);
-    std::memcpy(mesh.skinVertices.data(), vertices.data + r.firstSkinVertex * sizeof(SkinVertex),
-                count * sizeof(SkinVertex));
+    const std::string error = decodeVertexStream(mesh.skinVertices.data(), count, sizeof(SkinVertex),
+                                                 vertices.data + r.firstByte, r.byteCount);
+    if (!error.empty()) {
+      mesh.skinVertices.clear();
+      return fail(fmt::format("{}: skin vertices of mesh {} do not decode: {}", where, r.mesh, error));
+    }
   }
   return {};
 }
@@ -478,7 +485,7 @@ uint32_t animationSectionElementSize(const std::string& name) {
       {kSkinsSection, sizeof(SkinRecord)},
       {kSkinJointsSection, sizeof(SkinJointRecord)},
       {kSkinnedMeshesSection, sizeof(SkinnedMeshRecord)},
-      {kSkinVerticesSection, sizeof(SkinVertex)},
+      {kSkinVerticesSection, 1},
       {kSkinnedObjectsSection, sizeof(SkinnedObjectRecord)},
       {kMorphMeshesSection, sizeof(MorphMeshRecord)},
       {kMorphDeltasSection, sizeof(gpu::MorphDelta)},

@@ -47,17 +47,20 @@ struct SkinJointRecord {
 };
 static_assert(sizeof(SkinJointRecord) == 136 && offsetof(SkinJointRecord, inverseBind) == 8);
 
-// Section "skinnedMeshes": meshes with per-vertex skin data: skinVertices[firstSkinVertex, + the mesh's
-// vertexCount) parallel to the mesh's vertices. At most one record per mesh.
+// Section "skinnedMeshes": meshes with per-vertex skin data, one SkinVertex per vertex of the mesh (parallel to
+// its vertices), stored encoded in "skinVertices" bytes [firstByte, firstByte + byteCount). At most one record
+// per mesh.
 struct SkinnedMeshRecord {
-  uint32_t mesh;             // < mesh count
-  uint32_t reserved;         // 0
-  uint64_t firstSkinVertex;  // into "skinVertices"
+  uint32_t mesh;       // < mesh count
+  uint32_t reserved;   // 0
+  uint64_t firstByte;  // into "skinVertices"
+  uint64_t byteCount;  // > 0; the mesh's vertexCount records through the vertex codec (pack_geometry.h)
 };
-static_assert(sizeof(SkinnedMeshRecord) == 16);
+static_assert(sizeof(SkinnedMeshRecord) == 24);
 
-// Section "skinVertices": SkinVertex records (scene/skin_vertex.h): joints u16 x 4, weights f32 x 4.
-static_assert(sizeof(SkinVertex) == 24 && offsetof(SkinVertex, weights) == 8);
+// Section "skinVertices": bytes (elementSize 1): per skinned mesh, its SkinVertex records (scene/skin_vertex.h:
+// joints u16 x 8, weights f32 x 8, 48 bytes) through meshoptimizer's vertex codec (version 0), like "vertices".
+static_assert(sizeof(SkinVertex) == 48 && offsetof(SkinVertex, weights) == 16);
 
 // Section "skinnedObjects": Scene::skinnedObjects, at most one record per object.
 struct SkinnedObjectRecord {

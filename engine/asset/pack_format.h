@@ -34,8 +34,9 @@ inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
 // 2: full materials, textures, tangent / uv1 streams. 3: quantised vertices ("qvertices" + "quantization" instead
 // of "vertices"; exactly one of the two vertex sections is present). 4: animated morph targets (the "morph*"
 // sections of pack_animation_format.h): a mesh with targets stores its base shape, which a version-3 reader
-// would draw without the node's default weights.
-inline constexpr uint32_t kVersion = 4;
+// would draw without the node's default weights. 5: block-compressed texture classes (TextureClassRecord::format)
+// and meshoptimizer-encoded geometry sections; the file is read in place from a memory mapping.
+inline constexpr uint32_t kVersion = 5;
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
 inline constexpr size_t kSectionNameSize = 16;
@@ -85,13 +86,15 @@ struct SceneRecord {
 };
 static_assert(sizeof(SceneRecord) == 136 && offsetof(SceneRecord, lightDirection) == 120);
 
-// Section "meshes": one record per Scene::meshes entry. The mesh's vertices are
-// vertices[firstVertex, firstVertex + vertexCount), its indices (all LODs, mesh-local values below
-// vertexCount) indices[firstIndex, firstIndex + indexCount), its LODs lods[firstLod, firstLod + lodCount).
+// Section "meshes": one record per Scene::meshes entry. Its vertices are records [firstVertex, firstVertex +
+// vertexCount) and its indices (all LODs, mesh-local values below vertexCount) [firstIndex, firstIndex + indexCount)
+// of the *decoded* vertex / index streams: the concatenation of every mesh's decoded data in mesh order, so
+// firstVertex / firstIndex are the sums of the counts of the meshes before it. Its LODs are lods[firstLod, +
+// lodCount). The encoded bytes are located by the mesh's MeshEncodingRecord.
 struct MeshRecord {
   StringRef name;
-  uint64_t firstVertex;   // into "vertices" (or "qvertices" in a quantised pack)
-  uint64_t firstIndex;    // into "indices"
+  uint64_t firstVertex;   // sum of the vertexCounts of the meshes before this one
+  uint64_t firstIndex;    // sum of their indexCounts
   uint32_t vertexCount;   // >= 1
   uint32_t indexCount;    // >= 3
   uint32_t firstLod;      // into "lods"
@@ -109,12 +112,37 @@ struct LodRecord {
 };
 static_assert(sizeof(LodRecord) == 16);
 
-// Section "vertices": gpu::Vertex records as the GPU pool stores them (32 bytes, shaders/shared/types.h).
+// Geometry encoding. The sections "vertices", "qvertices", "indices", "tangents" and "uvs1" are byte streams
+// (elementSize 1) holding one meshoptimizer-encoded stream per mesh, back to back in mesh order: vertex-like
+// streams through meshopt_encodeVertexBuffer (format version 0), indices through meshopt_encodeIndexBuffer (format
+// version 1) or, where that codec would not reproduce the mesh's exact index order, meshopt_encodeIndexSequence
+// (or, where neither is exact, stored raw).
+// Every mesh is encoded on its own (all its LODs in one index stream), so meshes decode independently.
+//   decoded "vertices":  gpu::Vertex records as the GPU pool stores them (32 bytes, shaders/shared/types.h)
+//   decoded "qvertices": QVertexRecord (20 bytes)
+//   decoded "indices":   uint32_t, mesh-local
+//   decoded "tangents":  float[4] per vertex; decoded "uvs1": float[2] per vertex (see MeshStreamsRecord)
 static_assert(sizeof(gpu::Vertex) == 32);
-// Section "indices": uint32_t, mesh-local.
+inline constexpr uint32_t kIndexCodecTriangles = 0;  // meshopt_decodeIndexBuffer
+inline constexpr uint32_t kIndexCodecSequence = 1;   // meshopt_decodeIndexSequence
+inline constexpr uint32_t kIndexCodecRaw = 2;        // not encoded: indexCount uint32_t (see pack_geometry.h)
 
-// Section "qvertices" (a quantised pack, `visbuf bake --quantize`; replaces "vertices"): one record per vertex,
-// the mesh's record in "quantization" maps the integers back. A component q of a unorm16 field decodes as
+// Section "meshEncoding": one record per mesh, in mesh order: where its encoded streams are and what they decode
+// to. Byte ranges lie inside their section; vertexCount / indexCount equal the mesh record's.
+struct MeshEncodingRecord {
+  uint64_t vertexByte;   // into "vertices" (or "qvertices"): the first byte of the mesh's encoded vertices
+  uint64_t vertexBytes;  // their length
+  uint64_t indexByte;    // into "indices"
+  uint64_t indexBytes;
+  uint32_t vertexCount;  // vertices the stream decodes to
+  uint32_t indexCount;   // indices the stream decodes to (a multiple of 3 with kIndexCodecTriangles)
+  uint32_t indexCodec;   // kIndexCodecTriangles, kIndexCodecSequence or kIndexCodecRaw
+  uint32_t reserved;     // 0
+};
+static_assert(sizeof(MeshEncodingRecord) == 48 && offsetof(MeshEncodingRecord, vertexCount) == 32);
+
+// Section "qvertices" (a quantised pack, `visbuf bake --quantize`; replaces "vertices"): decodes to one record per
+// vertex, the mesh's record in "quantization" maps the integers back. A component q of a unorm16 field decodes as
 // dequantizeUnorm16(offset, scale, q) = offset + scale * (q / 65535), evaluated in float exactly as written
 // (the writer picks the q whose decoded value is nearest: error <= scale / 65535 / 2 + float rounding).
 struct QVertexRecord {
@@ -208,26 +236,33 @@ static_assert(sizeof(TextureRecord) == 32);
 // Section "textureClasses": one 2D array texture each (TextureClass).
 struct TextureClassRecord {
   uint32_t size;        // width = height, power of two in [1, 16384]
-  uint32_t colorSpace;  // ColorSpace
+  uint32_t colorSpace;  // ColorSpace; 0 (linear) for formats bc4 / bc5
   uint32_t layers;      // 1..256
   uint32_t mipCount;    // log2(size) + 1
+  uint32_t format;      // TextureFormat: 0 rgba8, 1 bc1, 2 bc3, 3 bc4, 4 bc5
+  uint32_t reserved;    // 0
   uint64_t firstByte;   // into "texels", multiple of 16
-  uint64_t byteCount;   // sum over mips m of layers * max(size >> m, 1)^2 * 4
+  uint64_t byteCount;   // sum over mips m of layers * textureImageBytes(format, max(size >> m, 1)): rgba8
+                        // side^2 * 4; BC ceil(side / 4)^2 blocks of 8 (bc1, bc4) or 16 (bc3, bc5) bytes
 };
-static_assert(sizeof(TextureClassRecord) == 32 && offsetof(TextureClassRecord, firstByte) == 16);
+static_assert(sizeof(TextureClassRecord) == 40 && offsetof(TextureClassRecord, format) == 16 &&
+              offsetof(TextureClassRecord, firstByte) == 24 && offsetof(TextureClassRecord, byteCount) == 32);
 
-// Section "texels": bytes (elementSize 1); each class's RGBA8 texels at its firstByte, mip-major (all layers of
-// mip 0, then of mip 1, ...), zero padding between classes.
+// Section "texels": bytes (elementSize 1); each class's texels (RGBA8 texels or BC blocks) at its firstByte,
+// mip-major (all layers of mip 0, then of mip 1, ...), zero padding between classes.
 
 inline constexpr uint64_t kNoStream = ~uint64_t{0};
 
-// Section "meshStreams" (optional; absent: no mesh has extra streams): one record per mesh, in mesh order.
+// Section "meshStreams" (optional; absent: no mesh has extra streams): one record per mesh, in mesh order. Each
+// stream present decodes (meshopt_decodeVertexBuffer) to the mesh's vertexCount records.
 struct MeshStreamsRecord {
-  uint64_t firstTangent;  // into "tangents" (vertexCount records), kNoStream: none
-  uint64_t firstUv1;      // into "uvs1" (vertexCount records), kNoStream: none
+  uint64_t tangentByte;   // into "tangents": the mesh's encoded tangents, kNoStream: none
+  uint64_t tangentBytes;  // their length (0 with kNoStream)
+  uint64_t uv1Byte;       // into "uvs1", kNoStream: none
+  uint64_t uv1Bytes;
 };
-static_assert(sizeof(MeshStreamsRecord) == 16);
-// Section "tangents": float[4] per vertex (xyz unit, w = +-1, or all 0: none). Section "uvs1": float[2].
+static_assert(sizeof(MeshStreamsRecord) == 32);
+// Decoded "tangents": float[4] per vertex (xyz unit, w = +-1, or all 0: none). Decoded "uvs1": float[2].
 
 // Section "objects": one record per Scene::objects entry.
 struct ObjectRecord {
@@ -239,8 +274,8 @@ struct ObjectRecord {
 };
 static_assert(sizeof(ObjectRecord) == 144 && offsetof(ObjectRecord, mesh) == 128);
 
-// Section names; these eight are required, each at most once, except that a quantised pack has "qvertices" and
-// "quantization" instead of "vertices" (exactly one of "vertices" / "qvertices").
+// Section names; these nine (with "meshEncoding") are required, each at most once, except that a quantised pack
+// has "qvertices" and "quantization" instead of "vertices" (exactly one of "vertices" / "qvertices").
 inline constexpr const char* kSceneSection = "scene";
 inline constexpr const char* kStringsSection = "strings";
 inline constexpr const char* kMeshesSection = "meshes";
@@ -258,6 +293,8 @@ inline constexpr const char* kTangentsSection = "tangents";
 inline constexpr const char* kUvs1Section = "uvs1";
 inline constexpr const char* kQVerticesSection = "qvertices";
 inline constexpr const char* kQuantizationSection = "quantization";
+// Required: where each mesh's encoded geometry is.
+inline constexpr const char* kMeshEncodingSection = "meshEncoding";
 // Optional sections for skins, animation clips and skin vertices: pack_animation_format.h.
 
 // CRC-32 (IEEE, as zlib's crc32()): crc32(b, crc32(a)) == crc32(a + b). Start with crc = 0.

@@ -5,8 +5,9 @@
 //      then the declared file size;
 //   4. each section's checksum; required sections present, once, with the expected record size; exactly one of
 //      "vertices" / "qvertices", "quantization" exactly with "qvertices";
-//   5. contents: string refs, mesh/LOD/vertex/index ranges, index values, finite values, object references,
-//      then the optional animation sections (pack_animation.cpp);
+//   5. contents: string refs, mesh/LOD ranges, each mesh's encoded geometry (its "meshEncoding" record: counts,
+//      byte ranges, the codec's largest expansion before allocating, then the decode itself), index values,
+//      finite values, object references, then the optional animation sections (pack_animation.cpp);
 //   6. validateScene() on the result.
 #include "visbuf/asset/pack_reader.h"
 
@@ -26,7 +27,9 @@
 
 #include "visbuf/asset/pack_animation.h"
 #include "visbuf/asset/pack_format.h"
+#include "visbuf/asset/pack_geometry.h"
 #include "visbuf/core/file_read.h"
+#include "visbuf/core/mapped_file.h"
 
 namespace visbuf {
 
@@ -48,17 +51,18 @@ uint32_t expectedElementSize(std::string_view name) {
   if (name == pack::kStringsSection) return 1;
   if (name == pack::kMeshesSection) return sizeof(pack::MeshRecord);
   if (name == pack::kLodsSection) return sizeof(pack::LodRecord);
-  if (name == pack::kVerticesSection) return sizeof(gpu::Vertex);
-  if (name == pack::kIndicesSection) return sizeof(uint32_t);
+  if (name == pack::kVerticesSection) return 1;  // encoded streams (pack_geometry.h)
+  if (name == pack::kIndicesSection) return 1;
+  if (name == pack::kMeshEncodingSection) return sizeof(pack::MeshEncodingRecord);
   if (name == pack::kMaterialsSection) return sizeof(pack::MaterialRecord);
   if (name == pack::kObjectsSection) return sizeof(pack::ObjectRecord);
   if (name == pack::kTexturesSection) return sizeof(pack::TextureRecord);
   if (name == pack::kTextureClassesSection) return sizeof(pack::TextureClassRecord);
   if (name == pack::kTexelsSection) return 1;
   if (name == pack::kMeshStreamsSection) return sizeof(pack::MeshStreamsRecord);
-  if (name == pack::kTangentsSection) return sizeof(float) * 4;
-  if (name == pack::kUvs1Section) return sizeof(float) * 2;
-  if (name == pack::kQVerticesSection) return sizeof(pack::QVertexRecord);
+  if (name == pack::kTangentsSection) return 1;
+  if (name == pack::kUvs1Section) return 1;
+  if (name == pack::kQVerticesSection) return 1;
   if (name == pack::kQuantizationSection) return sizeof(pack::QuantizationRecord);
   return pack::animationSectionElementSize(std::string(name));  // 0: unknown
 }
@@ -66,7 +70,19 @@ uint32_t expectedElementSize(std::string_view name) {
 // Plus exactly one of "vertices" / "qvertices" (checked separately).
 constexpr const char* kRequiredSections[] = {pack::kSceneSection,   pack::kStringsSection,   pack::kMeshesSection,
                                              pack::kLodsSection,    pack::kIndicesSection,   pack::kMaterialsSection,
-                                             pack::kObjectsSection};
+                                             pack::kObjectsSection, pack::kMeshEncodingSection};
+
+// The most a codec can expand its input: the vertex codec spends at least 2 bits per 16 decoded bytes (64x), the
+// triangle codec one byte per triangle (12 decoded bytes), the sequence codec one byte per index (4). Checking a
+// stream's declared decoded size against these before allocating keeps a hostile pack from making the reader
+// allocate more than 64 times the file's size.
+constexpr uint64_t kVertexCodecMaxExpansion = 64;
+constexpr uint64_t kTriangleCodecMaxExpansion = 12;
+constexpr uint64_t kSequenceCodecMaxExpansion = 4;
+
+bool expansionFits(uint64_t decodedBytes, uint64_t encodedBytes, uint64_t factor) {
+  return encodedBytes <= std::numeric_limits<uint64_t>::max() / factor && decodedBytes <= encodedBytes * factor;
+}
 
 class Parser {
  public:
@@ -74,6 +90,12 @@ class Parser {
       : data_(data), size_(size), label_(label) {}
 
   Result<Scene> run();
+  uint64_t peakScratchBytes() const { return peakScratch_; }
+  uint64_t largestSection() const {
+    uint64_t largest = 0;
+    for (const auto& [name, v] : sections_) largest = std::max(largest, v.entry.size);
+    return largest;
+  }
 
  private:
   Error fail(std::string message, ErrorCode code = ErrorCode::MalformedInput) const {
@@ -105,11 +127,32 @@ class Parser {
     return empty;
   }
 
+  // Decodes one mesh's stream of `section` (bytes [byte, byte + bytes)) into `count` records of `stride` at `out`.
+  Status decodeVertices(void* out, uint64_t count, size_t stride, const SectionView& section, uint64_t byte,
+                        uint64_t bytes, const std::string& where) const;
+  void noteScratch(uint64_t bytes) { peakScratch_ = std::max(peakScratch_, bytes); }
+
   const uint8_t* data_;
   size_t size_;
   const std::string& label_;
   std::map<std::string, SectionView, std::less<>> sections_;
+  uint64_t peakScratch_ = 0;  // largest decode buffer besides the Scene's own storage
 };
+
+Status Parser::decodeVertices(void* out, uint64_t count, size_t stride, const SectionView& section, uint64_t byte,
+                              uint64_t bytes, const std::string& where) const {
+  if (!rangeFits(byte, bytes, section.entry.size))
+    return fail(fmt::format("{}: encoded bytes [{}, {} + {}) lie outside section '{}' ({} bytes)", where, byte, byte,
+                            bytes, section.name, section.entry.size));
+  if (!expansionFits(count * stride, bytes, kVertexCodecMaxExpansion))
+    return fail(fmt::format("{}: {} bytes cannot encode {} records of {} bytes (the codec expands at most {}x)",
+                            where, bytes, count, stride, kVertexCodecMaxExpansion));
+  const std::string why = pack::decodeVertexStream(out, count, stride, section.data + byte, bytes);
+  if (!why.empty())
+    return fail(fmt::format("{}: the encoded stream in section '{}' (bytes [{}, {} + {})) does not decode to {} "
+                            "records: {}", where, section.name, byte, byte, bytes, count, why));
+  return {};
+}
 
 Result<std::string> Parser::string(pack::StringRef ref, const std::string& where) const {
   const SectionView& s = sections_.at(pack::kStringsSection);
@@ -294,12 +337,17 @@ Status Parser::readMeshes(Scene* scene) {
   const SectionView& vertices = sections_.at(quantized ? pack::kQVerticesSection : pack::kVerticesSection);
   const SectionView quantization = optional(pack::kQuantizationSection);
   const SectionView& indices = sections_.at(pack::kIndicesSection);
+  const SectionView& encoding = sections_.at(pack::kMeshEncodingSection);
   if (meshes.entry.count == 0) return fail("section 'meshes' is empty: a pack needs at least one mesh");
   if (quantized && quantization.entry.count != meshes.entry.count) {
     return fail(fmt::format("section 'quantization' has {} records for {} meshes", quantization.entry.count,
                             meshes.entry.count));
   }
+  if (encoding.entry.count != meshes.entry.count)
+    return fail(fmt::format("section 'meshEncoding' has {} records for {} meshes", encoding.entry.count,
+                            meshes.entry.count));
   scene->meshes.reserve(meshes.entry.count);
+  uint64_t vertexTotal = 0, indexTotal = 0;  // the decoded streams so far
   for (uint64_t i = 0; i < meshes.entry.count; ++i) {
     const auto r = record<pack::MeshRecord>(meshes, i);
     std::string where = fmt::format("section 'meshes' record {}", i);
@@ -315,10 +363,11 @@ Status Parser::readMeshes(Scene* scene) {
       return fail(fmt::format("{}: 'vertexCount' {} / 'indexCount' {} (need >= 1 / >= 3)", where,
                               r.vertexCount, r.indexCount));
     }
-    if (!rangeFits(r.firstVertex, r.vertexCount, vertices.entry.count))
-      return outside("firstVertex", r.firstVertex, "vertexCount", r.vertexCount, vertices);
-    if (!rangeFits(r.firstIndex, r.indexCount, indices.entry.count))
-      return outside("firstIndex", r.firstIndex, "indexCount", r.indexCount, indices);
+    if (r.firstVertex != vertexTotal || r.firstIndex != indexTotal)
+      return fail(fmt::format("{}: fields 'firstVertex' {} / 'firstIndex' {} must be {} / {}, the counts of the "
+                              "meshes before it", where, r.firstVertex, r.firstIndex, vertexTotal, indexTotal));
+    vertexTotal += r.vertexCount;
+    indexTotal += r.indexCount;
     if (r.lodCount == 0 || r.lodCount > MAX_LODS)
       return fail(fmt::format("{}: field 'lodCount' is {} (1..{})", where, r.lodCount, MAX_LODS));
     if (!rangeFits(r.firstLod, r.lodCount, lods.entry.count))
@@ -326,11 +375,42 @@ Status Parser::readMeshes(Scene* scene) {
     if (!allFinite(r.boundsSphere, 4) || r.boundsSphere[3] < 0.0f)
       return fail(fmt::format("{}: field 'boundsSphere' is not finite with a radius >= 0", where));
 
+    const auto e = record<pack::MeshEncodingRecord>(encoding, i);
+    const std::string ew = fmt::format("section 'meshEncoding' record {} (mesh '{}')", i, *name);
+    if (e.vertexCount != r.vertexCount || e.indexCount != r.indexCount)
+      return fail(fmt::format("{}: its streams decode to {} vertices / {} indices, but the mesh record has {} / {}",
+                              ew, e.vertexCount, e.indexCount, r.vertexCount, r.indexCount));
+    if (e.reserved != 0) return fail(fmt::format("{}: field 'reserved' is {}, expected 0", ew, e.reserved));
+    if (e.indexCodec != pack::kIndexCodecTriangles && e.indexCodec != pack::kIndexCodecSequence &&
+        e.indexCodec != pack::kIndexCodecRaw)
+      return fail(fmt::format("{}: field 'indexCodec' is {} (0 triangles, 1 sequence, 2 raw)", ew, e.indexCodec));
+    if (!rangeFits(e.indexByte, e.indexBytes, indices.entry.size))
+      return fail(fmt::format("{}: encoded index bytes [{}, {} + {}) lie outside section 'indices' ({} bytes)", ew,
+                              e.indexByte, e.indexByte, e.indexBytes, indices.entry.size));
+    const uint64_t indexExpansion = e.indexCodec == pack::kIndexCodecTriangles ? kTriangleCodecMaxExpansion
+                                    : e.indexCodec == pack::kIndexCodecSequence ? kSequenceCodecMaxExpansion
+                                                                                : 1;
+    if (!expansionFits(uint64_t{r.indexCount} * sizeof(uint32_t), e.indexBytes, indexExpansion))
+      return fail(fmt::format("{}: {} bytes cannot encode {} indices (the codec expands at most {}x)", ew,
+                              e.indexBytes, r.indexCount, indexExpansion));
+
     Mesh mesh;
     mesh.name = *name;
     mesh.boundsSphere = glm::vec4(r.boundsSphere[0], r.boundsSphere[1], r.boundsSphere[2], r.boundsSphere[3]);
+    const size_t vertexStride = quantized ? sizeof(pack::QVertexRecord) : sizeof(gpu::Vertex);
+    // Both checked before any allocation: the range inside the section and the codec's largest expansion.
+    if (!rangeFits(e.vertexByte, e.vertexBytes, vertices.entry.size) ||
+        !expansionFits(uint64_t{r.vertexCount} * vertexStride, e.vertexBytes, kVertexCodecMaxExpansion))
+      return decodeVertices(nullptr, r.vertexCount, vertexStride, vertices, e.vertexByte, e.vertexBytes,
+                            ew + " vertices");
     mesh.vertices.resize(r.vertexCount);
     if (quantized) {
+      std::vector<pack::QVertexRecord> decoded(r.vertexCount);
+      noteScratch(decoded.size() * sizeof(pack::QVertexRecord));
+      if (Status st = decodeVertices(decoded.data(), r.vertexCount, vertexStride, vertices, e.vertexByte,
+                                     e.vertexBytes, ew + " vertices");
+          !st)
+        return st;
       const auto q = record<pack::QuantizationRecord>(quantization, i);
       const std::string qw = fmt::format("section 'quantization' record {}", i);
       if (!allFinite(q.positionOffset, 3) || !allFinite(q.uvOffset, 2))
@@ -341,20 +421,25 @@ Status Parser::readMeshes(Scene* scene) {
       if (!scaleOk(q.positionScale, 3) || !scaleOk(q.uvScale, 2))
         return fail(qw + ": field 'positionScale' or 'uvScale' is not a finite value >= 0");
       for (uint32_t v = 0; v < r.vertexCount; ++v) {
-        const auto qv = record<pack::QVertexRecord>(vertices, r.firstVertex + v);
+        const pack::QVertexRecord& qv = decoded[v];
         if (qv.reserved != 0) {
-          return fail(fmt::format("section 'qvertices' record {} (mesh {} vertex {}): field 'reserved' is {}, "
-                                  "expected 0", r.firstVertex + v, i, v, qv.reserved));
+          return fail(fmt::format("section 'qvertices' (mesh {} vertex {}): field 'reserved' is {}, expected 0", i,
+                                  v, qv.reserved));
         }
         mesh.vertices[v] = pack::dequantizeVertex(q, qv);
       }
-    } else {
-      std::memcpy(mesh.vertices.data(), vertices.data + r.firstVertex * sizeof(gpu::Vertex),
-                  size_t{r.vertexCount} * sizeof(gpu::Vertex));
+    } else if (Status st = decodeVertices(mesh.vertices.data(), r.vertexCount, vertexStride, vertices, e.vertexByte,
+                                          e.vertexBytes, ew + " vertices");
+               !st) {
+      return st;
     }
     mesh.indices.resize(r.indexCount);
-    std::memcpy(mesh.indices.data(), indices.data + r.firstIndex * sizeof(uint32_t),
-                size_t{r.indexCount} * sizeof(uint32_t));
+    if (const std::string why = pack::decodeIndexStream(mesh.indices.data(), r.indexCount, e.indexCodec,
+                                                        indices.data + e.indexByte, e.indexBytes);
+        !why.empty())
+      return fail(fmt::format("{} indices: the encoded stream in section 'indices' (bytes [{}, {} + {})) does not "
+                              "decode to {} indices: {}", ew, e.indexByte, e.indexByte, e.indexBytes, r.indexCount,
+                              why));
     // Culling is only conservative if the sphere really contains the mesh: check it (relative slack as in
     // buildMesh's padding, plus float rounding of the distance).
     const glm::dvec3 centre(mesh.boundsSphere);
@@ -475,12 +560,22 @@ Status Parser::readMeshStreams(Scene* scene) {
     Mesh& mesh = scene->meshes[i];
     const uint64_t n = mesh.vertices.size();
     const std::string where = fmt::format("section 'meshStreams' record {}", i);
-    if (r.firstTangent != pack::kNoStream) {
-      if (!rangeFits(r.firstTangent, n, tangents.entry.count))
-        return fail(fmt::format("{}: field 'firstTangent' {} + {} vertices runs past the {} records of section "
-                                "'tangents'", where, r.firstTangent, n, tangents.entry.count));
+    if ((r.tangentByte == pack::kNoStream && r.tangentBytes != 0) || (r.uv1Byte == pack::kNoStream && r.uv1Bytes != 0))
+      return fail(where + ": a stream marked absent (kNoStream) has a non-zero byte count");
+    // Range and expansion checked by decodeVertices() before the allocation: a failed check leaves nothing.
+    auto fits = [&](uint64_t byte, uint64_t bytes, const SectionView& section, size_t stride) {
+      return rangeFits(byte, bytes, section.entry.size) &&
+             expansionFits(n * stride, bytes, kVertexCodecMaxExpansion);
+    };
+    if (r.tangentByte != pack::kNoStream) {
+      const std::string tw = where + " ('" + mesh.name + "') tangents";
+      if (!fits(r.tangentByte, r.tangentBytes, tangents, sizeof(glm::vec4)))
+        return decodeVertices(nullptr, n, sizeof(glm::vec4), tangents, r.tangentByte, r.tangentBytes, tw);
       mesh.tangents.resize(n);
-      std::memcpy(mesh.tangents.data(), tangents.data + r.firstTangent * sizeof(glm::vec4), n * sizeof(glm::vec4));
+      if (Status st = decodeVertices(mesh.tangents.data(), n, sizeof(glm::vec4), tangents, r.tangentByte,
+                                     r.tangentBytes, tw);
+          !st)
+        return st;
       for (uint64_t v = 0; v < n; ++v) {
         const glm::vec4 t = mesh.tangents[v];
         const float len = glm::length(glm::vec3(t));
@@ -490,12 +585,13 @@ Status Parser::readMeshStreams(Scene* scene) {
               fmt::format("{}: tangent of vertex {} is not a unit vector with w = +-1 (or all zero)", where, v));
       }
     }
-    if (r.firstUv1 != pack::kNoStream) {
-      if (!rangeFits(r.firstUv1, n, uvs1.entry.count))
-        return fail(fmt::format("{}: field 'firstUv1' {} + {} vertices runs past the {} records of section 'uvs1'",
-                                where, r.firstUv1, n, uvs1.entry.count));
+    if (r.uv1Byte != pack::kNoStream) {
+      const std::string uw = where + " ('" + mesh.name + "') uvs1";
+      if (!fits(r.uv1Byte, r.uv1Bytes, uvs1, sizeof(glm::vec2)))
+        return decodeVertices(nullptr, n, sizeof(glm::vec2), uvs1, r.uv1Byte, r.uv1Bytes, uw);
       mesh.uvs1.resize(n);
-      std::memcpy(mesh.uvs1.data(), uvs1.data + r.firstUv1 * sizeof(glm::vec2), n * sizeof(glm::vec2));
+      if (Status st = decodeVertices(mesh.uvs1.data(), n, sizeof(glm::vec2), uvs1, r.uv1Byte, r.uv1Bytes, uw); !st)
+        return st;
       for (const glm::vec2& uv : mesh.uvs1)
         if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return fail(where + ": non-finite uv1");
     }
@@ -518,15 +614,23 @@ Status Parser::readTextures(Scene* scene) {
     c.colorSpace = ColorSpace(r.colorSpace);
     c.layers = r.layers;
     c.mipCount = r.mipCount;
+    c.format = TextureFormat(r.format);
     if (r.size < 1 || r.size > 16384 || !std::has_single_bit(r.size) || r.colorSpace > 1 || r.layers < 1 ||
         r.layers > 256 || r.mipCount != TextureClass::mipCountFor(r.size)) {
       return fail(fmt::format("{}: 'size' {} (power of two, 1..16384) / 'colorSpace' {} / 'layers' {} (1..256) / "
                               "'mipCount' {} (log2(size) + 1) invalid",
                               where, r.size, r.colorSpace, r.layers, r.mipCount));
     }
+    if (r.format >= kTextureFormatCount)
+      return fail(fmt::format("{}: field 'format' {} is not a known texture format (0 rgba8, 1 bc1, 2 bc3, 3 bc4, "
+                              "4 bc5)", where, r.format));
+    if ((c.format == TextureFormat::Bc4 || c.format == TextureFormat::Bc5) && c.colorSpace != ColorSpace::Linear)
+      return fail(fmt::format("{}: format {} must be linear (field 'colorSpace' is {})", where,
+                              textureFormatName(c.format), r.colorSpace));
+    if (r.reserved != 0) return fail(fmt::format("{}: field 'reserved' is {}, expected 0", where, r.reserved));
     if (r.byteCount != c.totalBytes())
-      return fail(fmt::format("{}: field 'byteCount' {} differs from the {} bytes its mips need", where, r.byteCount,
-                              c.totalBytes()));
+      return fail(fmt::format("{}: field 'byteCount' {} differs from the {} bytes its mips need in format {}", where,
+                              r.byteCount, c.totalBytes(), textureFormatName(c.format)));
     if (r.firstByte % pack::kAlignment != 0 || !rangeFits(r.firstByte, r.byteCount, texels.entry.size))
       return fail(fmt::format("{}: field 'firstByte' {} (+ {} bytes) is not 16-aligned inside section 'texels' ({} "
                               "bytes)", where, r.firstByte, r.byteCount, texels.entry.size));
@@ -600,23 +704,30 @@ Result<Scene> Parser::run() {
 
 }  // namespace
 
-Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label) {
+Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label, PackReadStats* stats) {
   try {
     Parser parser(data, size, label);
-    return parser.run();
+    Result<Scene> scene = parser.run();
+    if (stats) {
+      stats->fileBytes = size;
+      stats->largestSection = parser.largestSection();
+      stats->peakScratchBytes = parser.peakScratchBytes();
+    }
+    return scene;
   } catch (const std::bad_alloc&) {
     return makeError(ErrorCode::CapacityExceeded, label + ": out of memory while reading the pack");
   }
 }
 
-// Only a regular file is read, opened without blocking (core/file_read.h): a FIFO or device given as a pack
-// fails at once instead of hanging in open() or read().
-Result<Scene> readPack(const std::string& path) {
+// Only a regular file is mapped, opened without blocking (core/mapped_file.h): a FIFO or device given as a pack
+// fails at once instead of hanging in open(). The sections are checked and decoded in place from the read-only
+// mapping; nothing holds a copy of the file.
+Result<Scene> readPack(const std::string& path, PackReadStats* stats) {
   FileReadOptions options;
-  options.maxBytes = std::numeric_limits<size_t>::max();
-  Result<std::vector<uint8_t>> bytes = readRegularFile(path, options);
-  if (!bytes) return bytes.error();
-  return parsePack(bytes->data(), bytes->size(), path);
+  options.maxBytes = kMaxPackFileBytes;
+  Result<MappedFile> file = MappedFile::open(path, options);
+  if (!file) return file.error();
+  return parsePack(file->data(), file->size(), path, stats);
 }
 
 bool isPackFile(const std::string& path) {

@@ -2,7 +2,8 @@
 //
 // The reader trusts nothing in the file: every offset, count, size and index is checked (with overflow-safe
 // arithmetic) before a byte is touched, so a damaged or hostile file gives an Error, never an assert, crash,
-// out-of-bounds read or an allocation larger than the file. Messages start with the path (or label) and name
+// out-of-bounds read or an allocation larger than 64 times the file (the geometry codecs' largest expansion).
+// Messages start with the path (or label) and name
 // the section, record and field, e.g.
 //   "pack.vbp: section 'indices' runs past the end of the file (offset 1234, size 5678, file 4000)".
 // Error codes: FileNotFound / IoError (cannot read), Unsupported (another format version), MalformedInput
@@ -19,11 +20,28 @@
 
 namespace visbuf {
 
-// Reads the pack file at `path`. The result passes validateScene().
-Result<Scene> readPack(const std::string& path);
+// Largest pack file readPack() maps (the address space, not memory, is what a mapping uses).
+inline constexpr uint64_t kMaxPackFileBytes = uint64_t{1} << 40;
+
+// What reading a pack cost besides the Scene it returns (for load statistics).
+struct PackReadStats {
+  uint64_t fileBytes = 0;         // the pack's size (mapped read-only, not copied, by readPack)
+  uint64_t largestSection = 0;    // bytes of the largest section as stored
+  uint64_t peakScratchBytes = 0;  // the largest transient decode buffer (quantised vertices of one mesh); the
+                                  // Scene's own decoded geometry is not counted
+};
+
+// Maps the pack file at `path` (read-only, private; core/mapped_file.h) and parses it in place. The result
+// passes validateScene(). `stats` (may be null) gets the read's figures.
+//
+// A mapped file that another process truncates while it is being read raises SIGBUS on the next access to the
+// lost pages. Packs are written atomically (writePack renames a complete file into place, which leaves an open
+// mapping on the old file intact), so only an in-place truncation by another program can do that; such a file
+// should be read with parsePack() from a private copy instead.
+Result<Scene> readPack(const std::string& path, PackReadStats* stats = nullptr);
 
 // Parses pack bytes held in memory (`size` bytes at `data`); `label` starts every error message.
-Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label);
+Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label, PackReadStats* stats = nullptr);
 
 // True when the file at `path` can be opened and starts with the pack magic "VBPK".
 bool isPackFile(const std::string& path);

@@ -18,6 +18,7 @@
 
 #include "visbuf/asset/pack_animation.h"
 #include "visbuf/asset/pack_format.h"
+#include "visbuf/asset/pack_geometry.h"
 #include "visbuf/core/image_io.h"
 #include "visbuf/core/temp_file.h"
 
@@ -146,8 +147,11 @@ Status checkTextureClasses(const Scene& scene) {
     const TextureClass& c = scene.textureClasses[i];
     if (c.size < 1 || c.size > 16384 || !std::has_single_bit(c.size) || c.layers < 1 || c.layers > 256 ||
         c.mipCount != TextureClass::mipCountFor(c.size) || uint32_t(c.colorSpace) > 1 ||
-        c.texels.size() != c.totalBytes())
-      return invalid(fmt::format("texture class {}: inconsistent size, layers, mip count or texel bytes", i));
+        uint32_t(c.format) >= kTextureFormatCount || c.texels.size() != c.totalBytes())
+      return invalid(fmt::format("texture class {}: inconsistent size, layers, mip count, format or texel bytes", i));
+    // Single- and two-channel formats hold data, never colour: there is no sRGB BC4 / BC5 format.
+    if ((c.format == TextureFormat::Bc4 || c.format == TextureFormat::Bc5) && c.colorSpace != ColorSpace::Linear)
+      return invalid(fmt::format("texture class {}: format {} must be linear", i, textureFormatName(c.format)));
     used[i].assign(c.layers, 0);
   }
   for (size_t i = 0; i < scene.textures.size(); ++i) {
@@ -173,8 +177,8 @@ Status serializeTextures(const Scene& scene, StringTable& strings, std::vector<S
   }
   for (const TextureClass& c : scene.textureClasses) {
     texels.resize(alignUp(texels.size()), 0);
-    append(classBytes, pack::TextureClassRecord{c.size, uint32_t(c.colorSpace), c.layers, c.mipCount, texels.size(),
-                                                c.texels.size()});
+    append(classBytes, pack::TextureClassRecord{c.size, uint32_t(c.colorSpace), c.layers, c.mipCount,
+                                                uint32_t(c.format), 0, texels.size(), c.texels.size()});
     texels.insert(texels.end(), c.texels.begin(), c.texels.end());
   }
   sections->push_back(
@@ -186,24 +190,39 @@ Status serializeTextures(const Scene& scene, StringTable& strings, std::vector<S
   return {};
 }
 
-// Appends "meshStreams", "tangents" and "uvs1" when some mesh has tangents or a second uv set.
+// Appends `encoded` to `section` and returns where it starts.
+uint64_t appendStream(std::vector<uint8_t>& section, const std::vector<uint8_t>& encoded) {
+  const uint64_t at = section.size();
+  section.insert(section.end(), encoded.begin(), encoded.end());
+  return at;
+}
+
+// Appends "meshStreams", "tangents" and "uvs1" (encoded per mesh) when some mesh has tangents or a second uv set.
 void serializeMeshStreams(const Scene& scene, std::vector<Section>* sections) {
   std::vector<pack::MeshStreamsRecord> records;
-  std::vector<glm::vec4> tangents;
-  std::vector<glm::vec2> uvs1;
+  std::vector<uint8_t> tangents, uvs1;
+  bool any = false;
   for (const Mesh& m : scene.meshes) {
-    pack::MeshStreamsRecord r{pack::kNoStream, pack::kNoStream};
-    if (!m.tangents.empty()) r.firstTangent = tangents.size();
-    if (!m.uvs1.empty()) r.firstUv1 = uvs1.size();
-    tangents.insert(tangents.end(), m.tangents.begin(), m.tangents.end());
-    uvs1.insert(uvs1.end(), m.uvs1.begin(), m.uvs1.end());
+    pack::MeshStreamsRecord r{pack::kNoStream, 0, pack::kNoStream, 0};
+    if (!m.tangents.empty()) {
+      const std::vector<uint8_t> e = pack::encodeVertexStream(m.tangents.data(), m.tangents.size(), sizeof(glm::vec4));
+      r.tangentByte = appendStream(tangents, e);
+      r.tangentBytes = e.size();
+      any = true;
+    }
+    if (!m.uvs1.empty()) {
+      const std::vector<uint8_t> e = pack::encodeVertexStream(m.uvs1.data(), m.uvs1.size(), sizeof(glm::vec2));
+      r.uv1Byte = appendStream(uvs1, e);
+      r.uv1Bytes = e.size();
+      any = true;
+    }
     records.push_back(r);
   }
-  if (tangents.empty() && uvs1.empty()) return;
+  if (!any) return;
   sections->push_back({pack::kMeshStreamsSection, sizeof(pack::MeshStreamsRecord), records.size(), bytesOf(records)});
-  if (!tangents.empty())
-    sections->push_back({pack::kTangentsSection, sizeof(glm::vec4), tangents.size(), bytesOf(tangents)});
-  if (!uvs1.empty()) sections->push_back({pack::kUvs1Section, sizeof(glm::vec2), uvs1.size(), bytesOf(uvs1)});
+  const uint64_t tangentBytes = tangents.size(), uv1Bytes = uvs1.size();
+  if (tangentBytes > 0) sections->push_back({pack::kTangentsSection, 1, tangentBytes, std::move(tangents)});
+  if (uv1Bytes > 0) sections->push_back({pack::kUvs1Section, 1, uv1Bytes, std::move(uvs1)});
 }
 
 // Picks the unorm16 q whose decoded value (pack::dequantizeUnorm16) is nearest to x in [offset, offset + scale].
@@ -332,8 +351,8 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
     append(sceneBytes, r);
   }
 
-  // meshes, lods, vertices (or qvertices + quantization), indices
-  std::vector<uint8_t> meshBytes, lodBytes, vertexBytes, indexBytes, quantizationBytes;
+  // meshes, lods, vertices (or qvertices + quantization), indices; geometry encoded per mesh ("meshEncoding")
+  std::vector<uint8_t> meshBytes, lodBytes, vertexBytes, indexBytes, quantizationBytes, encodingBytes;
   uint64_t vertexTotal = 0, indexTotal = 0, lodTotal = 0;
   PackQuantizationReport quantization;
   quantization.enabled = options.quantize;
@@ -381,17 +400,20 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
       const float error = options.quantize ? roundUp(double(l.error) + double(q.maxPositionError)) : l.error;
       append(lodBytes, pack::LodRecord{l.firstIndex, l.indexCount, error, 0});
     }
-    if (options.quantize) {
-      for (const pack::QVertexRecord& qv : q.vertices) append(vertexBytes, qv);
-      append(quantizationBytes, q.params);
-    } else {
-      const size_t vAt = vertexBytes.size();
-      vertexBytes.resize(vAt + m.vertices.size() * sizeof(gpu::Vertex));
-      std::memcpy(vertexBytes.data() + vAt, m.vertices.data(), m.vertices.size() * sizeof(gpu::Vertex));
-    }
-    const size_t iAt = indexBytes.size();
-    indexBytes.resize(iAt + m.indices.size() * sizeof(uint32_t));
-    std::memcpy(indexBytes.data() + iAt, m.indices.data(), m.indices.size() * sizeof(uint32_t));
+    pack::MeshEncodingRecord enc{};
+    const std::vector<uint8_t> encodedVertices =
+        options.quantize ? pack::encodeVertexStream(q.vertices.data(), q.vertices.size(), sizeof(pack::QVertexRecord))
+                         : pack::encodeVertexStream(m.vertices.data(), m.vertices.size(), sizeof(gpu::Vertex));
+    if (options.quantize) append(quantizationBytes, q.params);
+    enc.vertexByte = appendStream(vertexBytes, encodedVertices);
+    enc.vertexBytes = encodedVertices.size();
+    const pack::EncodedIndices encodedIndices = pack::encodeIndexStream(m.indices.data(), m.indices.size());
+    enc.indexByte = appendStream(indexBytes, encodedIndices.bytes);
+    enc.indexBytes = encodedIndices.bytes.size();
+    enc.vertexCount = r.vertexCount;
+    enc.indexCount = r.indexCount;
+    enc.indexCodec = encodedIndices.codec;
+    append(encodingBytes, enc);
     vertexTotal += m.vertices.size();
     indexTotal += m.indices.size();
     lodTotal += m.lods.size();
@@ -426,11 +448,14 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
                       std::move(materialBytes.value())});
   sections.push_back(
       {pack::kObjectsSection, sizeof(pack::ObjectRecord), scene.objects.size(), std::move(objectBytes)});
+  sections.push_back(
+      {pack::kMeshEncodingSection, sizeof(pack::MeshEncodingRecord), scene.meshes.size(), std::move(encodingBytes)});
+  const uint64_t vertexStreamBytes = vertexBytes.size(), indexStreamBytes = indexBytes.size();
   if (options.quantize) {
+    // Measured on the decoded records (what the GPU pool holds), independent of the encoding.
     quantization.bytesSaved = int64_t(vertexTotal * sizeof(gpu::Vertex)) -
-                              int64_t(vertexBytes.size() + quantizationBytes.size());
-    sections.push_back(
-        {pack::kQVerticesSection, sizeof(pack::QVertexRecord), vertexTotal, std::move(vertexBytes)});
+                              int64_t(vertexTotal * sizeof(pack::QVertexRecord) + quantizationBytes.size());
+    sections.push_back({pack::kQVerticesSection, 1, vertexStreamBytes, std::move(vertexBytes)});
     sections.push_back({pack::kQuantizationSection, sizeof(pack::QuantizationRecord), scene.meshes.size(),
                         std::move(quantizationBytes)});
     if (vertexTotal > 0) {
@@ -438,9 +463,9 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
       quantization.rmsRelativePositionError = std::sqrt(sumSquaresRelative / double(vertexTotal));
     }
   } else {
-    sections.push_back({pack::kVerticesSection, sizeof(gpu::Vertex), vertexTotal, std::move(vertexBytes)});
+    sections.push_back({pack::kVerticesSection, 1, vertexStreamBytes, std::move(vertexBytes)});
   }
-  sections.push_back({pack::kIndicesSection, sizeof(uint32_t), indexTotal, std::move(indexBytes)});
+  sections.push_back({pack::kIndicesSection, 1, indexStreamBytes, std::move(indexBytes)});
   serializeMeshStreams(scene, &sections);
   if (Status s = serializeTextures(scene, strings, &sections); !s) return s.error();
   for (pack::SectionData& a : *animation) sections.push_back({a.name, a.elementSize, a.count, std::move(a.bytes)});

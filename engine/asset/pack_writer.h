@@ -27,7 +27,8 @@ struct PackQuantizationReport {
   double rmsRelativePositionError = 0.0;   // (meshes of radius 0 count 0)
   double maxNormalError = 0.0;             // max |decoded normal - original| (0: normals are stored unchanged)
   double maxUvError = 0.0;                 // max |decoded uv - original| (Euclidean), uv units
-  int64_t bytesSaved = 0;                  // 32 bytes per vertex minus the "qvertices" + "quantization" bytes
+  int64_t bytesSaved = 0;                  // 32 bytes per vertex minus 20 per vertex and the "quantization" bytes
+                                           // (decoded sizes: what the GPU pool saves, before the geometry codecs)
   std::vector<float> meshMaxPositionError;  // per mesh: added to its LOD errors in the pack (rounded up)
 };
 

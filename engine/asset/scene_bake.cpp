@@ -1,9 +1,14 @@
 #include "visbuf/asset/scene_bake.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
+#include <optional>
+
+#include "visbuf/asset/pack_geometry.h"
 
 namespace visbuf {
 
@@ -12,15 +17,32 @@ Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildO
   Scene scene;
   scene.name = imported.name;
   scene.pointLights = imported.pointLights;
-  scene.meshes.reserve(imported.meshes.size());
-  for (size_t i = 0; i < imported.meshes.size(); ++i) {
+  // Meshes build in parallel (oneTBB; tbb::global_control limits the threads); each result goes to its own slot,
+  // so the scene, and the pack written from it, do not depend on the thread count or the schedule.
+  const size_t count = imported.meshes.size();
+  std::vector<std::optional<Result<Mesh>>> built(count);
+  std::mutex progressMutex;
+  size_t done = 0;
+  tbb::parallel_for(size_t{0}, count, [&](size_t i) {
     Result<Mesh> mesh = buildMesh(imported.meshes[i].source, options);
+    // Triangles rotated into the order the pack's index codec reproduces (same triangles and winding), so a
+    // baked mesh survives the pack round trip bit for bit and loading a pack gives the in-memory bake's scene.
+    if (mesh) pack::rotateTrianglesToCodecOrder(mesh->indices);
+    built[i].emplace(std::move(mesh));
+    if (progress) {
+      // Serialised, with the count of meshes finished so far: callers see 1, 2, ..., total in order.
+      const std::lock_guard<std::mutex> lock(progressMutex);
+      progress(++done, count, imported.meshes[i].source.name);
+    }
+  });
+  scene.meshes.reserve(count);
+  for (size_t i = 0; i < count; ++i) {
+    Result<Mesh>& mesh = *built[i];
     if (!mesh) {
       return makeError(mesh.error().code, fmt::format("{}: mesh {} '{}': {}", imported.name, i,
                                                       imported.meshes[i].source.name, mesh.error().message));
     }
     scene.meshes.push_back(std::move(mesh.value()));
-    if (progress) progress(i + 1, imported.meshes.size(), imported.meshes[i].source.name);
   }
   scene.materials = imported.materials;
   if (scene.materials.empty()) {

@@ -14,11 +14,15 @@
 
 namespace visbuf {
 
-// Called after each mesh is built: (meshes done, meshes total, name of the mesh just built).
+// Called after each mesh is built: (meshes done, meshes total, name of the mesh just built). Calls never overlap
+// and `done` counts up by one per call, but meshes finish in any order, on any of the bake's threads.
 using BakeProgress = std::function<void(size_t done, size_t total, const std::string& mesh)>;
 
-// Builds every imported mesh with `options` (in order, so scene.meshes[i] comes from imported.meshes[i]),
-// copies materials, turns instances into objects, then calls frameScene(). Errors name the mesh.
+// Builds every imported mesh with `options` in parallel (oneTBB; the caller limits the threads with
+// tbb::global_control), keeping the order (scene.meshes[i] comes from imported.meshes[i]), so the result does not
+// depend on the thread count. Each mesh's triangles are rotated into the order the pack's index codec reproduces
+// (pack::rotateTrianglesToCodecOrder). Then copies materials, turns instances into objects and calls
+// frameScene(). Errors name the mesh (the first failing one in mesh order).
 Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildOptions& options = {},
                                  const BakeProgress& progress = {});
 

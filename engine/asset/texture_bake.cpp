@@ -3,16 +3,25 @@
 #include "visbuf/asset/texture_bake.h"
 
 #include <fmt/format.h>
+#include <squish.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <map>
+#include <mutex>
+#include <optional>
+#include <tuple>
 #include <utility>
 
 #include "visbuf/asset/uri_resolver.h"
 #include "visbuf/core/file_read.h"
+#include "visbuf/shared/config.h"
 
 namespace visbuf {
 
@@ -51,9 +60,16 @@ Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image) {
   return bytes;
 }
 
+// A texture to bake: one (image, colour space) pair and the slots that use it.
+struct TextureKey {
+  int32_t image = -1;
+  ColorSpace colorSpace = ColorSpace::Linear;
+  TextureSlotMask slots = 0;
+};
+
 // Numbers the (image, colour space) pairs in order of first use and points every reference at its number.
-Result<std::vector<std::pair<int32_t, ColorSpace>>> assignTextures(const ImportedScene& imported, Scene* scene) {
-  std::vector<std::pair<int32_t, ColorSpace>> keys;
+Result<std::vector<TextureKey>> assignTextures(const ImportedScene& imported, Scene* scene) {
+  std::vector<TextureKey> keys;
   std::map<std::pair<int32_t, ColorSpace>, int32_t> index;
   for (Material& m : scene->materials) {
     const auto slots = textureSlots(m);
@@ -67,7 +83,8 @@ Result<std::vector<std::pair<int32_t, ColorSpace>>> assignTextures(const Importe
                                      imported.images.size()));
       }
       auto [it, added] = index.emplace(std::pair{ref->image, colorSpace}, int32_t(keys.size()));
-      if (added) keys.emplace_back(ref->image, colorSpace);
+      if (added) keys.push_back({ref->image, colorSpace, 0});
+      keys[size_t(it->second)].slots |= TextureSlotMask{1} << slot;
       ref->baked = it->second;
     }
   }
@@ -76,15 +93,17 @@ Result<std::vector<std::pair<int32_t, ColorSpace>>> assignTextures(const Importe
 
 // Puts each baked image into a class (layer = position in its class) and concatenates the texels mip-major.
 void buildClasses(std::vector<BakedImage>& baked, Scene* scene) {
-  std::map<std::pair<uint32_t, ColorSpace>, uint32_t> open;  // (size, colour space) -> class with room
+  // (size, colour space, format) -> class with room
+  std::map<std::tuple<uint32_t, ColorSpace, TextureFormat>, uint32_t> open;
   for (size_t t = 0; t < baked.size(); ++t) {
     Texture& texture = scene->textures[t];
-    const auto key = std::pair{baked[t].size, texture.colorSpace};
+    const auto key = std::tuple{baked[t].size, texture.colorSpace, baked[t].format};
     auto it = open.find(key);
     if (it == open.end() || scene->textureClasses[it->second].layers == kMaxLayersPerClass) {
       TextureClass c;
       c.size = baked[t].size;
       c.colorSpace = texture.colorSpace;
+      c.format = baked[t].format;
       c.mipCount = TextureClass::mipCountFor(c.size);
       scene->textureClasses.push_back(c);
       it = open.insert_or_assign(key, uint32_t(scene->textureClasses.size() - 1)).first;
@@ -106,7 +125,115 @@ void buildClasses(std::vector<BakedImage>& baked, Scene* scene) {
   }
 }
 
+int squishFlags(TextureFormat format, TextureQuality quality) {
+  const int fit = quality == TextureQuality::Fast     ? squish::kColourRangeFit
+                  : quality == TextureQuality::Normal ? squish::kColourClusterFit
+                                                      : squish::kColourIterativeClusterFit;
+  switch (format) {
+    case TextureFormat::Bc1: return squish::kDxt1 | fit;
+    case TextureFormat::Bc3: return squish::kDxt5 | fit;
+    case TextureFormat::Bc4: return squish::kBc4;
+    case TextureFormat::Bc5: return squish::kBc5;
+    case TextureFormat::Rgba8: break;
+  }
+  return 0;
+}
+
+// Block rows per parallel task: a 2048-wide level has 512 blocks a row, so a task is ~4k blocks; levels of 32
+// rows or fewer are one task.
+constexpr size_t kBlockRowsPerTask = 8;
+
 }  // namespace
+
+const char* textureQualityName(TextureQuality quality) {
+  switch (quality) {
+    case TextureQuality::Fast: return "fast";
+    case TextureQuality::Normal: return "normal";
+    case TextureQuality::High: return "high";
+  }
+  return "unknown";
+}
+
+TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque) {
+  if (encoding == TextureEncoding::Rgba8) return TextureFormat::Rgba8;
+  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = 1u << 2, kOcclusion = 1u << 3;
+  if (colorSpace == ColorSpace::Srgb) return (slots & kBaseColor) && !opaque ? TextureFormat::Bc3 : TextureFormat::Bc1;
+  // Only the normal slot reads xy (z is rebuilt), only the occlusion slot reads R alone; metallic-roughness (G,
+  // B) and images shared by several data slots keep three channels.
+  if (slots == kNormal) return TextureFormat::Bc5;
+  if (slots == kOcclusion) return TextureFormat::Bc4;
+  return TextureFormat::Bc1;
+}
+
+std::vector<uint8_t> compressBlocks(const uint8_t* rgba, uint32_t width, uint32_t height, TextureFormat format,
+                                    TextureQuality quality) {
+  const uint32_t unit = textureFormatUnitBytes(format);
+  const uint32_t bx = (width + 3) / 4, by = (height + 3) / 4;
+  std::vector<uint8_t> out(textureImageBytes(format, width, height));
+  if (!isBlockCompressed(format) || width == 0 || height == 0) return out;
+  const int flags = squishFlags(format, quality);
+  const bool opaqueBc1 = format == TextureFormat::Bc1;
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, by, kBlockRowsPerTask), [&](const tbb::blocked_range<uint32_t>& r) {
+    uint8_t block[16 * 4];
+    for (uint32_t row = r.begin(); row != r.end(); ++row) {
+      for (uint32_t col = 0; col < bx; ++col) {
+        int mask = 0;  // texels inside the image; the others (levels below 4x4) are left out of the fit
+        for (uint32_t y = 0; y < 4; ++y) {
+          for (uint32_t x = 0; x < 4; ++x) {
+            const uint32_t px = col * 4 + x, py = row * 4 + y;
+            uint8_t* dst = &block[(y * 4 + x) * 4];
+            if (px < width && py < height) {
+              std::memcpy(dst, &rgba[(size_t(py) * width + px) * 4], 4);
+              // BC1 here is the RGB format: libsquish would turn texels with alpha below 128 into 3-colour
+              // mode's transparent black, which the RGB format reads as black.
+              if (opaqueBc1) dst[3] = 255;
+              mask |= 1 << (y * 4 + x);
+            } else {
+              std::memset(dst, 0, 4);
+            }
+          }
+        }
+        squish::CompressMasked(block, mask, &out[(size_t(row) * bx + col) * unit], flags);
+      }
+    }
+  });
+  return out;
+}
+
+size_t countTextureClasses(const std::vector<TextureClassKey>& images) {
+  std::map<std::tuple<uint32_t, ColorSpace, TextureFormat>, size_t> layers;
+  for (const TextureClassKey& k : images) ++layers[{k.size, k.colorSpace, k.format}];
+  size_t classes = 0;
+  for (const auto& [key, n] : layers) classes += (n + kMaxLayersPerClass - 1) / kMaxLayersPerClass;
+  return classes;
+}
+
+size_t fitTextureClassFormats(std::vector<TextureClassKey>& images, size_t maxClasses) {
+  // Each step folds formats into one that can stand in for them: BC1 (linear) holds BC4's R and BC5's x, y
+  // (with z: the shader then reads the normal's three channels), BC3 holds opaque sRGB BC1 colour (alpha 255).
+  auto fold = [&](auto&& from, TextureFormat to) {
+    for (TextureClassKey& k : images)
+      if (from(k)) k.format = to;
+  };
+  if (countTextureClasses(images) > maxClasses)
+    fold([](const TextureClassKey& k) { return k.format == TextureFormat::Bc4; }, TextureFormat::Bc1);
+  if (countTextureClasses(images) > maxClasses)
+    fold([](const TextureClassKey& k) { return k.format == TextureFormat::Bc5; }, TextureFormat::Bc1);
+  if (countTextureClasses(images) > maxClasses) {
+    fold([](const TextureClassKey& k) { return k.format == TextureFormat::Bc1 && k.colorSpace == ColorSpace::Srgb; },
+         TextureFormat::Bc3);
+  }
+  return countTextureClasses(images);
+}
+
+void compressBakedImage(BakedImage* image, TextureFormat format, TextureQuality quality) {
+  if (image->format == format || !isBlockCompressed(format)) return;
+  for (size_t m = 0; m < image->mips.size(); ++m) {
+    const uint32_t side = std::max(image->size >> m, 1u);
+    image->mips[m] = compressBlocks(image->mips[m].data(), side, side, format, quality);
+  }
+  image->format = format;
+}
 
 float srgbToLinear(float v) {
   v = std::clamp(v, 0.0f, 1.0f);
@@ -119,9 +246,25 @@ float linearToSrgb(float v) {
 }
 
 uint8_t encodeSrgb8(float linear) {
+  // The code is the number of midpoints below `linear`. A table over 8192 equal steps of [0, 1] gives that count
+  // at each step's lower edge; the walk up from there is exact and short (at most 2 codes a step near 0, where
+  // the curve is steepest).
+  constexpr int kSteps = 8192;
   static const std::array<float, 255> kMidpoints = makeSrgbMidpoints();
+  static const std::array<uint8_t, kSteps> kStart = [] {
+    std::array<uint8_t, kSteps> start{};
+    for (int i = 0; i < kSteps; ++i) {
+      const float edge = float(i) / float(kSteps);
+      start[size_t(i)] = uint8_t(std::lower_bound(kMidpoints.begin(), kMidpoints.end(), edge) - kMidpoints.begin());
+    }
+    return start;
+  }();
   if (!(linear > 0.0f)) return 0;  // also NaN
-  return uint8_t(std::lower_bound(kMidpoints.begin(), kMidpoints.end(), linear) - kMidpoints.begin());
+  if (linear >= 1.0f) return 255;
+  // float(i) / kSteps <= linear for this i (exact: a power-of-two scale), so the count only grows from here.
+  unsigned code = kStart[size_t(linear * float(kSteps))];
+  while (code < 255 && kMidpoints[code] < linear) ++code;
+  return uint8_t(code);
 }
 
 uint32_t bakedTextureSize(uint32_t width, uint32_t height, uint32_t maxSize) {
@@ -140,54 +283,157 @@ std::vector<LinearImage> buildMipChain(LinearImage level0) {
     LinearImage dst;
     dst.width = dst.height = src.width / 2;
     dst.rgba.resize(size_t(dst.width) * dst.height * 4);
-    for (uint32_t y = 0; y < dst.height; ++y) {
-      for (uint32_t x = 0; x < dst.width; ++x) {
-        const float* a = &src.rgba[(size_t(2 * y) * src.width + 2 * x) * 4];
-        const float* b = a + size_t(src.width) * 4;  // the row below
-        float* out = &dst.rgba[(size_t(y) * dst.width + x) * 4];
-        for (int c = 0; c < 4; ++c) out[c] = 0.25f * ((a[c] + a[4 + c]) + (b[c] + b[4 + c]));
+    // Rows in parallel: every output texel is the same expression whichever thread computes it.
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, dst.height, 16), [&](const tbb::blocked_range<uint32_t>& rows) {
+      for (uint32_t y = rows.begin(); y != rows.end(); ++y) {
+        for (uint32_t x = 0; x < dst.width; ++x) {
+          const float* a = &src.rgba[(size_t(2 * y) * src.width + 2 * x) * 4];
+          const float* b = a + size_t(src.width) * 4;  // the row below
+          float* out = &dst.rgba[(size_t(y) * dst.width + x) * 4];
+          for (int c = 0; c < 4; ++c) out[c] = 0.25f * ((a[c] + a[4 + c]) + (b[c] + b[4 + c]));
+        }
       }
-    }
+    });
     chain.push_back(std::move(dst));
   }
   return chain;
 }
 
+namespace {
+// lround(clamp(v, 0, 1) * 255) without the libm call: x - floor(x) is exact for x in [0, 255].
+uint8_t encodeUnorm8(float v) {
+  const float x = std::clamp(v, 0.0f, 1.0f) * 255.0f;  // NaN -> clamp keeps NaN: treated as 0 below
+  if (!(x > 0.0f)) return 0;
+  const int whole = int(x);
+  return uint8_t(whole + (x - float(whole) >= 0.5f ? 1 : 0));
+}
+}  // namespace
+
 std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace) {
   std::vector<uint8_t> out(image.rgba.size());
-  for (size_t i = 0; i < image.rgba.size(); ++i) {
-    const float v = image.rgba[i];
-    const bool srgb = colorSpace == ColorSpace::Srgb && i % 4 != 3;  // alpha is always linear
-    out[i] = srgb ? encodeSrgb8(v) : uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
-  }
+  const size_t texels = image.rgba.size() / 4;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, texels, 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin() * 4; i < r.end() * 4; ++i) {
+      const float v = image.rgba[i];
+      const bool srgb = colorSpace == ColorSpace::Srgb && i % 4 != 3;  // alpha is always linear
+      out[i] = srgb ? encodeSrgb8(v) : encodeUnorm8(v);
+    }
+  });
   return out;
+}
+
+namespace {
+
+// codeToLinear's values: [0] code / 255, [1] srgbToLinear(code / 255).
+const std::array<std::array<float, 256>, 2>& codeTables() {
+  static const std::array<std::array<float, 256>, 2> kTables = [] {
+    std::array<std::array<float, 256>, 2> t{};
+    for (int k = 0; k < 256; ++k) {
+      t[0][size_t(k)] = float(k) / 255.0f;
+      t[1][size_t(k)] = srgbToLinear(float(k) / 255.0f);
+    }
+    return t;
+  }();
+  return kTables;
+}
+
+}  // namespace
+
+float codeToLinear(uint8_t code, bool srgb) { return codeTables()[srgb ? 1 : 0][code]; }
+
+namespace {
+
+// RGBA8 codes to linear floats (codeToLinear; alpha always linear). Rows in parallel.
+LinearImage linearFromCodes(const std::vector<uint8_t>& codes, uint32_t width, uint32_t height, ColorSpace colorSpace) {
+  LinearImage image;
+  image.width = width;
+  image.height = height;
+  image.rgba.resize(codes.size());
+  const float* colour = codeTables()[colorSpace == ColorSpace::Srgb ? 1 : 0].data();
+  const float* alpha = codeTables()[0].data();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, codes.size() / 4, 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin() * 4; i < r.end() * 4; ++i) image.rgba[i] = (i % 4 == 3 ? alpha : colour)[codes[i]];
+  });
+  return image;
+}
+
+// Level 1 of a square power-of-two image straight from its level-0 codes: the same 2x2 average buildMipChain
+// computes from linearFromCodes(level 0), without materialising level 0 in float.
+LinearImage halveCodes(const std::vector<uint8_t>& codes, uint32_t size, ColorSpace colorSpace) {
+  LinearImage dst;
+  dst.width = dst.height = size / 2;
+  dst.rgba.resize(size_t(dst.width) * dst.height * 4);
+  const float* colour = codeTables()[colorSpace == ColorSpace::Srgb ? 1 : 0].data();
+  const float* alpha = codeTables()[0].data();
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, dst.height, 16), [&](const tbb::blocked_range<uint32_t>& rows) {
+    for (uint32_t y = rows.begin(); y != rows.end(); ++y) {
+      for (uint32_t x = 0; x < dst.width; ++x) {
+        const uint8_t* a = &codes[(size_t(2 * y) * size + 2 * x) * 4];
+        const uint8_t* b = a + size_t(size) * 4;  // the row below
+        float* out = &dst.rgba[(size_t(y) * dst.width + x) * 4];
+        for (int c = 0; c < 4; ++c) {
+          const float* t = c == 3 ? alpha : colour;
+          out[c] = 0.25f * ((t[a[c]] + t[a[4 + c]]) + (t[b[c]] + t[b[4 + c]]));
+        }
+      }
+    }
+  });
+  return dst;
+}
+
+}  // namespace
+
+Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
+                                uint64_t maxPixels) {
+  Result<DecodedImage> decoded = decodeImageForBake(bytes, size, name, colorSpace, maxPixels);
+  if (!decoded) return decoded.error();
+  if (decoded->codes.empty()) return std::move(decoded->linear);
+  return linearFromCodes(decoded->codes, decoded->width, decoded->height, colorSpace);
 }
 
 Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
                              uint32_t maxTextureSize, uint64_t maxPixels) {
-  Result<LinearImage> decoded = decodeImage(bytes, size, name, colorSpace, maxPixels);
+  Result<DecodedImage> decoded = decodeImageForBake(bytes, size, name, colorSpace, maxPixels);
   if (!decoded) return decoded.error();
   BakedImage baked;
-  baked.originalWidth = decoded->width;
-  baked.originalHeight = decoded->height;
-  baked.size = bakedTextureSize(decoded->width, decoded->height, maxTextureSize);
-  const bool squarePow2 = decoded->width == decoded->height && std::has_single_bit(decoded->width);
+  const uint32_t width = decoded->width, height = decoded->height;
+  baked.originalWidth = width;
+  baked.originalHeight = height;
+  baked.size = bakedTextureSize(width, height, maxTextureSize);
+  const bool squarePow2 = width == height && std::has_single_bit(width);
+  if (squarePow2 && !decoded->codes.empty()) {
+    // 8-bit square power of two: mip 0 is the file's own codes (encodeRgba8 of their linear values gives every
+    // code back, TextureMath.EightBitCodesSurviveTheLinearRoundTrip), level 1 is averaged from them directly.
+    if (baked.size < width) {
+      baked.resizeNote =
+          fmt::format("{}x{} -> {}x{} (size cap: top mip levels dropped)", width, height, baked.size, baked.size);
+    }
+    if (width <= baked.size) baked.mips.push_back(decoded->codes);
+    if (width > 1) {
+      LinearImage level1 = halveCodes(decoded->codes, width, colorSpace);
+      std::vector<uint8_t>().swap(decoded->codes);
+      for (const LinearImage& level : buildMipChain(std::move(level1)))
+        if (level.width <= baked.size) baked.mips.push_back(encodeRgba8(level, colorSpace));
+    }
+    return baked;
+  }
+  LinearImage image = decoded->codes.empty() ? std::move(decoded->linear)
+                                             : linearFromCodes(decoded->codes, width, height, colorSpace);
   if (!squarePow2) {
-    const char* why = decoded->width != decoded->height ? "non-square: square of the nearest power of two"
-                      : baked.size < bakedTextureSize(decoded->width, decoded->height, kMaxTextureSize)
+    const char* why = width != height ? "non-square: square of the nearest power of two"
+                      : baked.size < bakedTextureSize(width, height, kMaxTextureSize)
                           ? "size cap"
                           : "non-power-of-two: nearest power of two";
-    baked.resizeNote = fmt::format("{}x{} -> {}x{} ({})", decoded->width, decoded->height, baked.size, baked.size, why);
-    decoded = resizeImage(*decoded, baked.size, baked.size);
-    if (!decoded) return makeError(decoded.error().code, name + ": " + decoded.error().message);
-  } else if (baked.size < decoded->width) {
-    baked.resizeNote = fmt::format("{}x{} -> {}x{} (size cap: top mip levels dropped)", decoded->width,
-                                   decoded->height, baked.size, baked.size);
+    baked.resizeNote = fmt::format("{}x{} -> {}x{} ({})", width, height, baked.size, baked.size, why);
+    Result<LinearImage> resized = resizeImage(image, baked.size, baked.size);
+    if (!resized) return makeError(resized.error().code, name + ": " + resized.error().message);
+    image = std::move(resized.value());
+  } else if (baked.size < width) {
+    baked.resizeNote =
+        fmt::format("{}x{} -> {}x{} (size cap: top mip levels dropped)", width, height, baked.size, baked.size);
   }
-  std::vector<LinearImage> chain = buildMipChain(std::move(decoded.value()));
-  for (const LinearImage& level : chain) {
+  for (const LinearImage& level : buildMipChain(std::move(image)))
     if (level.width <= baked.size) baked.mips.push_back(encodeRgba8(level, colorSpace));
-  }
   return baked;
 }
 
@@ -204,27 +450,74 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   scene->textureClasses.clear();
   auto keys = assignTextures(imported, scene);
   if (!keys) return keys.error();
-  std::vector<BakedImage> baked;
-  for (size_t t = 0; t < keys->size(); ++t) {
-    const auto [imageIndex, colorSpace] = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(imageIndex)];
+  // Images in parallel (each one's levels in parallel too: oneTBB nests); messages, textures and classes are
+  // assembled afterwards in key order, so the result is that of a serial bake. After a failure, images behind
+  // the first failed one are skipped: the error reported is the one a serial bake stops at.
+  const size_t count = keys->size();
+  std::vector<std::optional<Result<BakedImage>>> results(count);
+  std::vector<TextureFormat> formats(count, TextureFormat::Rgba8);
+  std::atomic<size_t> firstFailed{count};
+  std::mutex progressMutex;
+  size_t done = 0;
+  tbb::parallel_for(size_t{0}, count, [&](size_t t) {
+    if (t > firstFailed.load()) return;
+    const TextureKey& key = (*keys)[t];
+    const ImportedImage& image = imported.images[size_t(key.image)];
     const std::string name =
-        fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), imageIndex, quoteForMessage(image.name));
-    Result<std::vector<uint8_t>> file = image.path.empty() ? Result<std::vector<uint8_t>>(image.bytes)
-                                                           : readImageFile(image);
-    if (!file) return makeError(file.error().code, imported.name + ": " + file.error().message);
-    Result<BakedImage> b =
-        bakeImage(file->data(), file->size(), name, colorSpace, options.maxTextureSize, options.maxImagePixels);
-    if (!b) return b.error();
-    if (report && !b->resizeNote.empty()) report->notes.push_back(fmt::format("{}: {}", name, b->resizeNote));
-    scene->textures.push_back({image.name, imageIndex, colorSpace, 0, 0, b->originalWidth, b->originalHeight});
+        fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), key.image, quoteForMessage(image.name));
+    Result<BakedImage> b = [&]() -> Result<BakedImage> {
+      Result<std::vector<uint8_t>> file = image.path.empty() ? Result<std::vector<uint8_t>>(image.bytes)
+                                                             : readImageFile(image);
+      if (!file) return makeError(file.error().code, imported.name + ": " + file.error().message);
+      return bakeImage(file->data(), file->size(), name, key.colorSpace, options.maxTextureSize,
+                       options.maxImagePixels);
+    }();
+    if (b) {
+      const std::vector<uint8_t>& top = b->mips.front();
+      bool opaque = true;
+      for (size_t i = 3; i < top.size() && opaque; i += 4) opaque = top[i] == 255;
+      formats[t] = chooseTextureFormat(options.encoding, key.slots, key.colorSpace, opaque);
+    } else {
+      for (size_t seen = firstFailed.load(); t < seen && !firstFailed.compare_exchange_weak(seen, t);) {
+      }
+    }
+    results[t].emplace(std::move(b));
+  });
+  for (size_t t = 0; t < count; ++t)
+    if (!*results[t]) return results[t]->error();  // every image up to the first failed one ran
+  // The classes must fit the shading pass's bindings: merge formats where the chosen ones would open too many.
+  std::vector<TextureClassKey> classKeys;
+  for (size_t t = 0; t < count; ++t) classKeys.push_back({(*results[t])->size, (*keys)[t].colorSpace, formats[t]});
+  fitTextureClassFormats(classKeys, MAX_TEXTURE_CLASSES);
+  tbb::parallel_for(size_t{0}, count, [&](size_t t) {
+    compressBakedImage(&results[t]->value(), classKeys[t].format, options.quality);
+    if (progress) {
+      std::lock_guard<std::mutex> lock(progressMutex);
+      progress(++done, count, imported.images[size_t((*keys)[t].image)].name);
+    }
+  });
+  std::vector<BakedImage> baked;
+  baked.reserve(count);
+  for (size_t t = 0; t < count; ++t) {
+    Result<BakedImage>& b = *results[t];
+    const TextureKey& key = (*keys)[t];
+    const ImportedImage& image = imported.images[size_t(key.image)];
+    if (report && !b->resizeNote.empty()) {
+      report->notes.push_back(fmt::format("{}: image {} '{}': {}", quoteForMessage(imported.name), key.image,
+                                          quoteForMessage(image.name), b->resizeNote));
+    }
+    scene->textures.push_back({image.name, key.image, key.colorSpace, 0, 0, b->originalWidth, b->originalHeight});
     baked.push_back(std::move(b.value()));
-    if (progress) progress(t + 1, keys->size(), image.name);
   }
   buildClasses(baked, scene);
   if (report) {
     report->texelBytes = 0;
-    for (const TextureClass& c : scene->textureClasses) report->texelBytes += c.texels.size();
+    report->rgba8Bytes = 0;
+    for (const TextureClass& c : scene->textureClasses) {
+      report->texelBytes += c.texels.size();
+      TextureClass rgba8 = {c.size, c.colorSpace, c.layers, c.mipCount, TextureFormat::Rgba8, {}};
+      report->rgba8Bytes += rgba8.totalBytes();
+    }
   }
   return {};
 }

@@ -4,7 +4,9 @@
 //
 // Per image, in this order:
 //   1. Decode to float RGBA (grey -> RGB, no alpha -> 1; alpha stays straight, not premultiplied). Colour
-//      textures (base colour, emissive) are sRGB: their RGB is converted to linear light here.
+//      textures (base colour, emissive) are sRGB: their RGB is converted to linear light here. An 8-bit file
+//      is converted through a table of its 256 codes (codeToLinear), and when it is a square power of two its
+//      codes are kept as mip 0 (they are what step 4 would give back) and level 1 is averaged from them.
 //   2. Size: S = min(maxTextureSize, P) where P is the power of two NEAREST to the larger side (ties round up:
 //      300 -> 256, 400 -> 512, 384 -> 512), so that side is stretched by at most 4/3 or shrunk to no less than
 //      2/3. Non-square images become S x S, stretching the shorter side (the shader's uvs span [0,1] either
@@ -15,6 +17,15 @@
 //   3. Mip chain to 1x1: each level is the 2x2 box average of the previous one, in linear light (float).
 //   4. Encode RGBA8: sRGB textures re-encode RGB with the sRGB curve (exactly rounded), alpha linear; data
 //      textures (normal, metallic-roughness, occlusion) are linear throughout.
+//   5. Block compression (TextureEncoding::Bc, the default; libsquish), of every mip level's RGBA8 bytes, so sRGB
+//      colour is compressed as encoded (the GPU's *_SRGB_BLOCK formats decode after the block decode). The format
+//      follows the slots that use the image (chooseTextureFormat): base colour / emissive BC1, or BC3 when a base
+//      colour's alpha is not all 255; normal-only BC5 (x, y; the shader rebuilds z); occlusion-only BC4 (R);
+//      metallic-roughness and any other linear mix BC1. Levels below 4x4 are one whole block, the missing texels
+//      left out of the fit. Blocks are independent, so each level is compressed in parallel bands of block rows
+//      whose output ranges are fixed in advance: the bytes do not depend on the thread count.
+//
+// Images are baked in parallel (oneTBB); classes are assembled afterwards in the same order as a serial bake.
 //
 // An image used both as colour and as data (rare) is baked twice, once per colour space.
 #pragma once
@@ -37,11 +48,22 @@ inline constexpr uint64_t kDefaultMaxImagePixels = uint64_t{64} << 20;
 // Largest encoded image file read (external images): 1 GiB.
 inline constexpr uint64_t kMaxImageFileBytes = uint64_t{1} << 30;
 
+// How baked textures are stored (`visbuf bake --textures bc|rgba8`).
+enum class TextureEncoding { Bc, Rgba8 };
+// libsquish's colour fit for BC1 / BC3 (`--texture-quality`): Fast = range fit, Normal = cluster fit, High =
+// iterative cluster fit. BC4 / BC5 (and BC3's alpha) are fitted the same way at every quality.
+enum class TextureQuality { Fast, Normal, High };
+const char* textureQualityName(TextureQuality quality);  // "fast", "normal", "high"
+
 struct TextureBakeOptions {
   uint32_t maxTextureSize = 2048;  // power of two in [1, 16384]; larger images are downscaled to it
   // Images whose header declares more than this many pixels (width x height) are refused before decoding
   // (CapacityExceeded): a 1 MiB PNG can declare 16384 x 16384 and would take 4 GiB once decoded.
   uint64_t maxImagePixels = kDefaultMaxImagePixels;
+  TextureEncoding encoding = TextureEncoding::Bc;
+  // Range fit by default: DamagedHelmet rendered from its BC pack is 45 dB PSNR from the RGBA8 pack's image
+  // (cluster fit: 48 dB for a texture bake ~5x longer; docs/pack-format.md).
+  TextureQuality quality = TextureQuality::Fast;
 };
 
 // A decoded image in linear light: width x height RGBA floats, row-major from the top row.
@@ -51,9 +73,11 @@ struct LinearImage {
   std::vector<float> rgba;
 };
 
-// One baked image: square, power-of-two `size`, mips[m] is max(size >> m, 1)^2 RGBA8 texels.
+// One baked image: square, power-of-two `size`, mips[m] is the level max(size >> m, 1) wide in `format`
+// (textureImageBytes bytes).
 struct BakedImage {
   uint32_t size = 0;
+  TextureFormat format = TextureFormat::Rgba8;
   uint32_t originalWidth = 0, originalHeight = 0;
   std::vector<std::vector<uint8_t>> mips;
   std::string resizeNote;  // e.g. "211x211 -> 256x256 (non-power-of-two: nearest power of two)"; empty: none
@@ -65,6 +89,7 @@ using TextureBakeProgress = std::function<void(size_t done, size_t total, const 
 struct TextureBakeReport {
   std::vector<std::string> notes;  // one line per resized image
   uint64_t texelBytes = 0;         // all classes, all mips
+  uint64_t rgba8Bytes = 0;         // what the same classes take as RGBA8 (texelBytes without compression)
 };
 
 // Bakes every image referenced by scene->materials (TextureRef::image indexes imported.images) into
@@ -98,15 +123,55 @@ std::vector<LinearImage> buildMipChain(LinearImage level0);
 // RGBA8 encoding (step 4).
 std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace);
 
+// Bit i set: the image is used by texture slot i (textureSlots() order: base colour, metallic-roughness, normal,
+// occlusion, emissive).
+using TextureSlotMask = uint32_t;
+// The stored format of an image (step 5): `opaque` says every alpha of its RGBA8 mip 0 is 255.
+TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque);
+// Block-compresses one width x height RGBA8 image (rows top first, R first) into `format` (a BC format):
+// textureImageBytes(format, width, height) bytes, blocks row-major. BC1 / BC3 take RGB(A), BC4 R, BC5 R and G.
+// Blocks are compressed in parallel; the result is the same whatever the thread count.
+std::vector<uint8_t> compressBlocks(const uint8_t* rgba, uint32_t width, uint32_t height, TextureFormat format,
+                                    TextureQuality quality);
+// (The inverse, decodeTextureImage, is in scene/texture.h: the GPU upload uses it where BC is unavailable.)
+// The class an image goes to, as far as its format is concerned.
+struct TextureClassKey {
+  uint32_t size = 0;
+  ColorSpace colorSpace = ColorSpace::Linear;
+  TextureFormat format = TextureFormat::Rgba8;
+};
+// Classes the images make (one per (size, colour space, format), one more per 256 layers).
+size_t countTextureClasses(const std::vector<TextureClassKey>& images);
+// Separate formats multiply the classes (up to 5 per size, against 2 with RGBA8), and the shading pass binds at
+// most MAX_TEXTURE_CLASSES: while the images make more classes than `maxClasses`, formats are folded into one
+// that holds them, in this order: BC4 -> BC1, BC5 -> BC1 (linear), sRGB BC1 -> BC3. Returns the classes after.
+size_t fitTextureClassFormats(std::vector<TextureClassKey>& images, size_t maxClasses);
+// Step 5 for a baked image: every RGBA8 level becomes `format` (Rgba8: unchanged).
+void compressBakedImage(BakedImage* image, TextureFormat format, TextureQuality quality);
+
 // Decodes an encoded PNG/JPEG (`name` starts error messages); RGB converted to linear when colorSpace is Srgb.
 // The header's width x height is checked against `maxPixels` (and each side against 16384) before any pixel
 // is decoded (CapacityExceeded). Any error the decoder reports, a truncated file included ("Premature end of
 // JPEG file"), is MalformedInput: no partially decoded image is ever returned.
 Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
                                 uint64_t maxPixels = kDefaultMaxImagePixels);
+// decodeImage as the bake uses it: an 8-bit file keeps its codes (`codes`: RGBA8, grey expanded to RGB, missing
+// alpha 255; `linear` empty), so that a square power-of-two image's mip 0 is its own bytes and level 1 is averaged
+// straight from them; a deeper file is decoded to `linear` (`codes` empty). Same checks and errors as decodeImage.
+struct DecodedImage {
+  uint32_t width = 0, height = 0;
+  std::vector<uint8_t> codes;
+  LinearImage linear;
+};
+Result<DecodedImage> decodeImageForBake(const uint8_t* bytes, size_t size, const std::string& name,
+                                        ColorSpace colorSpace, uint64_t maxPixels = kDefaultMaxImagePixels);
+// The linear value of 8-bit code `code` as decodeImage gives it: code / 255, through srgbToLinear for the RGB of
+// an sRGB image. Every code survives encodeRgba8 of its value unchanged (the bake relies on it for mip 0).
+float codeToLinear(uint8_t code, bool srgb);
+
 // Resamples (OpenImageIO resize, linear light) to width x height.
 Result<LinearImage> resizeImage(const LinearImage& image, uint32_t width, uint32_t height);
-// Steps 1-4 for one encoded image.
+// Steps 1-4 for one encoded image (RGBA8 levels; compressBakedImage is step 5).
 Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
                              uint32_t maxTextureSize, uint64_t maxPixels = kDefaultMaxImagePixels);
 

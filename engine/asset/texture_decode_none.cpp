@@ -12,7 +12,7 @@ Error unavailable(const std::string& name) {
 }
 }  // namespace
 
-Result<LinearImage> decodeImage(const uint8_t*, size_t, const std::string& name, ColorSpace, uint64_t) {
+Result<DecodedImage> decodeImageForBake(const uint8_t*, size_t, const std::string& name, ColorSpace, uint64_t) {
   return unavailable(name);
 }
 Result<LinearImage> resizeImage(const LinearImage&, uint32_t, uint32_t) { return unavailable("resize"); }

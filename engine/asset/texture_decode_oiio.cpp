@@ -4,6 +4,9 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cstring>
 #include <optional>
@@ -43,6 +46,21 @@ void expandToRgba(const std::vector<float>& in, int channels, ColorSpace colorSp
     if (colorSpace == ColorSpace::Srgb)
       for (int c = 0; c < 3; ++c) dst[c] = srgbToLinear(dst[c]);
   }
+}
+
+// 1-4 channels of 8-bit codes to RGBA codes (grey -> RGB, missing alpha -> 255). Rows in parallel.
+void expandCodes(const std::vector<uint8_t>& in, int channels, std::vector<uint8_t>* out) {
+  const size_t pixels = in.size() / size_t(channels);
+  out->resize(pixels * 4);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p != r.end(); ++p) {
+      const uint8_t* src = &in[p * size_t(channels)];
+      uint8_t* dst = &(*out)[p * 4];
+      const bool grey = channels <= 2;
+      for (int c = 0; c < 3; ++c) dst[c] = grey ? src[0] : src[c];
+      dst[3] = channels == 2 ? src[1] : channels == 4 ? src[3] : 255;
+    }
+  });
 }
 
 // The reader's error message. OpenImageIO 2.4 keeps pending errors per ImageInput in a per-thread map, and
@@ -120,8 +138,8 @@ PreparedJpeg prepareJpeg(const uint8_t* bytes, size_t size) {
 
 }  // namespace
 
-Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
-                                uint64_t maxPixels) {
+Result<DecodedImage> decodeImageForBake(const uint8_t* bytes, size_t size, const std::string& name,
+                                        ColorSpace colorSpace, uint64_t maxPixels) {
   if (bytes == nullptr || size == 0) return malformed(name, "image data is empty");
   const char* format = formatName(bytes, size);
   if (!format) return malformed(name, "not a PNG or JPEG file (unrecognised signature)");
@@ -151,15 +169,22 @@ Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::st
     return *over;
   }
   const int channels = std::min(spec.nchannels, 4);
+  // 8-bit files (every JPEG, most PNGs) are read as bytes and kept as codes (DecodedImage).
+  const bool bytes8 = spec.format == OIIO::TypeDesc::UINT8;
   std::vector<float> decoded;
+  std::vector<uint8_t> decoded8;
   try {
-    decoded.resize(size_t(pixels) * size_t(channels));
+    if (bytes8)
+      decoded8.resize(size_t(pixels) * size_t(channels));
+    else
+      decoded.resize(size_t(pixels) * size_t(channels));
   } catch (const std::bad_alloc&) {
     (void)readerError(in.get());
     return makeError(ErrorCode::CapacityExceeded, name + ": out of memory decoding " + std::to_string(spec.width) +
                                                       "x" + std::to_string(spec.height) + " pixels");
   }
-  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, decoded.data()))
+  if (!in->read_image(0, 0, 0, channels, bytes8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT,
+                      bytes8 ? static_cast<void*>(decoded8.data()) : static_cast<void*>(decoded.data())))
     return malformed(name, "cannot decode: " + readerError(in.get()));
   // A truncated or corrupt stream can still "succeed": libjpeg pads a truncated JPEG with grey and only
   // warns ("Premature end of JPEG file"), which OpenImageIO keeps as a pending error. Any such message means
@@ -168,10 +193,16 @@ Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::st
     while (!pending.empty() && (pending.back() == '\n' || pending.back() == ' ')) pending.pop_back();
     return malformed(name, "truncated or corrupt image: " + pending);
   }
-  LinearImage image;
+  DecodedImage image;
   image.width = uint32_t(spec.width);
   image.height = uint32_t(spec.height);
-  expandToRgba(decoded, channels, colorSpace, &image.rgba);
+  if (bytes8) {
+    expandCodes(decoded8, channels, &image.codes);
+  } else {
+    image.linear.width = image.width;
+    image.linear.height = image.height;
+    expandToRgba(decoded, channels, colorSpace, &image.linear.rgba);
+  }
   return image;
 }
 

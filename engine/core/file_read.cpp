@@ -129,6 +129,10 @@ FileKind probeFile(const std::string& path, uint64_t* size, bool noFollow) {
   return kindOf(st.st_mode);
 }
 
+Result<int> openRegularFile(const std::string& path, bool noFollow, uint64_t* size) {
+  return openRegular(path, noFollow, size);
+}
+
 Result<std::vector<uint8_t>> readRegularFile(const std::string& path, const FileReadOptions& options) {
   uint64_t size = 0;
   Result<int> opened = openRegular(path, options.noFollow, &size);

@@ -41,6 +41,11 @@ FileKind probeFile(const std::string& path, uint64_t* size = nullptr, bool noFol
 //   IoError: open / read failures, or a file that shrank while being read.
 Result<std::vector<uint8_t>> readRegularFile(const std::string& path, const FileReadOptions& options = {});
 
+// Opens the regular file at `path` as readRegularFile() does (non-blocking, O_NOFOLLOW with `noFollow`, fstat on
+// the descriptor) and returns the descriptor, which the caller closes; `size` gets the file's size. The same
+// errors as readRegularFile() but for the budget and reading.
+Result<int> openRegularFile(const std::string& path, bool noFollow, uint64_t* size);
+
 // The first `count` bytes (fewer when the file is shorter) of a regular file; an error as readRegularFile()
 // for anything else. Never blocks.
 Result<std::vector<uint8_t>> readFilePrefix(const std::string& path, size_t count);

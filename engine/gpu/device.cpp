@@ -242,6 +242,14 @@ Result<std::unique_ptr<Device>> Device::create(const DeviceOptions& options) {
   fc.f12.bufferDeviceAddress = VK_TRUE;  // skinned vertices (MeshData.skinnedVertex*): one buffer past 4 windows
   fc.f13.dynamicRendering = VK_TRUE;
   fc.f13.synchronization2 = VK_TRUE;
+  // Optional: block-compressed textures are sampled as such where the device has BC formats; elsewhere the
+  // texture upload decompresses them to RGBA8 (scene/gpu_textures.cpp).
+  {
+    VkPhysicalDeviceFeatures have{};
+    vkGetPhysicalDeviceFeatures(dev->physical_, &have);
+    fc.f2.features.textureCompressionBC = have.textureCompressionBC;
+    dev->textureCompressionBC_ = have.textureCompressionBC == VK_TRUE;
+  }
   float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueFamilyIndex = dev->queueFamily_;
@@ -271,6 +279,7 @@ Result<std::unique_ptr<Device>> Device::adopt(const ExternalDevice& external) {
   dev->device_ = external.device;
   dev->queue_ = external.queue;
   dev->queueFamily_ = external.queueFamily;
+  dev->textureCompressionBC_ = external.textureCompressionBC;
   uint32_t family = 0;
   std::vector<std::string> why = missingRequirements(external.physicalDevice, &family);
   if (!why.empty()) {

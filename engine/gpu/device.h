@@ -33,6 +33,7 @@ struct ExternalDevice {
   VkDevice device = VK_NULL_HANDLE;
   VkQueue queue = VK_NULL_HANDLE;
   uint32_t queueFamily = 0;
+  bool textureCompressionBC = false;  // the host enabled VkPhysicalDeviceFeatures::textureCompressionBC
 };
 
 class Device {
@@ -57,6 +58,8 @@ class Device {
   // Nanoseconds per timestamp tick.
   double timestampPeriodNs() const { return properties_.limits.timestampPeriod; }
   const std::string& selectionReport() const { return selectionReport_; }
+  // BC1-BC7 formats can be sampled (the optional feature, enabled when the device has it).
+  bool textureCompressionBC() const { return textureCompressionBC_; }
 
   // Number of validation messages (warning or error severity) seen since creation. Tests require 0.
   uint32_t validationMessages() const { return validationMessages_.load(); }
@@ -89,6 +92,7 @@ class Device {
   std::string name_;
   std::string selectionReport_;
   bool owned_ = true;
+  bool textureCompressionBC_ = false;
   std::atomic<uint32_t> validationMessages_{0};
 };
 

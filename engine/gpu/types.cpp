@@ -27,7 +27,7 @@ static_assert(offsetof(FrameData, frustum) == 144);
 static_assert(offsetof(FrameData, lightDir) == 224);
 static_assert(offsetof(FrameData, lodScale) == 256);
 static_assert(offsetof(FrameData, projX) == 288);
-static_assert(sizeof(PointLightData) == 32);
+static_assert(sizeof(PointLightData) == 64 && offsetof(PointLightData, type) == 56);
 static_assert(offsetof(FrameData, pointLightCount) == 308);
 static_assert(sizeof(PassConstants) == 16);
 static_assert(sizeof(MaterialTiles) == 32);

@@ -1,5 +1,6 @@
 // Tiled light culling (shaders/light_cull.comp.glsl): one thread per 16x16 screen tile builds the list of the
-// point lights that can reach a covered pixel of the tile, from the tile's depth bounds in the visibility depth.
+// KHR_lights_punctual lights that can reach a covered pixel of the tile, from the tile's depth bounds in the
+// visibility depth: point and spot lights by their range sphere; directional lights are in every covered tile.
 // Reads: frame, point lights (BINDING_LIGHTS), depth (BINDING_LIGHT_DEPTH, shader-read layout).
 // Writes: the tile lists and their counters (BINDING_LIGHT_TILES, layout in shaders/shared/config.h).
 // Created only for scenes with point lights; a scene without any records no light culling and owns no light

@@ -1,4 +1,5 @@
-// Skinning pass (shaders/skin.comp.glsl): linear blend skinning of every animated instance into its own
+// Skinning pass (shaders/skin.comp.glsl): linear blend skinning (up to 8 joint influences per vertex, the
+// SkinVertex records of scene/skin_vertex.h) of every animated instance into its own
 // region of the skinned-vertex buffer (addressed by its mesh slot), plus the instance's per-pose bounds and LOD
 // errors in its mesh slot. Bounds: the CPU's joint-reach sphere, or (gpuBounds) an AABB reduced from the skinned
 // vertices with atomics, whose centre and the largest distance of the vertices from it make the sphere (three

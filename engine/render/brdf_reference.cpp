@@ -35,6 +35,11 @@ glm::dvec3 shadeReference(const SurfaceReference& s, const Scene& scene, const g
   glm::dvec3 color = AMBIENT_RADIANCE * (cDiff + f0) * s.occlusion;
   color += brdfCosineReference(s, v, glm::normalize(glm::dvec3(scene.lightDirection))) * double(scene.lightIntensity);
   for (const PointLight& light : scene.pointLights) {
+    if (light.type == LightType::Directional) {
+      color += brdfCosineReference(s, v, -glm::normalize(glm::dvec3(light.direction))) * glm::dvec3(light.color) *
+               double(light.intensity);
+      continue;
+    }
     const glm::dvec3 toLight = (light.position - cameraPosition) - s.position;
     const double dist = glm::length(toLight);
     double window = 1.0;
@@ -44,6 +49,15 @@ glm::dvec3 shadeReference(const SurfaceReference& s, const Scene& scene, const g
       window *= window;
     }
     if (window <= 0.0 || dist <= 0.0) continue;
+    if (light.type == LightType::Spot) {
+      // KHR_lights_punctual's cone, from the angles (not through spotAngleScaleOffset, which feeds the GPU): cd
+      // is the cosine between the spot's axis and the direction from the light to the surface.
+      const double cosOuter = std::cos(double(light.outerConeAngle));
+      const double scale = 1.0 / std::max(0.001, std::cos(double(light.innerConeAngle)) - cosOuter);
+      const double cd = glm::dot(glm::normalize(glm::dvec3(light.direction)), -toLight / dist);
+      const double cone = std::clamp(cd * scale - cosOuter * scale, 0.0, 1.0);
+      window *= cone * cone;
+    }
     color += brdfCosineReference(s, v, toLight / dist) * glm::dvec3(light.color) *
              (double(light.intensity) * window / (dist * dist));
   }

@@ -1,6 +1,7 @@
 // Double-precision CPU twin of shaders/lighting.glsl's shadeSurface(): the glTF 2.0 metallic-roughness BRDF
 // (specification appendix B: GGX D, Smith height-correlated V, Schlick F, Lambert diffuse of (1 - F) c_diff),
-// the scene's directional light, KHR_lights_punctual point lights with the range window, the ambient term
+// the scene's directional light, KHR_lights_punctual point and spot lights with the range window (spot: times the
+// extension's cone attenuation) and directional lights, the ambient term
 // AMBIENT_RADIANCE x (c_diff + f0) x occlusion, and emissive. Independent code (written from the
 // specification, not generated from the shader), for the GPU tests' per-pixel comparison.
 #pragma once
@@ -25,7 +26,8 @@ struct SurfaceReference {
 glm::dvec3 brdfCosineReference(const SurfaceReference& s, const glm::dvec3& v, const glm::dvec3& l);
 
 // Outgoing radiance towards the camera: every light of `scene` (directional: scene.lightDirection and
-// lightIntensity; every point light, positions made camera-relative with `cameraPosition`).
+// lightIntensity; every KHR_lights_punctual light of scene.pointLights, positions made camera-relative with
+// `cameraPosition`).
 glm::dvec3 shadeReference(const SurfaceReference& s, const Scene& scene, const glm::dvec3& cameraPosition);
 
 }  // namespace visbuf

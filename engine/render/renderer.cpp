@@ -1145,6 +1145,9 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   st.drawCapacity = capacity;
   st.ids = encoding;
   st.sceneBytes = gpuScene.bytes + (animation ? animation->bytes() : 0);
+  st.textureClasses = uint32_t(gpuScene.textureClasses.size());
+  st.textureBytes = gpuScene.textureBytes;
+  st.texturesDecompressed = gpuScene.texturesDecompressed;
   st.pointLights = uint32_t(scene.pointLights.size());
   st.lightBytes = hasPointLights() ? pointLights.size() + lightCull.tiles().size() : 0;
   st.lightsCulled = cullLights(options);
@@ -1609,8 +1612,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 16);
   if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
     std::vector<gpu::PointLightData> lights;
-    for (const PointLight& l : scene.pointLights)
-      lights.push_back({glm::vec4(glm::vec3(l.position - scene.anchor), l.range), glm::vec4(l.color, l.intensity)});
+    for (const PointLight& l : scene.pointLights) {
+      const glm::vec2 cone(spotAngleScaleOffset(l));
+      lights.push_back({glm::vec4(glm::vec3(l.position - scene.anchor), l.range), glm::vec4(l.color, l.intensity),
+                        glm::vec4(l.direction, 0.0f), cone.x, cone.y, uint32_t(l.type), 0u});
+    }
     impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
     impl->lightCull.create(device, impl->pipelineLayout, w);
   }

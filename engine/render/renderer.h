@@ -156,6 +156,9 @@ struct FrameStats {
   double meanLightsPerTile = 0.0; // kept (tile, light) pairs / tiles
   uint64_t lightBytes = 0;        // GPU memory of the point lights and the tile lists
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
+  uint32_t textureClasses = 0;        // baked texture classes (2D array images) of the scene
+  uint64_t textureBytes = 0;          // their texel bytes on the GPU (part of sceneBytes)
+  uint32_t texturesDecompressed = 0;  // BC classes expanded to RGBA8: the device lacks textureCompressionBC
   uint64_t targetBytesPerPixel = 0;  // bytes per pixel of the path's screen targets (raster targets, depth, colour)
   // Bytes one depth-passing raster fragment writes: visbuf ID + depth, G-buffer targets + depth, forward colour +
   // depth.

@@ -311,7 +311,7 @@ std::vector<glm::mat4> jointMatricesRelative(const Skin& skin, const std::vector
 
 glm::dmat4 blendedJointMatrix(const SkinVertex& skin, std::span<const glm::dmat4> joints) {
   glm::dmat4 b(0.0);
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < kSkinInfluences; ++i) {
     if (skin.weights[i] == 0.0f) continue;
     b += joints[skin.joints[i]] * double(skin.weights[i]);
   }
@@ -345,7 +345,7 @@ std::vector<glm::dvec4> jointInfluenceSpheres(std::span<const glm::vec3> positio
   std::vector<glm::dvec3> lo(jointCount, glm::dvec3(INFINITY)), hi(jointCount, glm::dvec3(-INFINITY));
   auto forInfluences = [&](auto&& fn) {
     for (size_t v = 0; v < positions.size() && v < skin.size(); ++v)
-      for (int i = 0; i < 4; ++i)
+      for (int i = 0; i < kSkinInfluences; ++i)
         if (skin[v].weights[i] > 0.0f && skin[v].joints[i] < jointCount)
           fn(skin[v].joints[i], glm::dvec3(positions[v]));
   };

@@ -1,12 +1,99 @@
 #include "visbuf/scene/gpu_scene.h"
 
 #include <algorithm>
+#include <cstring>
 
 #include <fmt/format.h>
 
 namespace visbuf {
 
 namespace {
+
+// Host-to-device copies through one reused staging buffer: writes are packed into it, and when it is full its
+// copies are submitted and waited for (a fence wait per chunk) before it is refilled. Host memory for an upload is
+// the staging buffer, whatever the size of the data.
+class StagingUploader {
+ public:
+  StagingUploader(gpu::Device& device, VkDeviceSize capacity)
+      : device_(device),
+        staging_(device, std::max<VkDeviceSize>(capacity, 16), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                 gpu::MemoryUse::HostVisible) {}
+  ~StagingUploader() { flush(); }
+  StagingUploader(const StagingUploader&) = delete;
+  StagingUploader& operator=(const StagingUploader&) = delete;
+
+  VkDeviceSize capacity() const { return staging_.size(); }
+
+  // Copies `bytes` from `src` (null: zeros) to `dst` at `offset`, in chunks of at most the staging size.
+  void write(const gpu::Buffer& dst, VkDeviceSize offset, const void* src, size_t bytes) {
+    const auto* from = static_cast<const uint8_t*>(src);
+    while (bytes > 0) {
+      if (used_ == staging_.size()) flush();  // the chunk is full: copy it out, then reuse it
+      const size_t n = size_t(std::min<VkDeviceSize>(bytes, staging_.size() - used_));
+      uint8_t* to = static_cast<uint8_t*>(staging_.mapped()) + used_;
+      if (from) {
+        std::memcpy(to, from, n);
+        from += n;
+      } else {
+        std::memset(to, 0, n);
+      }
+      if (!copies_.empty() && copies_.back().dst == dst.handle() &&
+          copies_.back().region.dstOffset + copies_.back().region.size == offset &&
+          copies_.back().region.srcOffset + copies_.back().region.size == used_) {
+        copies_.back().region.size += n;  // contiguous with the previous write: one region
+      } else {
+        copies_.push_back({dst.handle(), VkBufferCopy{used_, offset, n}});
+      }
+      used_ += n;
+      offset += n;
+      bytes -= n;
+    }
+  }
+
+  // A device-local buffer of `bytes` (rounded up to 4, at least 16, as gpu::uploadBuffer makes them) whose bytes
+  // past `bytes` are zero; the caller fills [0, bytes) with write().
+  gpu::Buffer create(uint64_t bytes, VkBufferUsageFlags usage) {
+    const uint64_t size = std::max<uint64_t>((bytes + 3) & ~uint64_t{3}, 16);
+    gpu::Buffer b(device_, size, usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::DeviceLocal);
+    write(b, bytes, nullptr, size_t(size - bytes));
+    return b;
+  }
+
+  // A device-local buffer holding `v` (create + write).
+  template <typename T>
+  gpu::Buffer upload(const std::vector<T>& v, VkBufferUsageFlags usage) {
+    gpu::Buffer b = create(v.size() * sizeof(T), usage);
+    write(b, 0, v.data(), v.size() * sizeof(T));
+    return b;
+  }
+
+  // Flushes and frees the staging buffer (before the texture uploads, which have their own).
+  void release() {
+    flush();
+    staging_.reset();
+  }
+
+  // Submits the pending copies and waits for them; the staging buffer is free again afterwards.
+  void flush() {
+    if (copies_.empty()) return;
+    VkCommandBuffer cmd = device_.beginOneShot();
+    for (const Copy& c : copies_) vkCmdCopyBuffer(cmd, staging_.handle(), c.dst, 1, &c.region);
+    device_.submitOneShot(cmd);  // waits: the staging bytes may be overwritten from here on
+    copies_.clear();
+    used_ = 0;
+  }
+
+ private:
+  struct Copy {
+    VkBuffer dst;
+    VkBufferCopy region;
+  };
+  gpu::Device& device_;
+  gpu::Buffer staging_;
+  VkDeviceSize used_ = 0;
+  std::vector<Copy> copies_;
+};
+
 uint32_t materialFlagsOf(const Material& m) {
   return (m.alphaMode == AlphaMode::Mask ? MATERIAL_FLAG_MASK : 0u) |
          (m.alphaMode == AlphaMode::Blend ? MATERIAL_FLAG_BLEND : 0u) | (m.doubleSided ? MATERIAL_FLAG_DOUBLE_SIDED : 0u);
@@ -53,6 +140,9 @@ gpu::MaterialData packMaterial(const Material& m, const Scene& scene) {
     if (t.baked >= 0 && size_t(t.baked) < scene.textures.size()) {
       const Texture& tex = scene.textures[size_t(t.baked)];
       x.image = tex.sizeClass << 16 | tex.layer;
+      if (tex.sizeClass < scene.textureClasses.size() &&
+          scene.textureClasses[tex.sizeClass].format == TextureFormat::Bc5)
+        x.samplerBits |= TEXTURE_SAMPLER_TWO_CHANNEL;
       d.slotCount = uint32_t(i + 1);
     }
   }
@@ -84,45 +174,31 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     return makeError(ErrorCode::CapacityExceeded,
                      fmt::format("the scene has {} texture size classes, over the {} the shading pass binds",
                                  scene.textureClasses.size(), MAX_TEXTURE_CLASSES));
-  std::vector<gpu::Vertex> vertices;
-  std::vector<uint32_t> indices;
-  std::vector<gpu::VertexExtra> extras;
-  std::vector<glm::vec4> planes;  // per triangle of `indices` (all LODs): object-space unit normal, offset
+  // The pools are not assembled on the host: the sizes and each mesh's offsets come first, then every mesh's
+  // data is streamed to its place through the staging buffer (StagingUploader), so the host holds at most one
+  // staging buffer and one mesh's derived data (extras, triangle planes) at a time.
+  uint64_t vertexCount = 0, indexCount = 0, extraCount = 0, planeCount = 0;
+  std::vector<uint64_t> indexStart;  // each mesh's first index in the index pool
+  indexStart.reserve(scene.meshes.size());
   for (const Mesh& mesh : scene.meshes) {
+    indexStart.push_back(indexCount);
     gpu::MeshData md{};
     md.boundsSphere = mesh.boundsSphere;
-    md.vertexOffset = uint32_t(vertices.size());
+    md.vertexOffset = uint32_t(vertexCount);
     md.vertexCount = uint32_t(mesh.vertices.size());
     md.lodCount = uint32_t(mesh.lods.size());
     md.extraOffset = EXTRA_NONE;
     if (!mesh.tangents.empty() || !mesh.uvs1.empty()) {
-      md.extraOffset = uint32_t(extras.size());
-      for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-        gpu::VertexExtra e{};
-        if (!mesh.tangents.empty() && mesh.tangents[v].w != 0.0f) {
-          e.tangent = octEncode(glm::normalize(glm::vec3(mesh.tangents[v])));
-          e.tangentW = mesh.tangents[v].w < 0.0f ? -1.0f : 1.0f;
-        }
-        if (!mesh.uvs1.empty()) {
-          e.u1 = mesh.uvs1[v].x;
-          e.v1 = mesh.uvs1[v].y;
-        }
-        extras.push_back(e);
-      }
+      md.extraOffset = uint32_t(extraCount);
+      extraCount += mesh.vertices.size();
     }
     for (size_t l = 0; l < mesh.lods.size(); ++l)
-      md.lods[l] = {uint32_t(indices.size()) + mesh.lods[l].firstIndex, mesh.lods[l].indexCount, mesh.lods[l].error, 0};
+      md.lods[l] = {uint32_t(indexCount) + mesh.lods[l].firstIndex, mesh.lods[l].indexCount, mesh.lods[l].error, 0};
     g.maxTrianglesPerDraw = std::max(g.maxTrianglesPerDraw, mesh.triangleCount(0));
-    vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
-    indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
+    vertexCount += mesh.vertices.size();
+    indexCount += mesh.indices.size();
     // Only lavapipe's micro-raster reads them (sw_raster_cpu.comp); a GPU gets a 16-byte stand-in.
-    for (size_t i = 0; device.isCpu() && i + 2 < mesh.indices.size(); i += 3) {
-      const glm::dvec3 p0(mesh.position(mesh.indices[i])), p1(mesh.position(mesh.indices[i + 1])),
-          p2(mesh.position(mesh.indices[i + 2]));
-      const glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
-      const double len = glm::length(n);
-      planes.push_back(len > 0.0 ? glm::vec4(glm::vec3(n / len), float(-glm::dot(n / len, p0))) : glm::vec4(0.0f));
-    }
+    if (device.isCpu()) planeCount += mesh.indices.size() / 3;
     g.meshTable.push_back(md);
   }
   std::vector<gpu::ObjectData> objects;
@@ -132,16 +208,17 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   // Skinned instances: a region of skinned vertices each (position and normal; tangents where the mesh has
   // them) and a mesh slot of their own that keeps the rest mesh's vertices (uv, colour); the skin vertices of
   // each source mesh once.
-  std::vector<SkinVertex> skinVertices;
+  uint64_t skinVertexCount = 0, morphDeltaCount = 0;
+  std::vector<uint32_t> skinMeshes, morphMeshes;  // source meshes in buffer order
   std::vector<int64_t> skinVertexStart(scene.meshes.size(), -1);
-  std::vector<gpu::MorphDelta> morphDeltas;
   std::vector<int64_t> morphDeltaStart(scene.meshes.size(), -1);
   for (const SkinnedObject& so : scene.skinnedObjects) {
     const Object& o = scene.objects[so.object];
     const Mesh& mesh = scene.meshes[o.mesh];
     if (skinVertexStart[o.mesh] < 0) {
-      skinVertexStart[o.mesh] = int64_t(skinVertices.size());
-      skinVertices.insert(skinVertices.end(), mesh.skinVertices.begin(), mesh.skinVertices.end());
+      skinVertexStart[o.mesh] = int64_t(skinVertexCount);
+      skinVertexCount += mesh.skinVertices.size();
+      skinMeshes.push_back(o.mesh);
     }
     GpuScene::SkinnedRegion r;
     r.object = so.object;
@@ -154,10 +231,11 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     r.hasTangents = !mesh.tangents.empty();
     if (so.morphNode >= 0 && mesh.morphTargetCount > 0) {
       if (morphDeltaStart[o.mesh] < 0) {
-        morphDeltaStart[o.mesh] = int64_t(morphDeltas.size());
-        morphDeltas.insert(morphDeltas.end(), mesh.morphDeltas.begin(), mesh.morphDeltas.end());
+        morphDeltaStart[o.mesh] = int64_t(morphDeltaCount);
+        morphDeltaCount += mesh.morphDeltas.size();
+        morphMeshes.push_back(o.mesh);
       }
-      if (morphDeltas.size() > UINT32_MAX)
+      if (morphDeltaCount > UINT32_MAX)
         return makeError(ErrorCode::CapacityExceeded, "more than 2^32-1 morph deltas in the skinned meshes");
       r.morphTargets = mesh.morphTargetCount;
       r.firstMorphDelta = uint32_t(morphDeltaStart[o.mesh]);
@@ -190,11 +268,11 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   vkGetPhysicalDeviceProperties2(device.physicalDevice(), &p2);
   const uint64_t poolLimit = std::min<uint64_t>(uint64_t(sizeof(gpu::Vertex)) << vertexWindowShift(limit) << 2,
                                                 p13.maxBufferSize);
-  if (vertices.size() * sizeof(gpu::Vertex) > poolLimit)
+  if (vertexCount * sizeof(gpu::Vertex) > poolLimit)
     return makeError(ErrorCode::CapacityExceeded,
                      fmt::format("vertex pool needs {:.1f} MiB, over this device's {:.1f} MiB ({} descriptor windows "
                                  "of maxStorageBufferRange, or maxBufferSize)",
-                                 vertices.size() * sizeof(gpu::Vertex) / 1048576.0, poolLimit / 1048576.0,
+                                 vertexCount * sizeof(gpu::Vertex) / 1048576.0, poolLimit / 1048576.0,
                                  VERTEX_WINDOWS));
   // Skinned regions: packed in order into blocks of at most one buffer (maxBufferSize, maxMemoryAllocationSize:
   // 2 GiB on lavapipe); each mesh slot holds its region's full address, so the blocks need not be contiguous.
@@ -215,8 +293,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     blockBytes.back() += v + t;
   }
   for (auto [what, bytes] : {
-                             std::pair{"index", indices.size() * sizeof(uint32_t)},
-                             std::pair{"vertex extras (tangents, TEXCOORD_1)", extras.size() * sizeof(gpu::VertexExtra)},
+                             std::pair{"index", indexCount * sizeof(uint32_t)},
+                             std::pair{"vertex extras (tangents, TEXCOORD_1)", extraCount * sizeof(gpu::VertexExtra)},
                              std::pair{"object (second window)",
                                        (objects.size() - objectWindowSplit(limit, uint32_t(objects.size()))) *
                                            sizeof(gpu::ObjectData)}}) {
@@ -225,8 +303,80 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   }
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   const VkBufferUsageFlags texel = VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
-  g.vertices = gpu::uploadVector(device, vertices, ssbo | texel);
-  g.indices = gpu::uploadVector(device, indices, ssbo | texel | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+  // One staging buffer for every geometry and table upload: an eighth of the largest buffer to upload, kept
+  // between 32 KiB (fewer, larger copies) and 8 MiB (the bound on host memory for any scene). The eighth keeps
+  // a small scene's staging well below its own data (and below its pack's largest section, which is the encoded
+  // form of that data, down to a quarter of it) at the cost of a few more submissions.
+  constexpr uint64_t kStagingBytes = uint64_t{8} << 20, kMinStagingBytes = uint64_t{32} << 10;
+  const uint64_t largestUpload = std::max({vertexCount * sizeof(gpu::Vertex), indexCount * sizeof(uint32_t),
+                                           extraCount * sizeof(gpu::VertexExtra), planeCount * sizeof(glm::vec4),
+                                           skinVertexCount * sizeof(SkinVertex),
+                                           morphDeltaCount * sizeof(gpu::MorphDelta),
+                                           g.meshTable.size() * sizeof(gpu::MeshData),
+                                           objects.size() * sizeof(gpu::ObjectData),
+                                           materials.size() * sizeof(gpu::MaterialData)});
+  StagingUploader staging(device, std::clamp<uint64_t>((largestUpload / 8 + 15) & ~uint64_t{15}, kMinStagingBytes,
+                                                       kStagingBytes));
+  uint64_t meshScratch = 0;  // the largest batch buffer (extras, planes) of the upload
+  // TRANSFER_SRC: the pools can be read back (tests check the chunked upload byte for byte).
+  const VkBufferUsageFlags readBack = VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+  g.vertices = staging.create(vertexCount * sizeof(gpu::Vertex), ssbo | texel | readBack);
+  g.indices =
+      staging.create(indexCount * sizeof(uint32_t), ssbo | texel | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | readBack);
+  // At least 16 bytes: always bindable.
+  g.vertexExtras = staging.create(extraCount * sizeof(gpu::VertexExtra), ssbo | readBack);
+  g.trianglePlanes = staging.create(planeCount * sizeof(glm::vec4), texel);
+  {
+    constexpr size_t kBatch = 1024;  // 16-32 KiB of derived records at a time
+    uint64_t planeAt = 0;
+    std::vector<gpu::VertexExtra> extras;
+    std::vector<glm::vec4> planes;  // per triangle (all LODs): object-space unit normal, offset
+    for (size_t m = 0; m < scene.meshes.size(); ++m) {
+      const Mesh& mesh = scene.meshes[m];
+      const gpu::MeshData& md = g.meshTable[m];
+      staging.write(g.vertices, uint64_t{md.vertexOffset} * sizeof(gpu::Vertex), mesh.vertices.data(),
+               mesh.vertices.size() * sizeof(gpu::Vertex));
+      staging.write(g.indices, indexStart[m] * sizeof(uint32_t), mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
+      // Extras and planes are derived in batches of kBatch records, so their host buffers stay small.
+      if (md.extraOffset != EXTRA_NONE) {
+        for (size_t first = 0; first < mesh.vertices.size(); first += kBatch) {
+          extras.assign(std::min(kBatch, mesh.vertices.size() - first), gpu::VertexExtra{});
+          for (size_t k = 0; k < extras.size(); ++k) {
+            const size_t v = first + k;
+            gpu::VertexExtra& e = extras[k];
+            if (!mesh.tangents.empty() && mesh.tangents[v].w != 0.0f) {
+              e.tangent = octEncode(glm::normalize(glm::vec3(mesh.tangents[v])));
+              e.tangentW = mesh.tangents[v].w < 0.0f ? -1.0f : 1.0f;
+            }
+            if (!mesh.uvs1.empty()) {
+              e.u1 = mesh.uvs1[v].x;
+              e.v1 = mesh.uvs1[v].y;
+            }
+          }
+          staging.write(g.vertexExtras, (uint64_t{md.extraOffset} + first) * sizeof(gpu::VertexExtra), extras.data(),
+                        extras.size() * sizeof(gpu::VertexExtra));
+          meshScratch = std::max<uint64_t>(meshScratch, extras.capacity() * sizeof(gpu::VertexExtra));
+        }
+      }
+      if (device.isCpu()) {
+        const size_t triangles = mesh.indices.size() / 3;
+        for (size_t first = 0; first < triangles; first += kBatch) {
+          planes.clear();
+          for (size_t t = first; t < std::min(triangles, first + kBatch); ++t) {
+            const size_t i = 3 * t;
+            const glm::dvec3 a(mesh.position(mesh.indices[i])), b(mesh.position(mesh.indices[i + 1])),
+                c(mesh.position(mesh.indices[i + 2]));
+            const glm::dvec3 n = glm::cross(b - a, c - a);
+            const double len = glm::length(n);
+            planes.push_back(len > 0.0 ? glm::vec4(glm::vec3(n / len), float(-glm::dot(n / len, a))) : glm::vec4(0.0f));
+          }
+          staging.write(g.trianglePlanes, planeAt * sizeof(glm::vec4), planes.data(), planes.size() * sizeof(glm::vec4));
+          planeAt += planes.size();
+          meshScratch = std::max<uint64_t>(meshScratch, planes.capacity() * sizeof(glm::vec4));
+        }
+      }
+    }
+  }
   for (uint64_t bytes : blockBytes)  // contents written by the skinning pass before any frame reads them
     g.skinnedVertices.emplace_back(device, bytes,
                                    ssbo | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
@@ -242,10 +392,9 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
     md.skinnedTangentLow = uint32_t(t);
     md.skinnedTangentHigh = uint32_t(t >> 32);
   }
-  g.meshes = gpu::uploadVector(device, g.meshTable, ssbo | texel | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
-  g.objects = gpu::uploadVector(device, objects, ssbo | texel);
-  g.trianglePlanes = gpu::uploadVector(device, planes, texel);
-  g.materials = gpu::uploadVector(device, materials, ssbo | texel);
+  g.meshes = staging.upload(g.meshTable, ssbo | texel | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+  g.objects = staging.upload(objects, ssbo | texel);
+  g.materials = staging.upload(materials, ssbo | texel);
   {
     const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
     auto view = [&](const gpu::Buffer& b, VkFormat format, VkDeviceSize texelBytes) {
@@ -265,14 +414,29 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
       g.texels = g.texels && b->size() / 16 <= maxTexels;
     g.texels = g.texels && g.indices.size() / 4 <= maxTexels;
   }
-  if (!skinVertices.empty()) g.skinVertices = gpu::uploadVector(device, skinVertices, ssbo);
-  if (!morphDeltas.empty()) g.morphDeltas = gpu::uploadVector(device, morphDeltas, ssbo);
-  g.vertexExtras = gpu::uploadVector(device, extras, ssbo);  // at least 16 bytes: always bindable
-  uint64_t textureBytes = 0;
-  for (const TextureClass& c : scene.textureClasses) {
-    g.textureClasses.push_back(uploadTextureClass(device, c));
-    textureBytes += c.texels.size();
+  if (skinVertexCount > 0) {
+    g.skinVertices = staging.create(skinVertexCount * sizeof(SkinVertex), ssbo);
+    for (uint32_t m : skinMeshes)
+      staging.write(g.skinVertices, uint64_t(skinVertexStart[m]) * sizeof(SkinVertex), scene.meshes[m].skinVertices.data(),
+               scene.meshes[m].skinVertices.size() * sizeof(SkinVertex));
   }
+  if (morphDeltaCount > 0) {
+    g.morphDeltas = staging.create(morphDeltaCount * sizeof(gpu::MorphDelta), ssbo);
+    for (uint32_t m : morphMeshes)
+      staging.write(g.morphDeltas, uint64_t(morphDeltaStart[m]) * sizeof(gpu::MorphDelta),
+               scene.meshes[m].morphDeltas.data(), scene.meshes[m].morphDeltas.size() * sizeof(gpu::MorphDelta));
+  }
+  g.stagingBytes = staging.capacity();
+  g.uploadHostBytes = g.stagingBytes + meshScratch + objects.size() * sizeof(gpu::ObjectData) +
+                      materials.size() * sizeof(gpu::MaterialData);
+  staging.release();  // every geometry buffer is complete before the first frame
+  for (const TextureClass& c : scene.textureClasses) {
+    TextureUpload uploaded = uploadTextureClass(device, c, {});
+    g.textureClasses.push_back(std::move(uploaded.image));
+    g.textureBytes += uploaded.gpuBytes;
+    g.texturesDecompressed += uploaded.decompressed ? 1u : 0u;
+  }
+  const uint64_t textureBytes = g.textureBytes;
   TextureClass white;
   white.size = 1;
   white.layers = 1;

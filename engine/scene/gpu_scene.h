@@ -30,6 +30,8 @@ struct GpuScene {
   gpu::BufferView planeTexels;
   bool texels = false;
   std::vector<gpu::Image> textureClasses;  // Scene::textureClasses, same order: 2D arrays with full mip chains
+  uint64_t textureBytes = 0;               // their texel bytes on the GPU
+  uint32_t texturesDecompressed = 0;       // BC classes expanded to RGBA8 (device without textureCompressionBC)
   gpu::Image placeholderTexture;           // 1x1x1 white: bound to the class slots the scene does not use
   std::vector<gpu::MeshData> meshTable;  // CPU copy (forward path, ID decoding)
   std::vector<uint32_t> objectMesh;      // meshTable slot each object draws (its own slot when skinned)
@@ -55,7 +57,7 @@ struct GpuScene {
     uint32_t firstMorphDelta = 0;  // its first MorphDelta in morphDeltas
   };
   std::vector<SkinnedRegion> skinned;
-  gpu::Buffer skinVertices;     // SkinVertex[] of the meshes skinned objects use (24 bytes each)
+  gpu::Buffer skinVertices;     // SkinVertex[] of the meshes skinned objects use (48 bytes each)
   // MorphDelta[] of the meshes skinned objects with morph targets use (36 bytes per vertex and target); null
   // when none has targets.
   gpu::Buffer morphDeltas;
@@ -65,6 +67,11 @@ struct GpuScene {
   uint32_t objectCount = 0;
   uint32_t maxTrianglesPerDraw = 0;  // largest LOD0 triangle count: sets the triangle ID bits
   uint64_t bytes = 0;                // GPU memory of the mirror
+  // Host memory of the geometry and table upload: its staging buffer (reused, at most 8 MiB) and the transient
+  // host buffers besides it (object and material records, one mesh's vertex extras or triangle planes at a
+  // time). The Scene's own copy of the geometry and the texture uploads are not included.
+  uint64_t stagingBytes = 0;
+  uint64_t uploadHostBytes = 0;
 };
 
 // The first object of the second descriptor window (BINDING_OBJECTS_HIGH): as many objects as one window of
@@ -85,15 +92,38 @@ gpu::ObjectData packSkinnedObject(const Object& object, const glm::dmat4& placem
 // sampler bits and transform (TEXTURE_NONE where the slot has no baked texture).
 gpu::MaterialData packMaterial(const Material& material, const Scene& scene);
 
-// Uploads one baked texture class as a sampled 2D array image (R8G8B8A8 UNORM or SRGB by colour space), every
-// layer and mip level, left in SHADER_READ_ONLY_OPTIMAL.
+// The VkFormat a texture class is sampled as: R8G8B8A8 or BC1 RGB / BC3 (UNORM or SRGB by colour space), BC4 /
+// BC5 UNORM; `decompressed`: the RGBA8 format a BC class is expanded to on a device without BC formats.
+VkFormat textureClassFormat(const TextureClass& textureClass, bool decompressed);
+
+struct TextureUploadOptions {
+  bool allowBc = true;                        // false: decompress BC classes even where the device samples them
+  // Staging buffer, reused batch after batch; raised to 64 KiB or to one 4-row band of mip 0 when smaller.
+  VkDeviceSize stagingBytes = VkDeviceSize{16} << 20;
+  VkImageUsageFlags extraUsage = 0;  // beyond SAMPLED | TRANSFER_DST (TRANSFER_SRC: read back by a test)
+};
+struct TextureUpload {
+  gpu::Image image;
+  uint64_t gpuBytes = 0;      // texel bytes of the image as created (RGBA8 size where decompressed)
+  bool decompressed = false;  // a BC class expanded to RGBA8 (no textureCompressionBC, or !allowBc)
+  uint64_t stagingBytes = 0;  // the host staging buffer it went through (freed on return)
+};
+
+// Uploads one baked texture class as a sampled 2D array image (textureClassFormat), every layer and mip level,
+// left in SHADER_READ_ONLY_OPTIMAL. BC classes stay compressed where the device has textureCompressionBC and are
+// decompressed to RGBA8 otherwise. The texels go through one staging buffer of at most options.stagingBytes,
+// refilled after each batch's copy has finished, so the upload's host memory stays bounded whatever the class size.
+TextureUpload uploadTextureClass(gpu::Device& device, const TextureClass& textureClass,
+                                 const TextureUploadOptions& options);
 gpu::Image uploadTextureClass(gpu::Device& device, const TextureClass& textureClass);
 
 // Validates and uploads. Fails with CapacityExceeded when a buffer would exceed the device's
 // maxStorageBufferRange (128 MiB on lavapipe), naming the buffer and the limit; the object records are read
 // through two descriptor windows (objectWindowSplit), so they may take twice that, and the skinned vertices by
 // device address from as many buffers as they need (CapacityExceeded only if one instance's region passes
-// maxBufferSize / maxMemoryAllocationSize).
+// maxBufferSize / maxMemoryAllocationSize). The geometry pools and tables are written mesh by mesh through one
+// reused staging buffer (a quarter of the largest buffer, 64 KiB..8 MiB; a wait between chunks), never assembled
+// on the host: stagingBytes / uploadHostBytes report what that cost.
 Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene);
 
 }  // namespace visbuf

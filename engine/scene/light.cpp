@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -20,8 +21,31 @@ Status validatePointLights(const std::vector<PointLight>& lights) {
     if (!finite) return makeError(ErrorCode::MalformedInput, fmt::format("point light {}: non-finite value", i));
     if (l.intensity < 0.0f || l.color.r < 0.0f || l.color.g < 0.0f || l.color.b < 0.0f)
       return makeError(ErrorCode::MalformedInput, fmt::format("point light {}: negative intensity or colour", i));
+    if (l.type != LightType::Point && l.type != LightType::Spot && l.type != LightType::Directional)
+      return makeError(ErrorCode::MalformedInput, fmt::format("light {}: unknown type {}", i, uint32_t(l.type)));
+    if (l.type == LightType::Point) continue;
+    const double len = glm::length(glm::dvec3(l.direction));
+    if (!(std::abs(len - 1.0) <= 1e-3))
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("{} light {}: direction ({}, {}, {}) is not a unit vector",
+                                   l.type == LightType::Spot ? "spot" : "directional", i, l.direction.x,
+                                   l.direction.y, l.direction.z));
+    if (l.type != LightType::Spot) continue;
+    // The extension's bounds; inner == outer would make the cone's edge a step (scale 1 / 0.001 hides it).
+    if (!(l.innerConeAngle >= 0.0f && l.innerConeAngle < l.outerConeAngle &&
+          double(l.outerConeAngle) <= std::numbers::pi / 2 + 1e-6))
+      return makeError(ErrorCode::MalformedInput,
+                       fmt::format("spot light {}: cone angles inner {} / outer {} (need 0 <= inner < outer <= pi/2)",
+                                   i, l.innerConeAngle, l.outerConeAngle));
   }
   return {};
+}
+
+glm::dvec2 spotAngleScaleOffset(const PointLight& light) {
+  if (light.type != LightType::Spot) return {0.0, 1.0};
+  const double cosOuter = std::cos(double(light.outerConeAngle));
+  const double scale = 1.0 / std::max(0.001, std::cos(double(light.innerConeAngle)) - cosOuter);
+  return {scale, -cosOuter * scale};
 }
 
 void scatterPointLights(Scene& scene, uint32_t count, uint64_t seed) {

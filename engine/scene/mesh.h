@@ -24,7 +24,11 @@ struct MeshSource {
   std::vector<uint32_t> indices;   // 3 per triangle, each < positions.size()
   // Skinning streams (glTF JOINTS_0 / WEIGHTS_0): both empty, or both the same count as positions.
   std::vector<glm::u16vec4> joints;  // indices into the skin's joint list; slots with weight 0 hold 0
-  std::vector<glm::vec4> weights;    // each >= 0, finite, summing to 1
+  std::vector<glm::vec4> weights;    // each >= 0, finite, summing to 1 (with weights1, when present)
+  // Influences 5..8 (glTF JOINTS_1 / WEIGHTS_1): both empty, or both the same count as joints; weights and
+  // weights1 together sum to 1.
+  std::vector<glm::u16vec4> joints1;
+  std::vector<glm::vec4> weights1;
   // Morph targets (glTF mesh.primitives[].targets) kept for animation, not baked: each stream of a target is
   // empty (the target does not move that attribute) or the same count as positions, finite. Tangent deltas
   // move the tangent's xyz only. Every target of a mesh has the same streams present.

@@ -93,18 +93,21 @@ void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std:
   }
 }
 
-// The source's JOINTS_0 / WEIGHTS_0 streams as SkinVertex records (empty when the mesh is not skinned), in
-// canonical form: slots with weight 0 get joint 0, so equal influences compare equal byte for byte.
+// The source's JOINTS_0 / WEIGHTS_0 (+ JOINTS_1 / WEIGHTS_1) streams as SkinVertex records (empty when the mesh
+// is not skinned), in canonical form: slots with weight 0 get joint 0, so equal influences compare equal byte for
+// byte.
 Result<std::vector<SkinVertex>> skinVerticesOf(const MeshSource& source) {
   std::vector<SkinVertex> out(source.joints.size());
+  const bool second = !source.joints1.empty();
   for (size_t v = 0; v < out.size(); ++v) {
-    for (int i = 0; i < 4; ++i) {
-      const float w = source.weights[v][i];
+    for (int i = 0; i < kSkinInfluences; ++i) {
+      if (i >= 4 && !second) break;
+      const float w = i < 4 ? source.weights[v][i] : source.weights1[v][i - 4];
       if (!std::isfinite(w) || w < 0.0f)
         return makeError(ErrorCode::MalformedInput,
                          fmt::format("mesh '{}': vertex {} has skin weight {} (< 0 or not finite)", source.name, v, w));
       out[v].weights[i] = w;
-      out[v].joints[i] = w > 0.0f ? source.joints[v][i] : uint16_t{0};
+      out[v].joints[i] = w > 0.0f ? (i < 4 ? source.joints[v][i] : source.joints1[v][i - 4]) : uint16_t{0};
     }
   }
   return out;
@@ -152,7 +155,9 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
       (!source.uvs1.empty() && source.uvs1.size() != vertexCount) ||
       (!source.tangents.empty() && source.tangents.size() != vertexCount) ||
       source.joints.size() != source.weights.size() ||
-      (!source.joints.empty() && source.joints.size() != vertexCount))
+      (!source.joints.empty() && source.joints.size() != vertexCount) ||
+      source.joints1.size() != source.weights1.size() ||
+      (!source.joints1.empty() && source.joints1.size() != source.joints.size()))
     return makeError(ErrorCode::MalformedInput, fmt::format("mesh '{}': attribute counts differ", source.name));
   for (uint32_t i : source.indices)
     if (i >= vertexCount)

@@ -25,7 +25,7 @@ Status checkSkinVertices(const Mesh& mesh, size_t meshIndex, int64_t* maxJoint) 
   for (size_t v = 0; v < mesh.skinVertices.size(); ++v) {
     const SkinVertex& s = mesh.skinVertices[v];
     double sum = 0.0;
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < kSkinInfluences; ++i) {
       if (!std::isfinite(s.weights[i]) || s.weights[i] < 0.0f)
         return malformed(fmt::format("mesh {} '{}': skin vertex {} has a negative or non-finite weight",
                                      meshIndex, mesh.name, v));

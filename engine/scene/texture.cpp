@@ -2,14 +2,126 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 
 namespace visbuf {
 
 uint32_t TextureClass::mipCountFor(uint32_t size) { return size == 0 ? 0 : uint32_t(std::bit_width(size)); }
 
+const char* textureFormatName(TextureFormat format) {
+  switch (format) {
+    case TextureFormat::Rgba8: return "rgba8";
+    case TextureFormat::Bc1: return "bc1";
+    case TextureFormat::Bc3: return "bc3";
+    case TextureFormat::Bc4: return "bc4";
+    case TextureFormat::Bc5: return "bc5";
+  }
+  return "unknown";
+}
+
+bool isBlockCompressed(TextureFormat format) { return format != TextureFormat::Rgba8; }
+
+uint32_t textureFormatUnitBytes(TextureFormat format) {
+  switch (format) {
+    case TextureFormat::Rgba8: return 4;
+    case TextureFormat::Bc1:
+    case TextureFormat::Bc4: return 8;
+    case TextureFormat::Bc3:
+    case TextureFormat::Bc5: return 16;
+  }
+  return 0;
+}
+
+uint64_t textureImageBytes(TextureFormat format, uint32_t width, uint32_t height) {
+  if (!isBlockCompressed(format)) return uint64_t{width} * height * 4;
+  const uint64_t bx = (uint64_t{width} + 3) / 4, by = (uint64_t{height} + 3) / 4;
+  return bx * by * textureFormatUnitBytes(format);
+}
+
+namespace {
+
+// One BC4 block (8 bytes: two 8-bit endpoints, 16 3-bit indices) into channel `channel` of 16 RGBA8 texels.
+void decodeBc4Block(const uint8_t* block, uint8_t* texels, int channel) {
+  const int a = block[0], b = block[1];
+  int value[8] = {a, b, 0, 0, 0, 0, 0, 0};
+  if (a > b) {
+    for (int i = 1; i < 7; ++i) value[i + 1] = ((7 - i) * a + i * b + 3) / 7;
+  } else {
+    for (int i = 1; i < 5; ++i) value[i + 1] = ((5 - i) * a + i * b + 2) / 5;
+    value[6] = 0;
+    value[7] = 255;
+  }
+  uint64_t bits = 0;
+  for (int i = 0; i < 6; ++i) bits |= uint64_t{block[2 + i]} << (8 * i);
+  for (int i = 0; i < 16; ++i) texels[i * 4 + channel] = uint8_t(value[(bits >> (3 * i)) & 7]);
+}
+
+// One BC1 colour block (8 bytes: two RGB565 endpoints, 16 2-bit indices) into RGB of 16 RGBA8 texels. `threeColour`
+// allows BC1's 3-colour mode (endpoint 0 <= endpoint 1: midpoint and black); BC3's colour block is always 4-colour.
+void decodeColourBlock(const uint8_t* block, uint8_t* texels, bool threeColour) {
+  const uint32_t e0 = uint32_t(block[0]) | uint32_t(block[1]) << 8, e1 = uint32_t(block[2]) | uint32_t(block[3]) << 8;
+  int colour[4][3];
+  for (int k = 0; k < 2; ++k) {
+    const uint32_t e = k == 0 ? e0 : e1;
+    colour[k][0] = int(((e >> 11) & 31) * 255 + 15) / 31;
+    colour[k][1] = int(((e >> 5) & 63) * 255 + 31) / 63;
+    colour[k][2] = int((e & 31) * 255 + 15) / 31;
+  }
+  for (int c = 0; c < 3; ++c) {
+    if (!threeColour || e0 > e1) {
+      colour[2][c] = (2 * colour[0][c] + colour[1][c] + 1) / 3;
+      colour[3][c] = (colour[0][c] + 2 * colour[1][c] + 1) / 3;
+    } else {
+      colour[2][c] = (colour[0][c] + colour[1][c] + 1) / 2;
+      colour[3][c] = 0;
+    }
+  }
+  const uint32_t bits = uint32_t(block[4]) | uint32_t(block[5]) << 8 | uint32_t(block[6]) << 16 | uint32_t(block[7]) << 24;
+  for (int i = 0; i < 16; ++i)
+    for (int c = 0; c < 3; ++c) texels[i * 4 + c] = uint8_t(colour[(bits >> (2 * i)) & 3][c]);
+}
+
+}  // namespace
+
+std::vector<uint8_t> decodeTextureImage(const uint8_t* data, uint32_t width, uint32_t height, TextureFormat format) {
+  std::vector<uint8_t> out(size_t(width) * height * 4);
+  if (!isBlockCompressed(format)) {
+    std::memcpy(out.data(), data, out.size());
+    return out;
+  }
+  const uint32_t unit = textureFormatUnitBytes(format);
+  const uint32_t bx = (width + 3) / 4, by = (height + 3) / 4;
+  uint8_t texels[16 * 4];
+  for (uint32_t row = 0; row < by; ++row) {
+    for (uint32_t col = 0; col < bx; ++col) {
+      const uint8_t* block = &data[(size_t(row) * bx + col) * unit];
+      std::memset(texels, 0, sizeof texels);
+      for (int i = 0; i < 16; ++i) texels[i * 4 + 3] = 255;
+      switch (format) {
+        case TextureFormat::Bc1: decodeColourBlock(block, texels, true); break;
+        case TextureFormat::Bc3:
+          decodeBc4Block(block, texels, 3);  // BC3's alpha block is a BC4 block
+          decodeColourBlock(block + 8, texels, false);
+          break;
+        case TextureFormat::Bc4: decodeBc4Block(block, texels, 0); break;
+        case TextureFormat::Bc5:
+          decodeBc4Block(block, texels, 0);
+          decodeBc4Block(block + 8, texels, 1);
+          break;
+        case TextureFormat::Rgba8: break;
+      }
+      for (uint32_t y = 0; y < 4 && row * 4 + y < height; ++y) {
+        const uint32_t columns = std::min(4u, width - col * 4);
+        std::memcpy(&out[(size_t(row * 4 + y) * width + col * 4) * 4], &texels[y * 16], size_t(columns) * 4);
+      }
+    }
+  }
+  return out;
+}
+
 uint64_t TextureClass::layerBytes(uint32_t mip) const {
-  const uint64_t side = std::max<uint64_t>(uint64_t{size} >> mip, 1);
-  return side * side * 4;
+  const uint32_t side = mipSize(mip);
+  return textureImageBytes(format, side, side);
 }
 
 uint64_t TextureClass::offset(uint32_t mip, uint32_t layer) const {

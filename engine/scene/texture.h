@@ -2,16 +2,18 @@
 // (Texture + TextureClass). docs/pack-format.md ("Textures") gives the reasons for the layout.
 //
 // Baked layout (the shading pass runs on lavapipe without descriptor indexing):
-//   - Every baked image is square, power-of-two sized, RGBA8, with a full box-filtered mip chain to 1x1.
-//   - Images of the same (size, colour space) share one 2D ARRAY texture, a TextureClass; each image is one
+//   - Every baked image is square, power-of-two sized, with a full box-filtered mip chain to 1x1, stored as RGBA8
+//     or block-compressed (BC1 / BC3 / BC4 / BC5: TextureFormat).
+//   - Images of the same (size, colour space, format) share one 2D ARRAY texture, a TextureClass; each image is one
 //     layer of it. A shader addresses a texture as (class, layer): it binds one sampler2DArray per class
-//     (a handful: at most 12 sizes x 2 colour spaces) and, since the shade pass runs per material, indexes
-//     that array with a dynamically uniform class index, which core Vulkan allows without descriptor
-//     indexing; the layer is the third texture coordinate.
+//     (a handful: sizes x colour spaces x formats, at most MAX_TEXTURE_CLASSES) and, since the shade pass runs
+//     per material, indexes that array with a dynamically uniform class index, which core Vulkan allows
+//     without descriptor indexing; the layer is the third texture coordinate.
 //   - Sampler state (wrap, filter) is not part of the image: it travels with each TextureRef, so one image
 //     can be sampled with several samplers (glTF allows it) and the renderer needs only a few VkSamplers.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -63,19 +65,43 @@ struct Texture {
   bool operator==(const Texture&) const = default;
 };
 
-// One 2D array texture: `layers` square images of `size` x `size` RGBA8 texels with `mipCount` levels.
+// Storage format of a texture class. Values are stored in packs: never renumber.
+//   Rgba8: 4 bytes a texel, R first.
+//   Bc1..Bc5: 4x4 blocks (BC1 = DXT1 RGB, 8 bytes; BC3 = DXT5 RGBA, 16; BC4 = one channel (R), 8; BC5 = two
+//   channels (R, G), 16), blocks row-major within a level, bytes as Vulkan's VK_FORMAT_BC*_BLOCK read them.
+enum class TextureFormat : uint32_t { Rgba8 = 0, Bc1 = 1, Bc3 = 2, Bc4 = 3, Bc5 = 4 };
+inline constexpr uint32_t kTextureFormatCount = 5;
+const char* textureFormatName(TextureFormat format);  // "rgba8", "bc1", ...
+bool isBlockCompressed(TextureFormat format);
+// Bytes of one texel (Rgba8) or one 4x4 block (BC formats).
+uint32_t textureFormatUnitBytes(TextureFormat format);
+// Bytes of one width x height image in `format`. BC images are whole 4x4 blocks: a 2x2 or 1x1 level still takes
+// one block (Vulkan's rule: buffer-image copies of block formats cover whole blocks; the image extent stays the
+// level's true size).
+uint64_t textureImageBytes(TextureFormat format, uint32_t width, uint32_t height);
+
+// Decodes one width x height image stored in `format` (textureImageBytes bytes) to RGBA8 as Vulkan's decode of
+// the matching format gives it, rounded to 8 bits: BC1 (RGB block format: alpha 255, and 3-colour blocks' fourth
+// colour black), BC3, BC4 (R, 0, 0, 255), BC5 (R, G, 0, 255); Rgba8 is copied. Interpolated colours are computed
+// in integers from the 8-bit endpoints, so a GPU's float decode may differ by 1.
+std::vector<uint8_t> decodeTextureImage(const uint8_t* data, uint32_t width, uint32_t height, TextureFormat format);
+
+// One 2D array texture: `layers` square images of `size` x `size` texels in `format` with `mipCount` levels.
 // texels holds mip 0 of every layer, then mip 1 of every layer, ... (mip-major: one buffer-to-image copy
-// region per mip level covers all layers). Level m is max(size >> m, 1) texels wide; each texel is 4 bytes,
-// R first. Srgb classes store sRGB-encoded RGB (alpha is always linear).
+// region per mip level covers all layers). Level m is max(size >> m, 1) texels wide. Rgba8: 4 bytes a texel,
+// R first; BC formats: ceil(side / 4)^2 blocks a layer (textureImageBytes). Srgb classes store sRGB-encoded RGB
+// (alpha is always linear); Bc4 / Bc5 classes are always Linear.
 struct TextureClass {
   uint32_t size = 0;      // power of two, >= 1
   ColorSpace colorSpace = ColorSpace::Linear;
   uint32_t layers = 0;    // >= 1
   uint32_t mipCount = 0;  // log2(size) + 1
+  TextureFormat format = TextureFormat::Rgba8;
   std::vector<uint8_t> texels;
   bool operator==(const TextureClass&) const = default;
 
   static uint32_t mipCountFor(uint32_t size);
+  uint32_t mipSize(uint32_t mip) const { return std::max(size >> mip, 1u); }
   // Bytes of one layer at mip level `mip`, and the byte offset of (mip, layer) in texels.
   uint64_t layerBytes(uint32_t mip) const;
   uint64_t offset(uint32_t mip, uint32_t layer) const;

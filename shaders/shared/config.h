@@ -153,13 +153,15 @@
 #define TEXTURE_SLOT_EMISSIVE 4
 #define TEXTURE_NONE 0xffffffffu
 // TextureSlotData.samplerBits: wrap S (2 bits) and T (2 bits) as scene/texture.h WrapMode, magnification
-// linear, minification linear, mip filter (2 bits, MipFilter), TEXCOORD set.
+// linear, minification linear, mip filter (2 bits, MipFilter), TEXCOORD set (8 bits), two-channel image.
 #define TEXTURE_SAMPLER_WRAP_S_SHIFT 0
 #define TEXTURE_SAMPLER_WRAP_T_SHIFT 2
 #define TEXTURE_SAMPLER_MAG_LINEAR 16u
 #define TEXTURE_SAMPLER_MIN_LINEAR 32u
 #define TEXTURE_SAMPLER_MIP_SHIFT 6
 #define TEXTURE_SAMPLER_TEXCOORD_SHIFT 8
+// The image holds two channels (a BC5 class: x, y of a normal map); the normal slot rebuilds z from them.
+#define TEXTURE_SAMPLER_TWO_CHANNEL 65536u
 // Baked textures: one texture2DArray per size class (scene/texture.h), bound as a fixed array of
 // MAX_TEXTURE_CLASSES (12 sizes x 2 colour spaces); unused entries hold a 1x1 placeholder. Lavapipe has no
 // dynamic indexing of sampled-image arrays, so shaders index it with constants only (material.glsl).
@@ -199,6 +201,10 @@
 #define BINDING_GBUFFER_DEPTH 25  // sampler2D: the frame's D32 depth (reverse-Z), after both raster phases
 // Bindings 20..23: lights (shaders/lighting.glsl, light_cull.comp.glsl).
 #define BINDING_LIGHTS 20        // PointLightData[FrameData.pointLightCount]
+// PointLightData.type (engine/scene/light.h LightType): KHR_lights_punctual point, spot, directional.
+#define LIGHT_POINT 0u
+#define LIGHT_SPOT 1u
+#define LIGHT_DIRECTIONAL 2u
 #define BINDING_LIGHT_TILES 21   // uint[]: LIGHT_TILE_HEADER counters, then per tile a count + LIGHTS_PER_TILE indices
 #define BINDING_LIGHT_DEPTH 22   // sampler2D: the visibility depth (reverse-Z), per-tile depth bounds
 // Ambient radiance of the uniform environment every surface sees (scaled by occlusion; lighting.glsl).

@@ -171,12 +171,18 @@ struct FrameData {
   uint swTriangleBits;     // payload = (slot << swTriangleBits) | triangle (wide IDs); narrow: the encoded ID
 };
 
-// A KHR_lights_punctual point light (32 bytes): position relative to the scene anchor (like object
-// translations; + cameraOffset gives camera-relative), range (<= 0: infinite), linear RGB colour, intensity
-// (candela).
+// A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;
+// + cameraOffset gives camera-relative), range (<= 0: infinite), linear RGB colour, intensity (candela; lux for
+// a directional light); spot and directional lights: the unit direction the light shines along (world, w 0);
+// spot lights: the cone attenuation clamp(cd * angleScale + angleOffset, 0, 1)^2 (engine/scene/light.h).
 struct PointLightData {
   vec4 positionRange;
   vec4 colorIntensity;
+  vec4 direction;
+  float angleScale;
+  float angleOffset;
+  uint type;  // LIGHT_POINT / LIGHT_SPOT / LIGHT_DIRECTIONAL
+  uint pad;
 };
 
 // One animated instance of the skinning pass (64 bytes), written by the CPU every pose.

@@ -216,3 +216,108 @@ TEST(Lights, TileOverflowIsCounted) {
   EXPECT_GT(test::compareColor(tiled->color, all->color).maxAbs, 1e-3) << "dropped lights must show";
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
+
+// KHR_lights_punctual spot and directional lights: one spot light shining down on the knots (its cone edge
+// crosses them) and one directional light, through the real shading pass against the CPU reference at every
+// covered pixel, with the tolerance of BrdfMatchesCpuReference (2e-3 + 2e-3 x reference; the cone factor adds
+// float rounding of cd x scale, scale ~12 here, ~1e-6 relative). Both lights must visibly contribute, the spot
+// only inside its outer cone; the tiled image (the directional light is in every tile's list, the spot is culled
+// by its range sphere) equals the all-lights one (1e-5, as TiledEqualsAllLights).
+TEST(Lights, SpotAndDirectionalMatchCpuReference) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene scene = brdfScene(0);
+  scene.lightIntensity = 0.5f;  // the scene's own sun, dimmed so that the two lights under test dominate
+  PointLight spot;
+  spot.type = LightType::Spot;
+  spot.position = {1.0, 9.0, 2.0};
+  spot.direction = glm::normalize(glm::vec3(-0.1f, -1.0f, -0.2f));
+  spot.innerConeAngle = 0.25f;
+  spot.outerConeAngle = 0.35f;
+  spot.intensity = 250.0f;
+  spot.range = 40.0f;
+  spot.color = {1.0f, 0.85f, 0.6f};
+  PointLight sun;
+  sun.type = LightType::Directional;
+  sun.direction = glm::normalize(glm::vec3(-0.6f, -0.3f, -0.75f));
+  sun.intensity = 1.5f;
+  sun.color = {0.5f, 0.6f, 1.0f};
+  sun.position = {1e3, 0.0, 0.0};  // unused by a directional light
+  scene.pointLights = {spot, sun};
+  ASSERT_TRUE(validateScene(scene).ok());
+  const Camera cam = brdfCamera();
+  const uint32_t w = 320, h = 200;
+  auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
+  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+  FrameOptions fo;
+  fo.lodErrorPixels = 0.0f;
+  fo.readAttributes = true;
+  fo.readIds = true;
+  auto frame = (*renderer)->renderFrame(cam, fo);
+  ASSERT_TRUE(frame.ok()) << frame.error().message;
+  Scene noSpot = scene, noSun = scene;
+  noSpot.pointLights = {sun};
+  noSun.pointLights = {spot};
+  double maxErr = 0.0, maxSpot = 0.0, maxSun = 0.0;
+  size_t covered = 0, bad = 0, inCone = 0, outOfCone = 0;
+  for (size_t p = 0; p < size_t(w) * h; ++p) {
+    const float* a = &frame->attributes[p * ATTRIBUTE_FLOATS];
+    if (a[7] != 1.0f) continue;
+    ASSERT_NE(frame->ids[2 * p], 0u);
+    const Material& m = scene.materials[scene.objects[frame->ids[2 * p] - 1].material];
+    SurfaceReference s;
+    s.position = {a[0], a[1], a[2]};
+    s.normal = glm::normalize(glm::dvec3(a[4], a[5], a[6]));
+    s.baseColor = glm::dvec3(m.baseColor);
+    s.metallic = m.metallic;
+    s.roughness = m.roughness;
+    s.emissive = glm::dvec3(m.emissive * m.emissiveStrength);
+    const glm::dvec3 ref = shadeReference(s, scene, cam.position);
+    const glm::dvec3 spotEffect = ref - shadeReference(s, noSpot, cam.position);
+    const glm::dvec3 sunEffect = ref - shadeReference(s, noSun, cam.position);
+    // Where the surface point lies relative to the cone (angle from the spot's axis).
+    const glm::dvec3 fromSpot = glm::normalize(s.position + cam.position - spot.position);
+    const double cosAngle = glm::dot(fromSpot, glm::dvec3(spot.direction));
+    if (cosAngle > std::cos(double(spot.innerConeAngle))) ++inCone;
+    if (cosAngle < std::cos(double(spot.outerConeAngle))) {
+      ++outOfCone;
+      EXPECT_EQ(spotEffect.x, 0.0) << "the spot must not light a point beyond its outer cone";
+    }
+    ++covered;
+    for (int c = 0; c < 3; ++c) {
+      const double err = std::abs(double(frame->color[p * 4 + c]) - ref[c]);
+      maxErr = std::max(maxErr, err);
+      maxSpot = std::max(maxSpot, spotEffect[c]);
+      maxSun = std::max(maxSun, sunEffect[c]);
+      if (err > 2e-3 + 2e-3 * std::abs(ref[c])) {
+        if (bad < 5)
+          ADD_FAILURE() << "pixel " << p % w << "," << p / w << " channel " << c << ": gpu " << frame->color[p * 4 + c]
+                        << " reference " << ref[c];
+        ++bad;
+      }
+    }
+  }
+  std::printf("spot + directional vs CPU reference: %zu covered pixels (%zu inside the inner cone, %zu beyond the "
+              "outer), max error %.2e; the spot adds up to %.3f, the directional light %.3f\n",
+              covered, inCone, outOfCone, maxErr, maxSpot, maxSun);
+  EXPECT_GT(covered, size_t(w) * h / 10);
+  EXPECT_GT(inCone, 100u) << "the cone must light a part of the knots";
+  EXPECT_GT(outOfCone, 100u) << "and leave another part dark";
+  EXPECT_GT(maxSpot, 0.1);
+  EXPECT_GT(maxSun, 0.1);
+  EXPECT_EQ(bad, 0u);
+
+  FrameOptions all;
+  all.lodErrorPixels = 0.0f;
+  all.tiledLights = false;
+  auto allFrame = (*renderer)->renderFrame(cam, all);
+  FrameOptions tiledOptions;
+  tiledOptions.lodErrorPixels = 0.0f;
+  auto tiledFrame = (*renderer)->renderFrame(cam, tiledOptions);
+  ASSERT_TRUE(allFrame.ok() && tiledFrame.ok());
+  EXPECT_TRUE(tiledFrame->stats.lightsCulled);
+  const test::ImageError e = test::compareColor(tiledFrame->color, allFrame->color);
+  std::printf("spot + directional: tiled vs all lights max %.2e\n", e.maxAbs);
+  EXPECT_LE(e.maxAbs, 1e-5);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}

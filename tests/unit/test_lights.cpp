@@ -1,5 +1,6 @@
 // Lights on the CPU: the BRDF reference against closed-form values of the glTF 2.0 appendix B formulas,
-// point light validation and scattering, KHR_lights_punctual import.
+// point, spot and directional light validation, point light scattering, KHR_lights_punctual import.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -99,12 +100,16 @@ TEST(LightsCpu, ScatterFillsTheSceneBounds) {
 
 class LightImportTest : public test::TempDirTest {};
 
-// A triangle at the origin and a point light on a translated, scaled node: position from the node's world
-// transform, range and intensity as written; a spot light is skipped with a warning.
-TEST_F(LightImportTest, KhrLightsPunctualPointLights) {
+// A triangle at the origin and three KHR_lights_punctual lights: a point light on a translated, scaled node
+// (position from the node's world transform, range and intensity as written, not scaled by the node); a spot
+// light on a node rotated -90 degrees about +X and scaled by 3 (its -Z becomes -Y: the direction is the node's
+// -Z, renormalised), with its cone angles; a directional light on a node rotated 90 degrees about +Y (-Z becomes
+// -X), whose range is ignored.
+TEST_F(LightImportTest, KhrLightsPunctualPointSpotDirectional) {
   std::vector<uint8_t> bytes(36);
   const float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   std::memcpy(bytes.data(), tri, sizeof(tri));
+  const double h = std::sqrt(0.5);  // quaternion (x, y, z, w) of a 90-degree turn: sin 45, cos 45
   nlohmann::json doc = {
       {"asset", {{"version", "2.0"}}},
       {"extensionsUsed", {"KHR_lights_punctual"}},
@@ -112,7 +117,9 @@ TEST_F(LightImportTest, KhrLightsPunctualPointLights) {
        {{"KHR_lights_punctual",
          {{"lights",
            {{{"type", "point"}, {"color", {1.0, 0.5, 0.25}}, {"intensity", 7.0}, {"range", 12.0}},
-            {{"type", "spot"}, {"spot", {{"outerConeAngle", 0.5}}}}}}}}}},
+            {{"type", "spot"}, {"name", "cone"}, {"intensity", 40.0}, {"range", 30.0},
+             {"spot", {{"innerConeAngle", 0.25}, {"outerConeAngle", 0.5}}}},
+            {{"type", "directional"}, {"color", {0.5, 0.5, 1.0}}, {"intensity", 3.0}}}}}}}},
       {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + test::base64(bytes)}}}},
       {"bufferViews", {{{"buffer", 0}, {"byteLength", 36}}}},
       {"accessors",
@@ -124,21 +131,179 @@ TEST_F(LightImportTest, KhrLightsPunctualPointLights) {
         {{"translation", {1.0, 2.0, 3.0}}, {"children", {2, 3}}},
         {{"translation", {0.0, 0.0, 5.0}}, {"scale", {2.0, 2.0, 2.0}},
          {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}},
-        {{"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}}}},
-      {"scenes", {{{"nodes", {0, 1}}}}},
+        {{"rotation", {-h, 0.0, 0.0, h}}, {"scale", {3.0, 3.0, 3.0}},
+         {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}},
+        {{"rotation", {0.0, h, 0.0, h}}, {"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}}}}},
+      {"scenes", {{{"nodes", {0, 1, 4}}}}},
       {"scene", 0}};
   const std::string path = (dir_ / "light.gltf").string();
   std::ofstream(path) << doc.dump();
   GltfImportReport report;
   Result<ImportedScene> s = importGltfScene(path, {}, &report);
   ASSERT_TRUE(s.ok()) << s.error().message;
-  ASSERT_EQ(s->pointLights.size(), 1u);
+  EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
+  ASSERT_EQ(s->pointLights.size(), 3u);
   const PointLight& l = s->pointLights[0];
+  EXPECT_EQ(l.type, LightType::Point);
   EXPECT_EQ(l.position, glm::dvec3(1.0, 2.0, 8.0));
   EXPECT_EQ(l.color, glm::vec3(1.0f, 0.5f, 0.25f));
   EXPECT_EQ(l.intensity, 7.0f);
   EXPECT_EQ(l.range, 12.0f);
-  bool warned = false;
-  for (const std::string& w : report.warnings) warned = warned || w.find("spot") != std::string::npos;
-  EXPECT_TRUE(warned);
+  const PointLight& spot = s->pointLights[1];
+  EXPECT_EQ(spot.type, LightType::Spot);
+  EXPECT_EQ(spot.position, glm::dvec3(1.0, 2.0, 3.0));
+  EXPECT_EQ(spot.intensity, 40.0f);
+  EXPECT_EQ(spot.range, 30.0f);
+  EXPECT_EQ(spot.color, glm::vec3(1.0f));  // the extension's default colour
+  EXPECT_LT(glm::length(glm::dvec3(spot.direction) - glm::dvec3(0.0, -1.0, 0.0)), 1e-6);
+  EXPECT_EQ(spot.innerConeAngle, 0.25f);
+  EXPECT_EQ(spot.outerConeAngle, 0.5f);
+  const PointLight& sun = s->pointLights[2];
+  EXPECT_EQ(sun.type, LightType::Directional);
+  EXPECT_LT(glm::length(glm::dvec3(sun.direction) - glm::dvec3(-1.0, 0.0, 0.0)), 1e-6);
+  EXPECT_EQ(sun.color, glm::vec3(0.5f, 0.5f, 1.0f));
+  EXPECT_EQ(sun.intensity, 3.0f);
+  EXPECT_EQ(sun.range, 0.0f);
+  // The cone as the GPU gets it: KHR_lights_punctual's scale / offset, checked at the two edges (attenuation
+  // 1 at the inner angle, 0 at the outer one).
+  const glm::dvec2 so = spotAngleScaleOffset(spot);
+  EXPECT_NEAR(std::cos(0.25) * so.x + so.y, 1.0, 1e-6);
+  EXPECT_NEAR(std::cos(0.5) * so.x + so.y, 0.0, 1e-6);
+  EXPECT_EQ(spotAngleScaleOffset(l), glm::dvec2(0.0, 1.0));
+}
+
+// Spot cone angles outside 0 <= inner < outer <= pi/2 and unusable parameters are refused with a message that
+// names the node and the light; an unknown light type is skipped with a warning.
+TEST_F(LightImportTest, KhrLightsPunctualBadParametersAreRefused) {
+  std::vector<uint8_t> bytes(36);
+  const float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  std::memcpy(bytes.data(), tri, sizeof(tri));
+  auto importLight = [&](const nlohmann::json& light, const nlohmann::json& lightNode, GltfImportReport* report) {
+    nlohmann::json node = lightNode;
+    node["name"] = "lamp";
+    node["extensions"] = {{"KHR_lights_punctual", {{"light", 0}}}};
+    nlohmann::json doc = {
+        {"asset", {{"version", "2.0"}}},
+        {"extensionsUsed", {"KHR_lights_punctual"}},
+        {"extensions", {{"KHR_lights_punctual", {{"lights", {light}}}}}},
+        {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + test::base64(bytes)}}}},
+        {"bufferViews", {{{"buffer", 0}, {"byteLength", 36}}}},
+        {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}}}},
+        {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}}}}}}},
+        {"nodes", {{{"mesh", 0}}, node}},
+        {"scenes", {{{"nodes", {0, 1}}}}}};
+    const std::string path = (dir_ / "bad_light.gltf").string();
+    std::ofstream(path) << doc.dump();
+    return importGltfScene(path, {}, report);
+  };
+  const nlohmann::json plainNode = nlohmann::json::object();
+  struct Case {
+    nlohmann::json light;
+    nlohmann::json node;
+    const char* message;
+  };
+  const double pi = std::numbers::pi;
+  const Case cases[] = {
+      {{{"type", "spot"}, {"spot", {{"innerConeAngle", 0.5}, {"outerConeAngle", 0.5}}}}, plainNode,
+       "need 0 <= inner < outer <= pi/2"},
+      {{{"type", "spot"}, {"spot", {{"innerConeAngle", 0.6}, {"outerConeAngle", 0.5}}}}, plainNode,
+       "need 0 <= inner < outer <= pi/2"},
+      {{{"type", "spot"}, {"spot", {{"innerConeAngle", -0.1}, {"outerConeAngle", 0.5}}}}, plainNode,
+       "need 0 <= inner < outer <= pi/2"},
+      {{{"type", "spot"}, {"spot", {{"outerConeAngle", pi / 2 + 0.01}}}}, plainNode, "need 0 <= inner < outer <= pi/2"},
+      {{{"type", "spot"}, {"range", -1.0}, {"spot", {{"outerConeAngle", 0.5}}}}, plainNode,
+       "negative or non-finite range"},
+      {{{"type", "point"}, {"intensity", -2.0}}, plainNode, "negative intensity or colour"},
+      {{{"type", "directional"}, {"color", {1.0, 1.0}}}, plainNode, "color must have 3 elements"},
+      {{{"type", "directional"}}, {{"scale", {1.0, 1.0, 0.0}}}, "maps -Z to a zero or non-finite direction"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.light.dump());
+    Result<ImportedScene> s = importLight(c.light, c.node, nullptr);
+    ASSERT_FALSE(s.ok());
+    EXPECT_EQ(s.error().code, ErrorCode::MalformedInput);
+    EXPECT_NE(s.error().message.find(c.message), std::string::npos) << s.error().message;
+    EXPECT_NE(s.error().message.find("node 1 'lamp': KHR_lights_punctual light 0"), std::string::npos)
+        << s.error().message;
+  }
+  // The bounds themselves are valid: inner 0, outer pi/2.
+  Result<ImportedScene> wide =
+      importLight({{"type", "spot"}, {"spot", {{"outerConeAngle", pi / 2}}}}, plainNode, nullptr);
+  ASSERT_TRUE(wide.ok()) << wide.error().message;
+  EXPECT_EQ(wide->pointLights.size(), 1u);
+  GltfImportReport report;
+  Result<ImportedScene> unknown = importLight({{"type", "area"}}, plainNode, &report);
+  ASSERT_TRUE(unknown.ok()) << unknown.error().message;
+  EXPECT_TRUE(unknown->pointLights.empty());
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_NE(report.warnings[0].find("unknown type 'area'"), std::string::npos) << report.warnings[0];
+}
+
+// The CPU reference's spot and directional terms against closed forms: a surface facing a spot light along its
+// axis gets the point light's value inside the inner cone, exactly the quadratic cone factor between the angles
+// and nothing beyond the outer one; a directional light equals the scene's own sun of the same direction.
+TEST(LightsCpu, SpotAndDirectionalReference) {
+  Scene scene;
+  scene.lightIntensity = 0.0f;
+  SurfaceReference s;
+  s.position = {0.0, 0.0, -10.0};
+  s.normal = {0.0, 0.0, 1.0};
+  PointLight point;
+  point.position = {0.0, 0.0, -6.0};  // 4 in front of the surface
+  point.intensity = 50.0f;
+  point.range = 0.0f;
+  scene.pointLights = {point};
+  const glm::dvec3 pointOnly = shadeReference(s, scene, glm::dvec3(0.0));
+  scene.pointLights.clear();
+  const glm::dvec3 ambient = shadeReference(s, scene, glm::dvec3(0.0));
+  PointLight spot = point;
+  spot.type = LightType::Spot;
+  spot.innerConeAngle = 0.2f;
+  spot.outerConeAngle = 0.4f;
+  for (double angle : {0.0, 0.1, 0.25, 0.3, 0.35, 0.45}) {
+    SCOPED_TRACE(angle);
+    // Tilt the spot's axis away from the surface point by `angle` (about +Y).
+    spot.direction = glm::vec3(float(std::sin(angle)), 0.0f, float(-std::cos(angle)));
+    scene.pointLights = {spot};
+    const glm::dvec3 lit = shadeReference(s, scene, glm::dvec3(0.0));
+    const double cd = std::cos(double(float(angle)));
+    const double t = std::clamp((cd - std::cos(0.4)) / (std::cos(0.2) - std::cos(0.4)), 0.0, 1.0);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(lit[c] - ambient[c], (pointOnly[c] - ambient[c]) * t * t, 1e-5);
+  }
+  PointLight sun;
+  sun.type = LightType::Directional;
+  sun.direction = glm::normalize(glm::vec3(0.3f, -0.2f, -1.0f));
+  sun.intensity = 2.5f;
+  sun.color = glm::vec3(1.0f, 0.5f, 0.25f);
+  scene.pointLights = {sun};
+  const glm::dvec3 viaLight = shadeReference(s, scene, glm::dvec3(0.0));
+  Scene sunScene;
+  sunScene.lightDirection = -sun.direction;
+  sunScene.lightIntensity = 2.5f;
+  const glm::dvec3 viaSun = shadeReference(s, sunScene, glm::dvec3(0.0));
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(viaLight[c] - ambient[c], (viaSun[c] - ambient[c]) * double(sun.color[c]), 1e-9);
+  EXPECT_GT(viaLight.x - ambient.x, 0.1);
+}
+
+// validatePointLights: spot angles and directions.
+TEST(LightsCpu, SpotAndDirectionalValidation) {
+  PointLight spot;
+  spot.type = LightType::Spot;
+  spot.innerConeAngle = 0.3f;
+  spot.outerConeAngle = 0.3f;
+  EXPECT_FALSE(validatePointLights({spot}).ok());
+  spot.innerConeAngle = 0.1f;
+  EXPECT_TRUE(validatePointLights({spot}).ok());
+  spot.outerConeAngle = 1.6f;
+  EXPECT_FALSE(validatePointLights({spot}).ok());
+  spot.outerConeAngle = 0.5f;
+  spot.direction = glm::vec3(0.0f, 0.0f, -2.0f);
+  EXPECT_FALSE(validatePointLights({spot}).ok());
+  PointLight sun;
+  sun.type = LightType::Directional;
+  sun.direction = glm::vec3(0.0f);
+  EXPECT_FALSE(validatePointLights({sun}).ok());
+  sun.direction = glm::vec3(0.0f, -1.0f, 0.0f);
+  EXPECT_TRUE(validatePointLights({sun}).ok());
 }

@@ -1,7 +1,9 @@
 // Tests for the pack format (engine/asset/pack_{format,writer,reader}.h): round trips of a generated scene
-// and of real assets, quantised packs (error bounds and the reported error against a recomputation),
+// and of real assets, quantised packs (error bounds and the reported error against a recomputation), the encoded
+// geometry streams (decoded with meshoptimizer's own API against the scene; hostile streams), memory-mapped reads,
 // truncation, checksums, versions, overflowing counts, atomic writes, and a bounded fuzz run.
 #include <gtest/gtest.h>
+#include <meshoptimizer.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -11,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <glm/gtc/matrix_transform.hpp>
 #include <random>
 #include <string>
@@ -21,6 +24,7 @@
 #include "test_assets.h"
 #include "visbuf/asset/gltf_import.h"
 #include "visbuf/asset/pack_format.h"
+#include "visbuf/asset/pack_geometry.h"
 #include "visbuf/asset/pack_reader.h"
 #include "visbuf/asset/pack_writer.h"
 #include "visbuf/asset/scene_bake.h"
@@ -235,6 +239,140 @@ Result<Scene> parse(const std::vector<uint8_t>& bytes) {
   return ::testing::AssertionSuccess();
 }
 
+// --- encoded geometry streams: editing a pack's decoded data
+//
+// A pack taken apart into its sections and put back together (laid out afresh, checksums recomputed), so a test
+// can replace one mesh's encoded stream with one of another length.
+struct RawSection {
+  pack::SectionEntry entry;
+  std::vector<uint8_t> bytes;
+};
+
+std::vector<RawSection> splitPack(const std::vector<uint8_t>& bytes) {
+  std::vector<RawSection> out;
+  for (size_t i = 0; i < headerOf(bytes).sectionCount; ++i) {
+    const pack::SectionEntry e = entryOf(bytes, i);
+    out.push_back({e, {bytes.begin() + int64_t(e.offset), bytes.begin() + int64_t(e.offset + e.size)}});
+  }
+  return out;
+}
+
+std::vector<uint8_t> joinPack(const std::vector<uint8_t>& original, const std::vector<RawSection>& sections) {
+  pack::Header h = headerOf(original);
+  h.sectionCount = uint32_t(sections.size());
+  uint64_t cursor = (sizeof(pack::Header) + sections.size() * sizeof(pack::SectionEntry) + 15) / 16 * 16;
+  std::vector<pack::SectionEntry> table;
+  for (const RawSection& r : sections) {
+    pack::SectionEntry e = r.entry;
+    e.offset = cursor;
+    e.size = r.bytes.size();
+    e.count = e.elementSize ? e.size / e.elementSize : 0;
+    table.push_back(e);
+    cursor += (e.size + 15) / 16 * 16;
+  }
+  h.fileSize = cursor;
+  std::vector<uint8_t> out(cursor, 0);
+  std::memcpy(out.data(), &h, sizeof(h));
+  for (size_t i = 0; i < sections.size(); ++i) {
+    setEntry(out, i, table[i]);
+    if (!sections[i].bytes.empty())
+      std::memcpy(out.data() + table[i].offset, sections[i].bytes.data(), sections[i].bytes.size());
+  }
+  reseal(out);
+  return out;
+}
+
+RawSection& rawSection(std::vector<RawSection>& sections, const std::string& name) {
+  for (RawSection& r : sections)
+    if (std::string(r.entry.name) == name) return r;
+  ADD_FAILURE() << "no section " << name;
+  return sections.front();
+}
+
+// Where a stream's per-mesh byte ranges are recorded: the record section and the byte / length field offsets.
+struct StreamLocator {
+  const char* records;
+  size_t byteField;
+  size_t bytesField;
+  size_t stride;  // decoded record size (0: indices)
+};
+
+StreamLocator locatorOf(const std::string& stream) {
+  if (stream == "vertices") return {"meshEncoding", 0, 8, sizeof(gpu::Vertex)};
+  if (stream == "qvertices") return {"meshEncoding", 0, 8, sizeof(pack::QVertexRecord)};
+  if (stream == "indices") return {"meshEncoding", 16, 24, 0};
+  if (stream == "tangents") return {"meshStreams", 0, 8, sizeof(glm::vec4)};
+  if (stream == "uvs1") return {"meshStreams", 16, 24, sizeof(glm::vec2)};
+  if (stream == "skinVertices") return {"skinnedMeshes", 8, 16, sizeof(SkinVertex)};  // record k: field 'mesh'
+  ADD_FAILURE() << "no stream " << stream;
+  return {"", 0, 0, 0};
+}
+
+template <typename T>
+T field(const RawSection& r, size_t record, size_t at) {
+  T v;
+  std::memcpy(&v, r.bytes.data() + record * r.entry.elementSize + at, sizeof(T));
+  return v;
+}
+template <typename T>
+void setField(RawSection& r, size_t record, size_t at, T v) {
+  std::memcpy(r.bytes.data() + record * r.entry.elementSize + at, &v, sizeof(T));
+}
+
+// Replaces mesh `mesh`'s encoded bytes in `stream` with `encoded`, moving the other meshes' ranges behind it.
+void replaceStream(std::vector<RawSection>& sections, const std::string& stream, size_t mesh,
+                   const std::vector<uint8_t>& encoded) {
+  const StreamLocator loc = locatorOf(stream);
+  RawSection& records = rawSection(sections, loc.records);
+  RawSection& data = rawSection(sections, stream);
+  const uint64_t at = field<uint64_t>(records, mesh, loc.byteField);
+  const uint64_t old = field<uint64_t>(records, mesh, loc.bytesField);
+  data.bytes.erase(data.bytes.begin() + int64_t(at), data.bytes.begin() + int64_t(at + old));
+  data.bytes.insert(data.bytes.begin() + int64_t(at), encoded.begin(), encoded.end());
+  for (size_t k = 0; k < records.entry.count; ++k) {
+    const uint64_t b = field<uint64_t>(records, k, loc.byteField);
+    if (k != mesh && b != pack::kNoStream && b > at) setField<uint64_t>(records, k, loc.byteField, b + encoded.size() - old);
+  }
+  setField<uint64_t>(records, mesh, loc.bytesField, encoded.size());
+}
+
+// Decodes mesh `mesh`'s `stream` (records of T; uint32_t for "indices"), lets `edit` change them, re-encodes them
+// and returns the resealed pack: how the tests put bad values into encoded sections.
+template <typename T>
+std::vector<uint8_t> editDecoded(const std::vector<uint8_t>& bytes, const std::string& stream, size_t mesh,
+                                 const std::function<void(std::vector<T>&)>& edit) {
+  std::vector<RawSection> sections = splitPack(bytes);
+  const StreamLocator loc = locatorOf(stream);
+  RawSection& records = rawSection(sections, loc.records);
+  const RawSection& data = rawSection(sections, stream);
+  const uint64_t at = field<uint64_t>(records, mesh, loc.byteField);
+  const uint64_t size = field<uint64_t>(records, mesh, loc.bytesField);
+  const RawSection& meshes = rawSection(sections, "meshes");
+  // "skinVertices" is located by its skinnedMeshes record, which names the mesh.
+  const size_t meshIndex = stream == "skinVertices" ? field<uint32_t>(records, mesh, 0) : mesh;
+  const uint32_t vertexCount = field<uint32_t>(meshes, meshIndex, offsetof(pack::MeshRecord, vertexCount));
+  const uint32_t indexCount = field<uint32_t>(meshes, meshIndex, offsetof(pack::MeshRecord, indexCount));
+  std::vector<T> decoded(loc.stride ? vertexCount : indexCount);
+  if (loc.stride) {
+    EXPECT_EQ(sizeof(T), loc.stride);
+    EXPECT_EQ(pack::decodeVertexStream(decoded.data(), decoded.size(), sizeof(T), data.bytes.data() + at, size), "");
+    edit(decoded);
+    replaceStream(sections, stream, mesh, pack::encodeVertexStream(decoded.data(), decoded.size(), sizeof(T)));
+  } else {
+    const uint32_t codec = field<uint32_t>(records, mesh, offsetof(pack::MeshEncodingRecord, indexCodec));
+    std::vector<uint32_t> indices(indexCount);
+    EXPECT_EQ(pack::decodeIndexStream(indices.data(), indices.size(), codec, data.bytes.data() + at, size), "");
+    std::memcpy(decoded.data(), indices.data(), indices.size() * sizeof(uint32_t));
+    edit(decoded);
+    std::memcpy(indices.data(), decoded.data(), indices.size() * sizeof(uint32_t));
+    const pack::EncodedIndices e = pack::encodeIndexStream(indices.data(), indices.size());
+    replaceStream(sections, stream, mesh, e.bytes);
+    setField<uint32_t>(rawSection(sections, "meshEncoding"), mesh, offsetof(pack::MeshEncodingRecord, indexCodec),
+                       e.codec);
+  }
+  return joinPack(bytes, sections);
+}
+
 class PackFileTest : public test::TempDirTest {
  protected:
   std::vector<std::string> listing() const {
@@ -276,7 +414,7 @@ TEST(PackRoundTrip, TexturedSceneInMemory) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(scene, &report);
   ASSERT_TRUE(bytes) << bytes.error().message;
-  EXPECT_EQ(report.sections.size(), 14u + 15u);  // 8 required, meshStreams, tangents, uvs1, 3 texture, 15 animation
+  EXPECT_EQ(report.sections.size(), 15u + 15u);  // 9 required, meshStreams, tangents, uvs1, 3 texture, 15 animation
   Result<Scene> back = parse(*bytes);
   ASSERT_TRUE(back) << back.error().message;
   expectScenesEqual(scene, *back);
@@ -345,7 +483,7 @@ TEST(PackReader, TruncatedAtEverySixteenth) {
     EXPECT_EQ(r.error().code, ErrorCode::MalformedInput) << r.error().message;
     EXPECT_EQ(r.error().message.rfind("pack.vbp: ", 0), 0u) << r.error().message;
   }
-  // Cut inside the vertex data: the message names the section and its extent.
+  // Cut inside the (encoded) vertex data: the message names the section and its extent.
   const pack::SectionEntry vertices = entryOf(*bytes, sectionIndex(*bytes, "vertices"));
   const size_t cut = vertices.offset + vertices.size / 2;
   EXPECT_TRUE(failsWith(parsePack(bytes->data(), cut, "pack.vbp"),
@@ -360,7 +498,7 @@ TEST(PackReader, FlippedByteInEachSectionIsAChecksumError) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene(), &report);
   ASSERT_TRUE(bytes);
-  ASSERT_EQ(report.sections.size(), 8u + 15u);  // required + animation sections (4 of them morph targets)
+  ASSERT_EQ(report.sections.size(), 9u + 15u);  // required + animation sections (4 of them morph targets)
   PackWriteReport texturedReport;
   Result<std::vector<uint8_t>> textured = serializePack(makeTexturedTestScene(), &texturedReport);
   ASSERT_TRUE(textured);
@@ -398,14 +536,14 @@ TEST(PackReader, WrongMagicAndVersion) {
   reseal(v);
   EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
                         ErrorCode::Unsupported));
-  // Version 3 packs (morph weights baked, before animated morph targets) are refused too: the user re-bakes.
-  EXPECT_EQ(pack::kVersion, 4u);
+  // Version 4 packs (raw geometry sections, RGBA8 textures only) are refused too: the user re-bakes.
+  EXPECT_EQ(pack::kVersion, 5u);
   v = *bytes;
   h = headerOf(v);
-  h.version = 3;
+  h.version = 4;
   std::memcpy(v.data(), &h, sizeof(h));
   reseal(v);
-  EXPECT_TRUE(failsWith(parse(v), "pack format version 3 is not supported by this build (it reads version 4); re-bake",
+  EXPECT_TRUE(failsWith(parse(v), "pack format version 4 is not supported by this build (it reads version 5); re-bake",
                         ErrorCode::Unsupported));
   v = *bytes;
   v[0] = 'X';
@@ -419,21 +557,22 @@ TEST(PackReader, HugeCountsAreRejectedWithoutOverflow) {
   ASSERT_TRUE(bytes);
   const size_t idx = sectionIndex(*bytes, "indices");
   {
-    // count x elementSize overflows 64 bits.
+    // count x elementSize overflows 64 bits (a section of 16-byte records).
     std::vector<uint8_t> v = *bytes;
-    pack::SectionEntry e = entryOf(v, idx);
+    const size_t lods = sectionIndex(v, "lods");
+    pack::SectionEntry e = entryOf(v, lods);
     e.count = (uint64_t{1} << 62) + 1;
-    setEntry(v, idx, e);
+    setEntry(v, lods, e);
     reseal(v);
     EXPECT_TRUE(failsWith(
-        parse(v), "section 'indices': field 'count' 4611686018427387905 x 'elementSize' 4 overflows"));
+        parse(v), "section 'lods': field 'count' 4611686018427387905 x 'elementSize' 16 overflows"));
   }
   {
     // A consistent but enormous count/size: range check, no allocation.
     std::vector<uint8_t> v = *bytes;
     pack::SectionEntry e = entryOf(v, idx);
     e.count = uint64_t{1} << 40;
-    e.size = e.count * 4;
+    e.size = e.count;  // encoded bytes
     setEntry(v, idx, e);
     reseal(v);
     EXPECT_TRUE(failsWith(parse(v), "section 'indices' runs past the end of the file"));
@@ -490,11 +629,7 @@ TEST(PackReader, BadReferencesInsideSections) {
                                      std::memcpy(p + 8, &nan, 8);
                                    }),
                         "section 'objects' record 0: field 'transform' is not finite"));
-  EXPECT_TRUE(failsWith(editRecord("indices", 5,
-                                   [](uint8_t* p) {
-                                     uint32_t i = 1u << 30;
-                                     std::memcpy(p, &i, 4);
-                                   }),
+  EXPECT_TRUE(failsWith(parse(editDecoded<uint32_t>(*bytes, "indices", 0, [](std::vector<uint32_t>& i) { i[5] = 1u << 30; })),
                         "index 5 has value 1073741824"));
   EXPECT_TRUE(failsWith(editRecord("lods", 1,
                                    [](uint8_t* p) {
@@ -508,11 +643,8 @@ TEST(PackReader, BadReferencesInsideSections) {
                                      std::memcpy(p, &n, 4);
                                    }),
                         "section 'materials' record 2 field 'name'"));
-  EXPECT_TRUE(failsWith(editRecord("vertices", 3,
-                                   [](uint8_t* p) {
-                                     float f = 1e30f;
-                                     std::memcpy(p, &f, 4);
-                                   }),
+  EXPECT_TRUE(failsWith(parse(editDecoded<gpu::Vertex>(*bytes, "vertices", 0,
+                                                       [](std::vector<gpu::Vertex>& v) { v[3].px = 1e30f; })),
                         "vertex 3 lies outside field 'boundsSphere'"));
 }
 
@@ -536,9 +668,17 @@ TEST(PackReader, BadTexturesAndStreams) {
   EXPECT_TRUE(failsWith(edit("textures", 2, 12, uint32_t{1}), "section 'textures' record 2: field 'colorSpace' 1"));
   EXPECT_TRUE(failsWith(edit("textureClasses", 0, 0, uint32_t{3}), "section 'textureClasses' record 0: 'size' 3"));
   EXPECT_TRUE(failsWith(edit("textureClasses", 1, 12, uint32_t{5}), "'mipCount' 5"));
-  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 24, uint64_t{1} << 40), "field 'byteCount' 1099511627776"));
-  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 16, ~uint64_t{15}), "is not 16-aligned inside section 'texels'"));
-  EXPECT_TRUE(failsWith(edit("textureClasses", 1, 16, uint64_t{8}), "field 'firstByte' 8"));
+  const size_t format = offsetof(pack::TextureClassRecord, format);
+  const size_t firstByte = offsetof(pack::TextureClassRecord, firstByte);
+  const size_t byteCount = offsetof(pack::TextureClassRecord, byteCount);
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, byteCount, uint64_t{1} << 40), "field 'byteCount' 1099511627776"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, firstByte, ~uint64_t{15}), "is not 16-aligned inside section 'texels'"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, firstByte, uint64_t{8}), "field 'firstByte' 8"));
+  // The format: known values only, BC4 / BC5 linear only, and byteCount must be that format's size.
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, format, uint32_t{5}), "field 'format' 5 is not a known texture format"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 0, format, uint32_t{3}), "format bc4 must be linear"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, format, uint32_t{1}), "mips need in format bc1"));
+  EXPECT_TRUE(failsWith(edit("textureClasses", 1, format + 4, uint32_t{1}), "field 'reserved' is 1"));
   const size_t slot0 = offsetof(pack::MaterialRecord, textures);
   const size_t normalSlot = slot0 + 2 * sizeof(pack::TextureSlotRecord);
   EXPECT_TRUE(failsWith(edit("materials", 1, slot0, int32_t{99}), "record 1 texture slot 0: field 'texture' 99"));
@@ -547,10 +687,13 @@ TEST(PackReader, BadTexturesAndStreams) {
   EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 17, uint8_t{3}), "texture slot 0: 'texCoord' 1 / wrap 1 3"));
   EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 28, float{NAN}), "texture slot 0: field 'transform'"));
   EXPECT_TRUE(failsWith(edit("materials", 0, 40, float{INFINITY}), "record 0: non-finite colour, factor"));
-  EXPECT_TRUE(failsWith(edit("meshStreams", 1, 0, ~uint64_t{0} - 1), "section 'meshStreams' record 1: field 'firstTangent'"));
-  EXPECT_TRUE(failsWith(edit("meshStreams", 0, 8, uint64_t{0}), "section 'meshStreams' record 0: field 'firstUv1' 0"));
-  EXPECT_TRUE(failsWith(edit("tangents", 2, 12, 0.5f), "record 1: tangent of vertex 2"));
-  EXPECT_TRUE(failsWith(edit("uvs1", 3, 0, float{NAN}), "record 1: non-finite uv1"));
+  EXPECT_TRUE(failsWith(edit("meshStreams", 1, 0, ~uint64_t{0} - 1),
+                        "tangents: encoded bytes ["));
+  EXPECT_TRUE(failsWith(edit("meshStreams", 0, 8, uint64_t{1}), "section 'meshStreams' record 0"));
+  EXPECT_TRUE(failsWith(parse(editDecoded<glm::vec4>(*bytes, "tangents", 1, [](std::vector<glm::vec4>& t) { t[2].w = 0.5f; })),
+                        "record 1: tangent of vertex 2"));
+  EXPECT_TRUE(failsWith(parse(editDecoded<glm::vec2>(*bytes, "uvs1", 1, [](std::vector<glm::vec2>& u) { u[3].x = NAN; })),
+                        "record 1: non-finite uv1"));
   {
     std::vector<uint8_t> v = *bytes;  // texels renamed: textures without pixels
     pack::SectionEntry e = entryOf(v, sectionIndex(v, "texels"));
@@ -585,9 +728,25 @@ TEST(PackReader, BadReferencesInAnimationSections) {
   EXPECT_TRUE(failsWith(edit("skinJoints", 1, 0, uint32_t{40}), "joint 1 is node 40, which does not exist"));
   EXPECT_TRUE(failsWith(edit("skinJoints", 0, 8 + 3 * 8, 0.5), "inverse bind matrix 0 is not affine"));
   EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 0, uint32_t{7}), "section 'skinnedMeshes' record 0: field 'mesh' 7"));
-  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 8, uint64_t{5}), "fields 'firstSkinVertex' 5"));
-  EXPECT_TRUE(failsWith(edit("skinVertices", 3, 0, uint16_t{2}), "uses joint index 2, skin 0 has 2 joints"));
-  EXPECT_TRUE(failsWith(edit("skinVertices", 3, 8, 0.75f), "weights sum to"));
+  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 8, uint64_t{1} << 40), "fields 'firstByte' 1099511627776"));
+  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 16, uint64_t{0}), "field 'byteCount' is 0"));
+  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 16, uint64_t{3}), "3 encoded bytes cannot hold the mesh's"));
+  EXPECT_TRUE(failsWith(edit("skinnedMeshes", 0, 4, uint32_t{1}), "field 'reserved' must be 0"));
+  {  // a stream cut short: the codec refuses it
+    std::vector<RawSection> sections = splitPack(*bytes);
+    RawSection& records = rawSection(sections, "skinnedMeshes");
+    const uint64_t at = field<uint64_t>(records, 0, 8), size = field<uint64_t>(records, 0, 16);
+    const std::vector<uint8_t>& data = rawSection(sections, "skinVertices").bytes;
+    replaceStream(sections, "skinVertices", 0,
+                  std::vector<uint8_t>(data.begin() + int64_t(at), data.begin() + int64_t(at + size - 8)));
+    EXPECT_TRUE(failsWith(parse(joinPack(*bytes, sections)), "skin vertices of mesh 1 do not decode"));
+  }
+  EXPECT_TRUE(failsWith(parse(editDecoded<SkinVertex>(*bytes, "skinVertices", 0,
+                                                      [](std::vector<SkinVertex>& v) { v[3].joints[0] = 2; })),
+                        "uses joint index 2, skin 0 has 2 joints"));
+  EXPECT_TRUE(failsWith(parse(editDecoded<SkinVertex>(*bytes, "skinVertices", 0,
+                                                      [](std::vector<SkinVertex>& v) { v[3].weights[0] = 0.75f; })),
+                        "weights sum to"));
   // (its morph record is checked first: the knot has neither skin vertices nor morph targets)
   EXPECT_TRUE(failsWith(edit("skinnedObjects", 0, 0, uint32_t{0}),
                         "section 'morphObjects' record 0: skinned object 0 draws mesh 0, which has no 'morphMeshes' record"));
@@ -682,8 +841,7 @@ TEST(PackQuantize, RoundTripWithinHalfAStep) {
   uint64_t vertexCount = 0;
   for (const Mesh& m : scene.meshes) vertexCount += m.vertices.size();
   const pack::SectionEntry qv = entryOf(*bytes, sectionIndex(*bytes, "qvertices"));
-  EXPECT_EQ(qv.count, vertexCount);
-  EXPECT_EQ(qv.elementSize, 20u);
+  EXPECT_EQ(qv.elementSize, 1u);  // encoded bytes
   EXPECT_EQ(entryOf(*bytes, sectionIndex(*bytes, "quantization")).count, scene.meshes.size());
   EXPECT_EQ(report.quantization.vertices, vertexCount);
   EXPECT_EQ(report.quantization.bytesSaved, int64_t(12 * vertexCount) - int64_t(40 * scene.meshes.size()));
@@ -744,12 +902,9 @@ TEST(PackQuantize, RoundTripWithinHalfAStep) {
   Scene rest = *back;
   rest.meshes = scene.meshes;
   expectScenesEqual(scene, rest);
-  // The saving is the difference of the vertex sections.
-  Result<std::vector<uint8_t>> plain = serializePack(scene);
-  ASSERT_TRUE(plain);
+  // The saving is measured on the decoded records: 12 bytes a vertex less the quantisation records.
   EXPECT_EQ(report.quantization.bytesSaved,
-            int64_t(entryOf(*plain, sectionIndex(*plain, "vertices")).size) -
-                int64_t(qv.size + entryOf(*bytes, sectionIndex(*bytes, "quantization")).size));
+            int64_t(12 * vertexCount) - int64_t(entryOf(*bytes, sectionIndex(*bytes, "quantization")).size));
 }
 
 TEST(PackQuantize, ReportedErrorsMatchAnIndependentRecomputation) {
@@ -818,9 +973,10 @@ TEST(PackReader, BadQuantizedSections) {
   EXPECT_TRUE(failsWith(edit("quantization", 1, 36, float{INFINITY}),
                         "section 'quantization' record 1: field 'positionScale' or 'uvScale' is not a finite value"));
   EXPECT_TRUE(failsWith(edit("quantization", 0, 12, 1e30f), "lies outside field 'boundsSphere'"));
-  EXPECT_TRUE(failsWith(edit("qvertices", 3, 6, uint16_t{7}),
-                        "section 'qvertices' record 3 (mesh 0 vertex 3): field 'reserved' is 7, expected 0"));
-  EXPECT_TRUE(failsWith(edit("meshes", 1, 8, ~uint64_t{0} - 5), "records of section 'qvertices'"));
+  EXPECT_TRUE(failsWith(parse(editDecoded<pack::QVertexRecord>(*bytes, "qvertices", 0,
+                                                                [](std::vector<pack::QVertexRecord>& q) { q[3].reserved = 7; })),
+                        "section 'qvertices' (mesh 0 vertex 3): field 'reserved' is 7, expected 0"));
+  EXPECT_TRUE(failsWith(edit("meshes", 1, 8, ~uint64_t{0} - 5), "section 'meshes' record 1"));
   for (const char* section : {"qvertices", "quantization"}) {
     std::vector<uint8_t> v = *bytes;
     v[entryOf(v, sectionIndex(v, section)).offset + 5] ^= 0x40;
@@ -850,12 +1006,223 @@ TEST(PackReader, BadQuantizedSections) {
   EXPECT_TRUE(failsWith(renamed("qvertices", "qverticesX"),
                         "required section 'vertices' (or 'qvertices' in a quantised pack) is missing"));
   // Both vertex sections, and a quantization section without qvertices.
-  EXPECT_TRUE(failsWith(parse(withExtraSection(*bytes, "vertices", 32, sectionBytes(*plain, "vertices"))),
+  EXPECT_TRUE(failsWith(parse(withExtraSection(*bytes, "vertices", 1, sectionBytes(*plain, "vertices"))),
                         "sections 'vertices' and 'qvertices' are both present; a pack stores exactly one of them"));
   EXPECT_TRUE(failsWith(parse(withExtraSection(*plain, "quantization", 40, sectionBytes(*bytes, "quantization"))),
                         "section 'quantization' is only valid with section 'qvertices'"));
   // The helper itself produces readable packs: an unknown extra section is skipped.
   EXPECT_TRUE(parse(withExtraSection(*bytes, "extra", 1, {1, 2, 3})));
+}
+
+// --- encoded geometry (meshoptimizer codecs, "meshEncoding")
+// ------------------------------------------------------------------------------------------
+
+pack::MeshEncodingRecord encodingOf(const std::vector<uint8_t>& bytes, size_t mesh) {
+  const pack::SectionEntry e = entryOf(bytes, sectionIndex(bytes, "meshEncoding"));
+  pack::MeshEncodingRecord r;
+  std::memcpy(&r, bytes.data() + e.offset + mesh * sizeof(r), sizeof(r));
+  return r;
+}
+
+// Decodes with meshoptimizer's own API (not pack_geometry.h) and compares with the scene the pack was written from:
+// every mesh's streams lie back to back in mesh order and decode to its data bit for bit.
+TEST(PackGeometry, EncodedSectionsDecodeToTheSceneExactly) {
+  const Scene scene = makeTexturedTestScene();
+  Result<std::vector<uint8_t>> bytes = serializePack(scene);
+  ASSERT_TRUE(bytes) << bytes.error().message;
+  const pack::SectionEntry vertices = entryOf(*bytes, sectionIndex(*bytes, "vertices"));
+  const pack::SectionEntry indices = entryOf(*bytes, sectionIndex(*bytes, "indices"));
+  const pack::SectionEntry streams = entryOf(*bytes, sectionIndex(*bytes, "meshStreams"));
+  const pack::SectionEntry tangents = entryOf(*bytes, sectionIndex(*bytes, "tangents"));
+  const pack::SectionEntry uvs1 = entryOf(*bytes, sectionIndex(*bytes, "uvs1"));
+  EXPECT_EQ(entryOf(*bytes, sectionIndex(*bytes, "meshEncoding")).count, scene.meshes.size());
+  uint64_t vertexCursor = 0, indexCursor = 0, rawBytes = 0;
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    SCOPED_TRACE("mesh " + std::to_string(i));
+    const Mesh& m = scene.meshes[i];
+    const pack::MeshEncodingRecord e = encodingOf(*bytes, i);
+    EXPECT_EQ(e.vertexCount, m.vertices.size());
+    EXPECT_EQ(e.indexCount, m.indices.size());
+    EXPECT_EQ(e.reserved, 0u);
+    EXPECT_EQ(e.vertexByte, vertexCursor);
+    EXPECT_EQ(e.indexByte, indexCursor);
+    vertexCursor += e.vertexBytes;
+    indexCursor += e.indexBytes;
+    std::vector<gpu::Vertex> v(m.vertices.size());
+    ASSERT_EQ(meshopt_decodeVertexBuffer(v.data(), v.size(), sizeof(gpu::Vertex),
+                                         bytes->data() + vertices.offset + e.vertexByte, e.vertexBytes), 0);
+    EXPECT_EQ(std::memcmp(v.data(), m.vertices.data(), v.size() * sizeof(gpu::Vertex)), 0);
+    std::vector<uint32_t> idx(m.indices.size());
+    const uint8_t* at = bytes->data() + indices.offset + e.indexByte;
+    ASSERT_EQ(e.indexCodec == pack::kIndexCodecTriangles
+                  ? meshopt_decodeIndexBuffer(idx.data(), idx.size(), 4, at, e.indexBytes)
+                  : meshopt_decodeIndexSequence(idx.data(), idx.size(), 4, at, e.indexBytes),
+              0);
+    EXPECT_EQ(idx, m.indices);
+    pack::MeshStreamsRecord r;
+    std::memcpy(&r, bytes->data() + streams.offset + i * sizeof(r), sizeof(r));
+    EXPECT_EQ(r.tangentByte == pack::kNoStream, m.tangents.empty());
+    if (!m.tangents.empty()) {
+      std::vector<glm::vec4> t(m.vertices.size());
+      ASSERT_EQ(meshopt_decodeVertexBuffer(t.data(), t.size(), 16, bytes->data() + tangents.offset + r.tangentByte,
+                                           r.tangentBytes), 0);
+      EXPECT_EQ(t, m.tangents);
+    }
+    if (!m.uvs1.empty()) {
+      std::vector<glm::vec2> u(m.vertices.size());
+      ASSERT_EQ(meshopt_decodeVertexBuffer(u.data(), u.size(), 8, bytes->data() + uvs1.offset + r.uv1Byte, r.uv1Bytes),
+                0);
+      EXPECT_EQ(u, m.uvs1);
+    }
+    rawBytes += m.vertices.size() * sizeof(gpu::Vertex) + m.indices.size() * sizeof(uint32_t);
+  }
+  EXPECT_EQ(vertexCursor, vertices.size);
+  EXPECT_EQ(indexCursor, indices.size);
+  EXPECT_LT(vertices.size + indices.size, rawBytes);  // it does compress
+  // The same scene always gives the same bytes (pinned codec versions, no state between calls).
+  Result<std::vector<uint8_t>> again = serializePack(scene);
+  ASSERT_TRUE(again);
+  EXPECT_TRUE(*again == *bytes);
+}
+
+// A baked asset's meshes have their triangles in the order the triangle codec reproduces (buildImportedScene), so
+// every mesh uses it and the round trip is exact; an arbitrary rotation falls back to the exact sequence codec.
+TEST(PackGeometry, BakedMeshesUseTheTriangleCodec) {
+  for (const char* asset : {"Fox/glTF/Fox.gltf", "CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb"}) {
+    SCOPED_TRACE(asset);
+    Result<ImportedScene> imported = importGltfScene(assetPath(asset));
+    ASSERT_TRUE(imported) << imported.error().message;
+    Result<Scene> scene = buildImportedScene(*imported);
+    ASSERT_TRUE(scene) << scene.error().message;
+    Result<std::vector<uint8_t>> bytes = serializePack(*scene);
+    ASSERT_TRUE(bytes);
+    for (size_t i = 0; i < scene->meshes.size(); ++i)
+      EXPECT_EQ(encodingOf(*bytes, i).indexCodec, pack::kIndexCodecTriangles) << "mesh " << i;
+    Result<Scene> back = parse(*bytes);
+    ASSERT_TRUE(back) << back.error().message;
+    for (size_t i = 0; i < scene->meshes.size(); ++i) EXPECT_EQ(back->meshes[i].indices, scene->meshes[i].indices);
+  }
+  // Rotating one triangle of a codec-ordered mesh: the triangle codec would undo the rotation, so the writer keeps
+  // the exact order with the sequence codec.
+  Scene scene = makeTestScene(16, 6);
+  std::vector<uint32_t>& idx = scene.meshes[0].indices;
+  ASSERT_TRUE(pack::rotateTrianglesToCodecOrder(idx));
+  Result<std::vector<uint8_t>> canonical = serializePack(scene);
+  ASSERT_TRUE(canonical);
+  EXPECT_EQ(encodingOf(*canonical, 0).indexCodec, pack::kIndexCodecTriangles);
+  std::rotate(idx.begin() + 3, idx.begin() + 4, idx.begin() + 6);
+  Result<std::vector<uint8_t>> rotated = serializePack(scene);
+  ASSERT_TRUE(rotated);
+  EXPECT_EQ(encodingOf(*rotated, 0).indexCodec, pack::kIndexCodecSequence);
+  Result<Scene> back = parse(*rotated);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->meshes[0].indices, idx);
+}
+
+TEST(PackReader, HostileEncodedStreams) {
+  const Scene scene = makeTexturedTestScene();
+  Result<std::vector<uint8_t>> bytes = serializePack(scene);
+  ASSERT_TRUE(bytes);
+  const std::string name0 = "mesh '" + scene.meshes[0].name + "'";
+  const std::string name1 = "mesh '" + scene.meshes[1].name + "'";
+  auto edit = [&](const char* section, size_t record, size_t at, auto value) {
+    return parseWithField(*bytes, section, record, at, value);
+  };
+  const pack::MeshEncodingRecord e0 = encodingOf(*bytes, 0), e1 = encodingOf(*bytes, 1);
+  const uint64_t vertexSection = entryOf(*bytes, sectionIndex(*bytes, "vertices")).size;
+  // A truncated stream: the codec runs out of data.
+  Result<Scene> r = edit("meshEncoding", 1, 8, e1.vertexBytes - 1);
+  EXPECT_TRUE(failsWith(r, "section 'meshEncoding' record 1 (" + name1 + ") vertices: the encoded stream in section "
+                           "'vertices' (bytes [" + std::to_string(e1.vertexByte) + ", "));
+  EXPECT_TRUE(failsWith(r, "does not decode to " + std::to_string(e1.vertexCount) + " records: "));
+  r = edit("meshEncoding", 0, 24, e0.indexBytes - 1);
+  EXPECT_TRUE(failsWith(r, "section 'meshEncoding' record 0 (" + name0 + ") indices: the encoded stream in section "
+                           "'indices'"));
+  // A damaged stream header.
+  {
+    std::vector<uint8_t> v = *bytes;
+    v[entryOf(v, sectionIndex(v, "vertices")).offset + e1.vertexByte] = 0xFF;
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v), "unsupported or damaged stream header"));
+  }
+  // Ranges outside the section, including one that wraps around 2^64.
+  EXPECT_TRUE(failsWith(edit("meshEncoding", 1, 0, vertexSection),
+                        "section 'meshEncoding' record 1 (" + name1 + ") vertices: encoded bytes [" +
+                            std::to_string(vertexSection) + ", " + std::to_string(vertexSection) + " + " +
+                            std::to_string(e1.vertexBytes) + ") lie outside section 'vertices' (" +
+                            std::to_string(vertexSection) + " bytes)"));
+  EXPECT_TRUE(failsWith(edit("meshEncoding", 0, 16, ~uint64_t{0} - 3), "lie outside section 'indices'"));
+  EXPECT_TRUE(failsWith(edit("meshStreams", 1, 16, ~uint64_t{0} - 3), "uvs1: encoded bytes ["));
+  // Lying sizes: the encoding record disagrees with the mesh record ...
+  EXPECT_TRUE(failsWith(edit("meshEncoding", 0, 32, e0.vertexCount + 1),
+                        "section 'meshEncoding' record 0 (" + name0 + "): its streams decode to " +
+                            std::to_string(e0.vertexCount + 1) + " vertices / " + std::to_string(e0.indexCount) +
+                            " indices, but the mesh record has " + std::to_string(e0.vertexCount) + " / " +
+                            std::to_string(e0.indexCount)));
+  // ... or both claim another count than the stream holds: the codec notices.
+  {
+    std::vector<RawSection> sections = splitPack(*bytes);
+    setField<uint32_t>(rawSection(sections, "meshes"), 1, offsetof(pack::MeshRecord, vertexCount), e1.vertexCount + 16);
+    setField<uint32_t>(rawSection(sections, "meshEncoding"), 1, 32, e1.vertexCount + 16);
+    EXPECT_TRUE(failsWith(parse(joinPack(*bytes, sections)), "(" + name1 + ") vertices: the encoded stream"));
+  }
+  // A decoded size the stream cannot hold is refused before anything is allocated.
+  {
+    std::vector<RawSection> sections = splitPack(*bytes);
+    setField<uint32_t>(rawSection(sections, "meshes"), 1, offsetof(pack::MeshRecord, vertexCount), 0xFFFFFFF0u);
+    setField<uint32_t>(rawSection(sections, "meshEncoding"), 1, 32, 0xFFFFFFF0u);
+    EXPECT_TRUE(failsWith(parse(joinPack(*bytes, sections)),
+                          std::to_string(e1.vertexBytes) + " bytes cannot encode 4294967280 records of 32 bytes"));
+  }
+  EXPECT_TRUE(failsWith(edit("meshEncoding", 0, 40, uint32_t{7}), "field 'indexCodec' is 7"));
+  EXPECT_TRUE(failsWith(edit("meshEncoding", 1, 44, uint32_t{1}), "field 'reserved' is 1"));
+  // The triangle codec only takes whole triangles.
+  {
+    std::vector<RawSection> sections = splitPack(*bytes);
+    setField<uint32_t>(rawSection(sections, "meshes"), 1, offsetof(pack::MeshRecord, indexCount), e1.indexCount - 1);
+    setField<uint32_t>(rawSection(sections, "meshEncoding"), 1, 36, e1.indexCount - 1);
+    setField<uint32_t>(rawSection(sections, "meshEncoding"), 1, 40, pack::kIndexCodecTriangles);
+    EXPECT_TRUE(failsWith(parse(joinPack(*bytes, sections)), "the triangle codec needs a multiple of 3 indices"));
+  }
+  // Counts that do not follow the mesh order.
+  EXPECT_TRUE(failsWith(edit("meshes", 1, 16, uint64_t{0}), "section 'meshes' record 1 (") );
+  // The helpers themselves give readable packs.
+  EXPECT_TRUE(parse(joinPack(*bytes, splitPack(*bytes))));
+  EXPECT_TRUE(parse(editDecoded<uint32_t>(*bytes, "indices", 1, [](std::vector<uint32_t>&) {})));
+}
+
+TEST_F(PackFileTest, MappedReadMatchesInMemoryParseAndTruncationFailsCleanly) {
+  const Scene scene = makeTexturedTestScene();
+  const fs::path path = dir_ / "mapped.vbp";
+  ASSERT_TRUE(writePack(scene, path.string()));
+  const std::vector<uint8_t> bytes = readBytes(path);
+  PackReadStats stats;
+  Result<Scene> mapped = readPack(path.string(), &stats);
+  ASSERT_TRUE(mapped) << mapped.error().message;
+  expectScenesEqual(scene, *mapped);
+  EXPECT_EQ(stats.fileBytes, bytes.size());
+  uint64_t largest = 0;
+  for (size_t i = 0; i < headerOf(bytes).sectionCount; ++i) largest = std::max(largest, entryOf(bytes, i).size);
+  EXPECT_EQ(stats.largestSection, largest);
+  EXPECT_EQ(stats.peakScratchBytes, 0u);  // plain vertices decode straight into the scene
+  // Truncated on disk: the size checks against the header come before any section is touched.
+  fs::resize_file(path, bytes.size() / 2);
+  Result<Scene> cut = readPack(path.string());
+  ASSERT_FALSE(cut);
+  EXPECT_EQ(cut.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(cut.error().message.find("runs past the end of the file"), std::string::npos) << cut.error().message;
+  fs::resize_file(path, 0);
+  Result<Scene> empty = readPack(path.string());
+  ASSERT_FALSE(empty);
+  EXPECT_NE(empty.error().message.find("file is 0 bytes"), std::string::npos) << empty.error().message;
+  EXPECT_EQ(readPack((dir_ / "missing.vbp").string()).error().code, ErrorCode::FileNotFound);
+  EXPECT_EQ(readPack(dir_.string()).error().code, ErrorCode::InvalidArgument);
+  // Quantised: one mesh's 20-byte records are the only decode scratch.
+  ASSERT_TRUE(writePack(scene, path.string(), PackWriteOptions{true}));
+  ASSERT_TRUE(readPack(path.string(), &stats));
+  size_t most = 0;
+  for (const Mesh& m : scene.meshes) most = std::max(most, m.vertices.size());
+  EXPECT_EQ(stats.peakScratchBytes, most * sizeof(pack::QVertexRecord));
 }
 
 // --- atomic writes

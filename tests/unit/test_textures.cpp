@@ -131,6 +131,21 @@ TEST(TextureMath, SrgbEncodingIsExactlyRounded) {
   EXPECT_EQ(encodeSrgb8(NAN), 0);
 }
 
+// The bake keeps an 8-bit square power-of-two image's codes as its mip 0 (bakeImage) instead of encoding their
+// linear values again: that is exact only if every code comes back from its own linear value.
+TEST(TextureMath, EightBitCodesSurviveTheLinearRoundTrip) {
+  for (int k = 0; k < 256; ++k) {
+    LinearImage one;
+    one.width = one.height = 1;
+    for (int c = 0; c < 4; ++c) one.rgba.push_back(codeToLinear(uint8_t(k), c < 3));
+    const std::vector<uint8_t> srgb = encodeRgba8(one, ColorSpace::Srgb);
+    EXPECT_EQ(srgb, std::vector<uint8_t>(4, uint8_t(k))) << "sRGB code " << k;
+    for (float& v : one.rgba) v = codeToLinear(uint8_t(k), false);
+    EXPECT_EQ(encodeRgba8(one, ColorSpace::Linear), std::vector<uint8_t>(4, uint8_t(k))) << "linear code " << k;
+    EXPECT_EQ(codeToLinear(uint8_t(k), true), srgbToLinear(float(k) / 255.0f));
+  }
+}
+
 TEST(TextureMath, BakedSizeRoundsToTheNearestPowerOfTwoAndCaps) {
   EXPECT_EQ(bakedTextureSize(1, 1, 2048), 1u);
   EXPECT_EQ(bakedTextureSize(211, 211, 2048), 256u);  // BoxTexturedNonPowerOfTwo
@@ -471,7 +486,9 @@ TEST_F(MaterialFixture, BakedTexturesAndPackRoundTrip) {
   Result<Scene> scene = buildImportedScene(*imported);
   ASSERT_TRUE(scene) << scene.error().message;
   TextureBakeReport report;
-  Status baked = bakeTextures(*imported, {}, &scene.value(), &report);
+  TextureBakeOptions rgba8;  // this test pins the uncompressed layout (test_texture_compression.cpp: BC)
+  rgba8.encoding = TextureEncoding::Rgba8;
+  Status baked = bakeTextures(*imported, rgba8, &scene.value(), &report);
   ASSERT_TRUE(baked) << baked.error().message;
   // (image 0, sRGB) for base colour and emissive, (image 1, linear) for metallic-roughness and normal,
   // (image 2, linear) for occlusion: 3 textures; classes 8 sRGB (1 layer) and 4 linear (2 layers).
