@@ -2,7 +2,9 @@
 // message/range helpers they share, and the container loader. Not installed as public API.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <string>
 #include <vector>
@@ -48,6 +50,22 @@ inline bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
 }
 inline std::string str(uint64_t v) { return std::to_string(v); }
 inline std::string str(int v) { return std::to_string(v); }
+// An index held in an extension's JSON value (tinygltf leaves extensions unparsed): the value when it is a whole
+// number in [0, count), else -1. Checked in double first: tinygltf's GetNumberAsInt() converts 1e30 to int,
+// which is undefined.
+inline int indexValue(const tinygltf::Value& v, size_t count) {
+  if (!v.IsNumber()) return -1;
+  const double d = v.GetNumberAsDouble();
+  if (!(d >= 0.0 && d < double(count) && d == std::floor(d))) return -1;
+  return static_cast<int>(d);
+}
+// The number as the file wrote it, for messages ("1e+30", "2.5", "7"); "(not a number)" otherwise.
+inline std::string numberText(const tinygltf::Value& v) {
+  if (!v.IsNumber()) return "(not a number)";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", v.GetNumberAsDouble());
+  return text;
+}
 // " 'Name'" when the object has a name, "" otherwise: "node 3 'Foo'" / "node 3".
 inline std::string named(const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; }
 inline Error malformed(std::string message) { return makeError(ErrorCode::MalformedInput, std::move(message)); }

@@ -1432,9 +1432,10 @@ Status Importer::emitNodeLight(int nodeIndex, const glm::dmat4& world, ImportedS
   auto ext = node.extensions.find("KHR_lights_punctual");
   if (ext == node.extensions.end() || !ext->second.Has("light")) return {};
   const std::string nodeWhere = path_ + ": node " + str(nodeIndex) + named(node.name);
-  const int index = ext->second.Get("light").GetNumberAsInt();
-  if (index < 0 || static_cast<size_t>(index) >= model_.lights.size())
-    return malformed(nodeWhere + ": KHR_lights_punctual light " + str(index) + " out of range");
+  const tinygltf::Value& lightValue = ext->second.Get("light");
+  const int index = indexValue(lightValue, model_.lights.size());
+  if (index < 0)
+    return malformed(nodeWhere + ": KHR_lights_punctual light " + numberText(lightValue) + " out of range");
   const tinygltf::Light& l = model_.lights[static_cast<size_t>(index)];
   const std::string where = nodeWhere + ": KHR_lights_punctual light " + str(index) + named(l.name);
   PointLight p;
@@ -1527,10 +1528,10 @@ Result<std::vector<glm::dmat4>> Importer::meshInstances(int nodeIndex, const glm
     if (!attributes.Has(st.semantic)) continue;
     const tinygltf::Value& index = attributes.Get(st.semantic);
     if (!index.IsNumber()) return malformed(where + ": attribute " + st.semantic + " is not an accessor index");
-    st.accessor = index.GetNumberAsInt();
+    st.accessor = indexValue(index, model_.accessors.size());
+    if (st.accessor < 0)
+      return malformed(where + " accessor " + numberText(index) + " (" + st.semantic + "): accessor does not exist");
     const std::string aw = where + " accessor " + str(st.accessor) + " (" + st.semantic + ")";
-    if (st.accessor < 0 || static_cast<size_t>(st.accessor) >= model_.accessors.size())
-      return malformed(aw + ": accessor does not exist");
     const uint64_t n = model_.accessors[static_cast<size_t>(st.accessor)].count;
     if (n == 0 || n > kMaxInstancesPerNode)
       return malformed(aw + ": instance count " + str(n) + " is not in [1, " + str(kMaxInstancesPerNode) + "]");

@@ -49,6 +49,21 @@ Camera brdfCamera() {
   return cam;
 }
 
+// The CPU reference's surface at covered pixel p: the frame's read-back position and normal, the material's
+// factors (these scenes are untextured).
+SurfaceReference surfaceAt(const Scene& scene, const FrameResult& frame, size_t p) {
+  const float* a = &frame.attributes[p * ATTRIBUTE_FLOATS];
+  const Material& m = scene.materials[scene.objects[frame.ids[2 * p] - 1].material];
+  SurfaceReference s;
+  s.position = {a[0], a[1], a[2]};
+  s.normal = glm::normalize(glm::dvec3(a[4], a[5], a[6]));
+  s.baseColor = glm::dvec3(m.baseColor);
+  s.metallic = m.metallic;
+  s.roughness = m.roughness;
+  s.emissive = glm::dvec3(m.emissive * m.emissiveStrength);
+  return s;
+}
+
 }  // namespace
 
 // Tolerance: |gpu - reference| <= 2e-3 + 2e-3 x reference per channel. The GPU evaluates in float and stores
@@ -77,14 +92,7 @@ TEST(Lights, BrdfMatchesCpuReference) {
     const float* a = &frame->attributes[p * ATTRIBUTE_FLOATS];
     if (a[7] != 1.0f) continue;
     ASSERT_NE(frame->ids[2 * p], 0u);
-    const Material& m = scene.materials[scene.objects[frame->ids[2 * p] - 1].material];
-    SurfaceReference s;
-    s.position = {a[0], a[1], a[2]};
-    s.normal = glm::normalize(glm::dvec3(a[4], a[5], a[6]));
-    s.baseColor = glm::dvec3(m.baseColor);
-    s.metallic = m.metallic;
-    s.roughness = m.roughness;
-    s.emissive = glm::dvec3(m.emissive * m.emissiveStrength);
+    const SurfaceReference s = surfaceAt(scene, *frame, p);
     const glm::dvec3 ref = shadeReference(s, scene, cam.position);
     const glm::dvec3 refDark = shadeReference(s, dark, cam.position);
     ++covered;
@@ -264,14 +272,7 @@ TEST(Lights, SpotAndDirectionalMatchCpuReference) {
     const float* a = &frame->attributes[p * ATTRIBUTE_FLOATS];
     if (a[7] != 1.0f) continue;
     ASSERT_NE(frame->ids[2 * p], 0u);
-    const Material& m = scene.materials[scene.objects[frame->ids[2 * p] - 1].material];
-    SurfaceReference s;
-    s.position = {a[0], a[1], a[2]};
-    s.normal = glm::normalize(glm::dvec3(a[4], a[5], a[6]));
-    s.baseColor = glm::dvec3(m.baseColor);
-    s.metallic = m.metallic;
-    s.roughness = m.roughness;
-    s.emissive = glm::dvec3(m.emissive * m.emissiveStrength);
+    const SurfaceReference s = surfaceAt(scene, *frame, p);
     const glm::dvec3 ref = shadeReference(s, scene, cam.position);
     const glm::dvec3 spotEffect = ref - shadeReference(s, noSpot, cam.position);
     const glm::dvec3 sunEffect = ref - shadeReference(s, noSun, cam.position);

@@ -621,8 +621,17 @@ EXTRA_ASSET_TEST(GltfTextures, DamagedHelmetHasFiveTexturesWithTheRightColourSpa
     EXPECT_EQ(t.originalWidth, 2048u);
     EXPECT_EQ(scene->textureClasses[t.sizeClass].size, 128u);
   }
-  ASSERT_EQ(scene->textureClasses.size(), 2u);  // 128 sRGB x 2 layers, 128 linear x 3 layers
-  EXPECT_EQ(scene->textureClasses[0].layers + scene->textureClasses[1].layers, 5u);
+  // Block-compressed by default: base colour and emissive share an sRGB BC1 class; metallic-roughness is linear
+  // BC1, the normal map BC5, occlusion BC4.
+  ASSERT_EQ(scene->textureClasses.size(), 4u);
+  const auto classOf = [&](size_t slot) { return scene->textureClasses[scene->textures[size_t(slots[slot]->baked)].sizeClass]; };
+  EXPECT_EQ(classOf(0).format, TextureFormat::Bc1);
+  EXPECT_EQ(classOf(0).layers, 2u);
+  EXPECT_EQ(classOf(4).format, TextureFormat::Bc1);
+  EXPECT_EQ(classOf(1).format, TextureFormat::Bc1);
+  EXPECT_EQ(classOf(1).colorSpace, ColorSpace::Linear);
+  EXPECT_EQ(classOf(2).format, TextureFormat::Bc5);
+  EXPECT_EQ(classOf(3).format, TextureFormat::Bc4);
   Result<std::vector<uint8_t>> bytes = serializePack(*scene);
   ASSERT_TRUE(bytes) << bytes.error().message;
   Result<Scene> back = parsePack(bytes->data(), bytes->size(), "helmet.vbp");
