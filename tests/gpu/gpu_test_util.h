@@ -9,12 +9,28 @@
 
 #include <gtest/gtest.h>
 
+#include "visbuf/asset/texture_bake.h"
 #include "visbuf/core/image_compare.h"
 #include "visbuf/core/image_io.h"
 #include "visbuf/gpu/device.h"
 #include "visbuf/render/renderer.h"
 
 namespace visbuf::test {
+
+// Whether this build decodes images (VISBUF_WITH_OIIO): without it every image step reports Unsupported, and
+// the tests that bake textures from PNG/JPEG skip with REQUIRE_IMAGE_DECODING() instead of failing.
+inline bool imageDecodingBuilt() {
+  LinearImage one;
+  one.width = one.height = 1;
+  one.rgba = {0.0f, 0.0f, 0.0f, 1.0f};
+  Result<LinearImage> r = resizeImage(one, 1, 1);
+  return r.ok() || r.error().code != ErrorCode::Unsupported;
+}
+#define REQUIRE_IMAGE_DECODING()                                                                          \
+  do {                                                                                                    \
+    if (!::visbuf::test::imageDecodingBuilt())                                                            \
+      GTEST_SKIP() << "built without OpenImageIO (VISBUF_WITH_OIIO=OFF): this test bakes textures from images"; \
+  } while (0)
 
 // The device every GPU test uses: default selection (lavapipe in CI), validation layers on.
 inline gpu::Device& testDevice() {

@@ -102,7 +102,16 @@ Result<Scene> bakeInMemory(const fs::path& file, std::vector<std::string>& warni
   if (!scene) return scene.error();
   TextureBakeOptions to;
   to.maxTextureSize = kTextureCap;
-  if (Status s = bakeTextures(*imported, to, &scene.value()); !s) return s.error();
+  if (Status s = bakeTextures(*imported, to, &scene.value()); !s) {
+    // A build without an image decoder (VISBUF_WITH_OIIO=OFF) still checks everything but the texture pixels:
+    // the materials keep their references unbaked, as `bake --no-textures` writes them.
+    if (s.error().code != ErrorCode::Unsupported) return s.error();
+    std::printf("%s: texture pixels not baked: %s\n", file.filename().string().c_str(), s.error().message.c_str());
+    scene->textures.clear();
+    scene->textureClasses.clear();
+    for (Material& m : scene->materials)
+      for (TextureRef* t : textureSlots(m)) t->baked = -1;
+  }
   return scene;
 }
 

@@ -164,12 +164,14 @@ void expectMatchesForwardResolve(const Scene& scene, const char* name, uint32_t 
 // and the extrapolated edge normals of forward give PSNR 40.9 dB, max 0.81, 4.3 % of the pixels > 1/255 (lavapipe),
 // while visbuf 1x is at 30.6 dB from forward 4x.
 TEST(Msaa, VisbufMatchesForwardResolveOnTexturedAsset) {
+  REQUIRE_IMAGE_DECODING();
   Scene s = texturedGrid(test::assetPath("NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf"));
   ASSERT_FALSE(s.objects.empty());
   expectMatchesForwardResolve(s, "textured_grid", 320, 200, {39.0, 0.85, 0.05});
 }
 
 EXTRA_ASSET_TEST(Msaa, VisbufMatchesForwardResolveOnAvocadoGrid, "Avocado/glTF/Avocado.gltf") {
+  REQUIRE_IMAGE_DECODING();
   Scene s = texturedGrid(asset);
   ASSERT_FALSE(s.objects.empty());
   expectMatchesForwardResolve(s, "avocado_grid", 320, 200, {45.0, 0.75, 0.045});
