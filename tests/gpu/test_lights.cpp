@@ -64,6 +64,17 @@ SurfaceReference surfaceAt(const Scene& scene, const FrameResult& frame, size_t 
   return s;
 }
 
+// One frame at full detail with the attributes and IDs read back: what the per-pixel reference comparisons use.
+Result<FrameResult> renderExact(gpu::Device& dev, const Scene& scene, const Camera& cam, uint32_t w, uint32_t h) {
+  auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
+  if (!renderer) return renderer.error();
+  FrameOptions fo;
+  fo.lodErrorPixels = 0.0f;
+  fo.readAttributes = true;
+  fo.readIds = true;
+  return (*renderer)->renderFrame(cam, fo);
+}
+
 }  // namespace
 
 // Tolerance: |gpu - reference| <= 2e-3 + 2e-3 x reference per channel. The GPU evaluates in float and stores
@@ -76,13 +87,7 @@ TEST(Lights, BrdfMatchesCpuReference) {
   const Scene scene = brdfScene(24);
   const Camera cam = brdfCamera();
   const uint32_t w = 320, h = 200;
-  auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
-  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
-  FrameOptions fo;
-  fo.lodErrorPixels = 0.0f;
-  fo.readAttributes = true;
-  fo.readIds = true;
-  auto frame = (*renderer)->renderFrame(cam, fo);
+  Result<FrameResult> frame = renderExact(dev, scene, cam, w, h);
   ASSERT_TRUE(frame.ok()) << frame.error().message;
   Scene dark = scene;  // the reference without point lights: they must matter for the test to mean anything
   dark.pointLights.clear();
@@ -255,13 +260,7 @@ TEST(Lights, SpotAndDirectionalMatchCpuReference) {
   ASSERT_TRUE(validateScene(scene).ok());
   const Camera cam = brdfCamera();
   const uint32_t w = 320, h = 200;
-  auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
-  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
-  FrameOptions fo;
-  fo.lodErrorPixels = 0.0f;
-  fo.readAttributes = true;
-  fo.readIds = true;
-  auto frame = (*renderer)->renderFrame(cam, fo);
+  Result<FrameResult> frame = renderExact(dev, scene, cam, w, h);
   ASSERT_TRUE(frame.ok()) << frame.error().message;
   Scene noSpot = scene, noSun = scene;
   noSpot.pointLights = {sun};
@@ -308,6 +307,8 @@ TEST(Lights, SpotAndDirectionalMatchCpuReference) {
   EXPECT_GT(maxSun, 0.1);
   EXPECT_EQ(bad, 0u);
 
+  auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
+  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
   FrameOptions all;
   all.lodErrorPixels = 0.0f;
   all.tiledLights = false;
