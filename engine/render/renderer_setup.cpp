@@ -1,0 +1,521 @@
+// Renderer creation and the resources it owns: descriptor layout and set, screen targets, lazily created MSAA,
+// G-buffer and classification resources.
+#include "visbuf/render/renderer_impl.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+namespace visbuf {
+
+// The vertex pool's descriptor windows: window k covers vertices [k << shift, (k + 1) << shift); windows past
+// the end of the pool repeat window 0 (bound, never read).
+std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift) {
+  const VkDeviceSize window = VkDeviceSize(sizeof(gpu::Vertex)) << shift;
+  std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> w{};
+  for (uint32_t k = 0; k < VERTEX_WINDOWS; ++k) {
+    const VkDeviceSize offset = k * window;
+    w[k] = offset < pool.size() ? VkDescriptorBufferInfo{pool.handle(), offset, std::min(window, pool.size() - offset)}
+                                : VkDescriptorBufferInfo{pool.handle(), 0, std::min(window, pool.size())};
+  }
+  return w;
+}
+
+void Renderer::Impl::createLayouts() {
+  VkDevice dev = device.device();
+  const VkShaderStageFlags all = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+  std::vector<VkDescriptorSetLayoutBinding> b = {
+      {BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, all, nullptr},
+      {BINDING_OBJECTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_MESHES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_DRAWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_STATS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_MATERIALS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_VISIBLE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+      {BINDING_ATTRIBUTES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_OBJECTS_HIGH, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_VERTICES_1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_VERTICES_2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_VERTICES_3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES, all, nullptr},
+      {BINDING_VERTEX_EXTRAS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_DRAW_LISTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_SW_VISIBILITY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_GBUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GBUFFER_TARGETS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_GBUFFER_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_LIGHT_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+      {BINDING_LIGHT_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_MATERIAL_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_TILE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_VERTEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+      {BINDING_INDEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+      {BINDING_OBJECT_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+      {BINDING_TRIANGLE_PLANES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {BINDING_MESH_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+      {BINDING_MATERIAL_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
+      {BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+  };
+  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  lci.bindingCount = uint32_t(b.size());
+  lci.pBindings = b.data();
+  VK_CHECK(vkCreateDescriptorSetLayout(dev, &lci, nullptr, &setLayout));
+  VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pci.setLayoutCount = 1;
+  pci.pSetLayouts = &setLayout;
+  VkPushConstantRange range{gpu::kPassConstantStages, 0, sizeof(gpu::PassConstants)};
+  pci.pushConstantRangeCount = 1;
+  pci.pPushConstantRanges = &range;
+  VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
+  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 17 + 2 /*lights*/ + 2 /*classification*/},
+                                  {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
+                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
+                                  {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 7}};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = 1;
+  dpci.poolSizeCount = uint32_t(std::size(sizes));
+  dpci.pPoolSizes = sizes;
+  VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
+  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  ai.descriptorPool = pool;
+  ai.descriptorSetCount = 1;
+  ai.pSetLayouts = &setLayout;
+  VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &set));
+  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  sci.maxLod = VK_LOD_CLAMP_NONE;
+  VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler));
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VK_CHECK(vkCreateFence(dev, &fci, nullptr, &fence));
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = device.commandPool();
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = kCommandBuffers;
+  VK_CHECK(vkAllocateCommandBuffers(dev, &cai, cmds.data()));
+}
+
+void Renderer::Impl::createTargets(uint32_t width, uint32_t height) {
+  vkDeviceWaitIdle(device.device());
+  const VkFormat idFormat = encoding.wide ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32_UINT;
+  ids = gpu::Image(device, idFormat, width, height,
+                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                   VK_IMAGE_ASPECT_COLOR_BIT);
+  depth = gpu::Image(device, VK_FORMAT_D32_SFLOAT, width, height,
+                     VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+  pyramid.resize(depth);
+  color = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, width, height,
+                     VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                         VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                     VK_IMAGE_ASPECT_COLOR_BIT);
+  const VkDeviceSize pixels = VkDeviceSize(width) * height;
+  colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+  forwardIds.reset();
+  idsMs.reset();
+  depthMs.reset();
+  colorMs.reset();
+  msaaSamples = 0;
+  descriptorsMsaa = false;
+  for (gpu::Image& t : gbufferTargets) t.reset();
+  overdrawReadback.reset();
+  resizeAttributes(ATTRIBUTE_FLOATS * sizeof(float));
+  overdraw = gpu::Image(device, VK_FORMAT_R32_UINT, width, height,
+                        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                        VK_IMAGE_ASPECT_COLOR_BIT);
+  {
+    VkCommandBuffer one = device.beginOneShot();
+    gpu::imageBarrier(one, overdraw, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
+    device.submitOneShot(one);
+  }
+  idsReadback = gpu::Buffer(device, pixels * 8 /* rg32ui: either path */, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            gpu::MemoryUse::HostVisible);
+  swRaster.resetBuffer(device);
+  if (hasPointLights()) lightCull.resize(device, width, height);
+  if (classify.created()) classify.resize(device, width, height);
+  config.width = width;
+  config.height = height;
+  writeDescriptors();
+}
+
+// The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
+void Renderer::Impl::resizeAttributes(VkDeviceSize bytes) {
+  attributes = gpu::Buffer(device, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                                              VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                           gpu::MemoryUse::DeviceLocal);
+  attributesReadback.reset();
+}
+
+void Renderer::Impl::writeDescriptors() {
+  // Objects: two windows of one buffer, split where one descriptor range would end (objectWindowSplit).
+  const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
+  const bool highUsed = objectSplit < gpuScene.objectCount;
+  const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
+  VkDescriptorBufferInfo bufs[17] = {
+      {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
+      {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
+      {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
+      {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
+      {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
+      {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
+      {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
+      vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swRaster.buffer.handle(), 0, VK_WHOLE_SIZE},
+      {visibleList.handle(), 0, VK_WHOLE_SIZE}};
+  const uint32_t bufBindings[17] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
+                                    BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
+                                    BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
+                                    BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3,
+                                    BINDING_DRAW_LISTS, BINDING_SW_VISIBILITY, BINDING_VISIBLE_LIST};
+  std::vector<VkWriteDescriptorSet> w;
+  for (int i = 0; i < 17; ++i) {
+    VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    x.dstSet = set;
+    x.dstBinding = bufBindings[i];
+    x.descriptorCount = 1;
+    x.descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    x.pBufferInfo = &bufs[i];
+    w.push_back(x);
+  }
+  // MSAA frames: the shading pass and the light culling read the multisampled targets (only those variants
+  // declare multisampled images; every other shader ignores these bindings).
+  VkDescriptorImageInfo idInfo{sampler, (descriptorsMsaa ? idsMs : ids).view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkDescriptorImageInfo colorInfo{VK_NULL_HANDLE, color.view(), VK_IMAGE_LAYOUT_GENERAL};
+  VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  x.dstSet = set;
+  x.descriptorCount = 1;
+  x.dstBinding = BINDING_VISIBILITY;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  x.pImageInfo = &idInfo;
+  w.push_back(x);
+  x.dstBinding = BINDING_COLOR;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+  x.pImageInfo = &colorInfo;
+  w.push_back(x);
+  VkDescriptorImageInfo overdrawInfo{VK_NULL_HANDLE, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL};
+  x.dstBinding = BINDING_OVERDRAW;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+  x.pImageInfo = &overdrawInfo;
+  w.push_back(x);
+  VkDescriptorImageInfo pyramidInfo{sampler, pyramid.pyramid().view(), VK_IMAGE_LAYOUT_GENERAL};
+  x.dstBinding = BINDING_PYRAMID;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  x.pImageInfo = &pyramidInfo;
+  w.push_back(x);
+  // Texture classes: the scene's, then the placeholder in every unused slot (material.glsl); vertex extras.
+  std::array<VkDescriptorImageInfo, MAX_TEXTURE_CLASSES> textureInfos;
+  for (size_t i = 0; i < textureInfos.size(); ++i) {
+    const gpu::Image& t = i < gpuScene.textureClasses.size() ? gpuScene.textureClasses[i] : gpuScene.placeholderTexture;
+    textureInfos[i] = {VK_NULL_HANDLE, t.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  }
+  x.dstBinding = BINDING_TEXTURE_CLASSES;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE;
+  x.descriptorCount = MAX_TEXTURE_CLASSES;
+  x.pImageInfo = textureInfos.data();
+  w.push_back(x);
+  const VkBufferView texelViews[7] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
+                                      gpuScene.objectTexels.handle(), gpuScene.planeTexels.handle(),
+                                      gpuScene.meshTexels.handle(),   gpuScene.materialTexels.handle(),
+                                      drawTexels.handle()};
+  const uint32_t texelBindings[7] = {BINDING_VERTEX_TEXELS,   BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
+                                     BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS,  BINDING_MATERIAL_TEXELS,
+                                     BINDING_DRAW_TEXELS};
+  for (int i = 0; i < 7; ++i) {
+    VkWriteDescriptorSet t{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    t.dstSet = set;
+    t.dstBinding = texelBindings[i];
+    t.descriptorCount = 1;
+    t.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    t.pTexelBufferView = &texelViews[i];
+    w.push_back(t);
+  }
+  VkDescriptorBufferInfo extrasInfo{gpuScene.vertexExtras.handle(), 0, VK_WHOLE_SIZE};
+  x.dstBinding = BINDING_VERTEX_EXTRAS;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  x.descriptorCount = 1;
+  x.pImageInfo = nullptr;
+  x.pBufferInfo = &extrasInfo;
+  w.push_back(x);
+  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  x.pBufferInfo = nullptr;
+  // G-buffer targets: until a G-buffer frame creates them, the depth stands in (lavapipe reads every descriptor
+  // of a bound set, so none may stay unwritten; only gbuffer_lighting.comp samples these).
+  VkDescriptorImageInfo gbufferDepthInfo{sampler, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  std::array<VkDescriptorImageInfo, GBUFFER_TARGETS> gbufferInfo{};
+  for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
+    gbufferInfo[i] = gbufferTargets[i] ? VkDescriptorImageInfo{sampler, gbufferTargets[i].view(),
+                                                               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+                                       : gbufferDepthInfo;
+  x.dstBinding = BINDING_GBUFFER;
+  x.descriptorCount = GBUFFER_TARGETS;
+  x.pImageInfo = gbufferInfo.data();
+  w.push_back(x);
+  x.dstBinding = BINDING_GBUFFER_DEPTH;
+  x.descriptorCount = 1;
+  x.pImageInfo = &gbufferDepthInfo;
+  w.push_back(x);
+  // Lights: with no point lights nothing is allocated; the shaders never read these bindings then
+  // (FrameData.pointLightCount = 0), which alias the stats buffer only to keep the set complete.
+  VkDescriptorBufferInfo lightInfo = hasPointLights() ? VkDescriptorBufferInfo{pointLights.handle(), 0, VK_WHOLE_SIZE}
+                                                      : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
+  VkDescriptorBufferInfo tileInfo = hasPointLights() ? VkDescriptorBufferInfo{lightCull.tiles().handle(), 0, VK_WHOLE_SIZE}
+                                                     : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
+  VkDescriptorImageInfo lightDepthInfo{sampler, (descriptorsMsaa ? depthMs : depth).view(),
+                                       VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  x.pImageInfo = nullptr;
+  x.dstBinding = BINDING_LIGHTS;
+  x.pBufferInfo = &lightInfo;
+  w.push_back(x);
+  x.dstBinding = BINDING_LIGHT_TILES;
+  x.pBufferInfo = &tileInfo;
+  w.push_back(x);
+  x.dstBinding = BINDING_LIGHT_DEPTH;
+  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  x.pBufferInfo = nullptr;
+  x.pImageInfo = &lightDepthInfo;
+  w.push_back(x);
+  // Classification: until a classified frame creates its buffers, the stats buffer stands in (never read).
+  VkDescriptorBufferInfo classifyInfo[2] = {{stats.handle(), 0, VK_WHOLE_SIZE}, {stats.handle(), 0, VK_WHOLE_SIZE}};
+  if (classify.created())
+    classifyInfo[0].buffer = classify.materialTiles().handle(), classifyInfo[1].buffer = classify.tileList().handle();
+  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  x.pImageInfo = nullptr;
+  x.dstBinding = BINDING_MATERIAL_TILES;
+  x.pBufferInfo = &classifyInfo[0];
+  w.push_back(x);
+  x.dstBinding = BINDING_TILE_LIST;
+  x.pBufferInfo = &classifyInfo[1];
+  w.push_back(x);
+  vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
+}
+
+// The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
+// for them).
+void Renderer::Impl::ensureGBufferTargets() {
+  if (gbuffer.formats.color[0] == VK_FORMAT_UNDEFINED) {  // not created yet
+    gbuffer = passes::GBufferPass::create(device, pipelineLayout, textured, listMask);
+    gbufferLighting = passes::GBufferLightingPass::create(device, pipelineLayout, textured.windowed);
+  }
+  if (gbufferTargets[0]) return;
+  for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
+    gbufferTargets[i] = gpu::Image(device, gbuffer.formats.color[i], config.width, config.height,
+                                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                                   VK_IMAGE_ASPECT_COLOR_BIT);
+  writeDescriptors();
+}
+
+// FrameOptions::msaa against the device and the frame's other options (what MSAA does not cover is refused).
+Status Renderer::Impl::checkMsaa(const FrameOptions& o) const {
+  if (o.msaa == 1) return {};
+  if (o.msaa != 2 && o.msaa != 4)
+    return makeError(ErrorCode::InvalidArgument, fmt::format("msaa {}: the sample count must be 1, 2 or 4", o.msaa));
+  if (std::find(msaaCounts.begin(), msaaCounts.end(), o.msaa) == msaaCounts.end())
+    return makeError(ErrorCode::Unsupported,
+                     fmt::format("msaa {} is not supported by {}: supported sample counts (for the r32ui/rg32ui ID, "
+                                 "D32 depth and rgba16f colour targets) are {}",
+                                 o.msaa, device.name(), fmt::join(msaaCounts, ", ")));
+  const char* refused = o.path == RenderPath::GBuffer ? "the G-buffer path"
+                        : !blendObjects.empty()       ? "scenes with BLEND materials (the transparency pass)"
+                        : o.countOverdraw             ? "the overdraw count (countOverdraw, --view overdraw)"
+                        : o.readAttributes            ? "the attribute readback (readAttributes)"
+                        : o.readIds && o.path == RenderPath::Forward ? "the forward path's ID target (readIds)"
+                                                                      : nullptr;
+  if (refused)
+    return makeError(ErrorCode::Unsupported,
+                     fmt::format("msaa {}: {} is single-sampled only; use msaa 1", o.msaa, refused));
+  return {};
+}
+
+// The multisampled targets and pipelines of this frame's sample count (created once per count and size), and
+// the descriptors that the shading and light culling passes read them through.
+void Renderer::Impl::prepareMsaa(const FrameOptions& options) {
+  const bool msaa = options.msaa > 1;
+  const auto samples = VkSampleCountFlagBits(options.msaa);
+  if (msaa && msaaSamples != options.msaa) {
+    idsMs = gpu::Image(device, ids.format(), config.width, config.height,
+                       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT, 1,
+                       0, samples);
+    depthMs = gpu::Image(device, VK_FORMAT_D32_SFLOAT, config.width, config.height,
+                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                         VK_IMAGE_ASPECT_DEPTH_BIT, 1, 0, samples);
+    colorMs.reset();
+    pyramid.resize(depth, &depthMs);  // level 0 from either depth
+    msaaSamples = options.msaa;
+    descriptorsMsaa = !msaa;  // the pyramid and the ID views changed: rewrite below
+  }
+  if (msaa && options.path == RenderPath::Visbuf) {
+    if (visibilityMsSamples != options.msaa)
+      visibilityMs = passes::VisibilityPass::create(device, pipelineLayout, textured, listMask, samples);
+    visibilityMsSamples = options.msaa;
+    shade.createMsaa(device, pipelineLayout, textured);
+  }
+  if (msaa && options.path == RenderPath::Forward) {
+    if (forwardMsSamples != options.msaa)
+      forwardMs = passes::ForwardPass::create(device, pipelineLayout, textured, listMask, samples);
+    forwardMsSamples = options.msaa;
+    if (!colorMs)
+      colorMs = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, config.width, config.height,
+                           VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, 1, 0, samples);
+  }
+  if (descriptorsMsaa != msaa) {
+    descriptorsMsaa = msaa;
+    writeDescriptors();
+  }
+}
+
+// The classification pipelines and buffers (only renderers that shade classified frames pay for them).
+void Renderer::Impl::ensureClassify() {
+  if (classify.created()) return;
+  std::vector<bool> sampling;  // per material: samples a texture
+  for (const Material& m : scene.materials) sampling.push_back(packMaterial(m, scene).slotCount > 0);
+  classify.create(device, pipelineLayout, textured, std::move(sampling));
+  classify.resize(device, config.width, config.height);
+  writeDescriptors();
+}
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Renderer::~Renderer() = default;
+
+Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Scene& scene,
+                                                   const RendererConfig& config) {
+  if (config.width == 0 || config.height == 0 || config.width > 16384 || config.height > 16384)
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("image size {}x{} outside 1..16384", config.width, config.height));
+  auto impl = std::make_unique<Impl>(device, scene);
+  impl->config = config;
+  Result<GpuScene> g = uploadScene(device, scene);
+  if (!g) return g.error();
+  impl->gpuScene = std::move(g.value());
+  // Default capacity: one draw per object, as far as one descriptor range holds both phases' draw lists
+  // (beyond that, overflow is counted and reported like any capacity overflow).
+  const uint64_t maxRange = device.properties().limits.maxStorageBufferRange;
+  impl->objectSplit = objectWindowSplit(maxRange, impl->gpuScene.objectCount);
+  impl->vertexShift = vertexWindowShift(maxRange);
+  // Draw lists: each list's capacity is its object count (a list can never hold more), capped by
+  // config.drawCapacity (per list) or, by default, shared out so that both phases fit one descriptor range.
+  std::array<uint64_t, DRAW_LISTS> listObjects{};
+  uint64_t listed = 0;
+  for (uint32_t i = 0; i < impl->gpuScene.objectCount; ++i) {
+    const uint32_t l = impl->gpuScene.objectList[i];
+    if (l == DRAW_LIST_NONE)
+      impl->blendObjects.push_back(i);
+    else
+      ++listObjects[l], ++listed;
+  }
+  const uint64_t rangeSlots = maxRange / (2 * sizeof(gpu::DrawCommand));
+  for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+    uint64_t c = listObjects[l];
+    if (config.drawCapacity)
+      c = std::min<uint64_t>(c, config.drawCapacity);
+    else if (listed > rangeSlots)
+      c = std::max<uint64_t>(c ? 1 : 0, c * rangeSlots / listed);
+    impl->listFirst[l] = impl->capacity;
+    impl->listCapacity[l] = uint32_t(c);
+    impl->capacity += uint32_t(c);
+    if (c) impl->listMask |= 1u << l;
+    // The micro-raster fills a list's region from its end, so only where the region holds every object of the list.
+    if (c && c == listObjects[l] && !passes::drawListMasked(l)) impl->swListMask |= 1u << l;
+  }
+  impl->capacity = std::max(impl->capacity, 1u);  // (a scene of only BLEND objects: no list, one unused slot)
+  // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
+  const uint64_t drawBytes = 2 * uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
+  if (drawBytes > device.properties().limits.maxStorageBufferRange)
+    return makeError(ErrorCode::CapacityExceeded,
+                     fmt::format("draw capacity {} needs {:.1f} MiB, over maxStorageBufferRange", impl->capacity,
+                                 drawBytes / 1048576.0));
+  impl->encoding = chooseIdEncoding(2 * impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
+  impl->msaaCounts = supportedMsaaSamples(device);
+  impl->createLayouts();
+  // Descriptor windows only when needed: a scene whose objects and vertices fit one range reads them directly.
+  const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||
+                        impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
+  const uint32_t w = windowed ? 1u : 0u;
+  // Texel views: the scene's records and the draws (five words each) within maxTexelBufferElements.
+  const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
+  const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
+  const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
+                                     impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
+  impl->cull = passes::CullPass::create(device, impl->pipelineLayout, textured);
+  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
+  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
+  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->pipelineLayout, textured);
+  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
+  if (!impl->blendObjects.empty())
+    impl->transparent = passes::TransparentPass::create(device, impl->pipelineLayout, textured);
+  std::array<glm::uvec4, DRAW_LISTS> lists{};
+  for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+    lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
+                impl->swListMask >> l & 1u};
+  impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
+  std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
+  impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
+  impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                  gpu::MemoryUse::HostVisible);
+  impl->draws = gpu::Buffer(device, drawBytes,
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
+                            gpu::MemoryUse::DeviceLocal);
+  impl->drawTexels = gpu::BufferView(device, impl->draws, VK_FORMAT_R32_UINT, 0,
+                                     std::min<VkDeviceSize>(drawBytes / 4, maxTexels) * 4);
+  impl->stats = gpu::Buffer(device, (SW_ARGS + 2 * SW_ARGS_UINTS) * sizeof(uint32_t),
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            gpu::MemoryUse::DeviceLocal);
+  impl->statsReadback = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                    gpu::MemoryUse::HostVisible);
+  impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                              gpu::MemoryUse::DeviceLocal);
+  impl->visibleList = gpu::Buffer(device, 2 * (VISIBLE_LIST_HEADER + uint64_t(impl->gpuScene.objectCount)) * 4,
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                      VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                                  gpu::MemoryUse::DeviceLocal);
+  impl->pyramid.create(device);
+  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 16);
+  if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
+    std::vector<gpu::PointLightData> lights;
+    for (const PointLight& l : scene.pointLights) {
+      const glm::vec2 cone(spotAngleScaleOffset(l));
+      lights.push_back({glm::vec4(glm::vec3(l.position - scene.anchor), l.range), glm::vec4(l.color, l.intensity),
+                        glm::vec4(l.direction, 0.0f), cone.x, cone.y, uint32_t(l.type), 0u});
+    }
+    impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    impl->lightCull.create(device, impl->pipelineLayout, w);
+  }
+  impl->createTargets(config.width, config.height);
+  const bool gpuBounds = config.skinBounds == SkinBounds::Gpu;
+  auto animation = AnimationState::create(device, scene, impl->gpuScene, gpuBounds);
+  if (!animation) return animation.error();
+  impl->animation = std::move(animation.value());
+  if (impl->animation)
+    impl->skin.create(device,
+                      {vertexWindows(impl->gpuScene.vertices, impl->vertexShift), impl->gpuScene.meshes.handle(),
+                       impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
+                       impl->animation->instances().handle(), impl->gpuScene.vertexExtras.handle(),
+                       impl->animation->bounds().handle(),
+                       impl->gpuScene.morphDeltas ? impl->gpuScene.morphDeltas.handle() : impl->animation->joints().handle(),
+                       gpuBounds},
+                      impl->vertexShift);
+  return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+Status Renderer::resize(uint32_t width, uint32_t height) {
+  if (width == 0 || height == 0 || width > 16384 || height > 16384)
+    return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
+  impl_->createTargets(width, height);
+  impl_->pyramidSkipFrames = 0;  // a new size: probe the pyramid again
+  return {};  // the draw lists stay valid (they do not depend on the size): freezeCulling still works
+}
+
+}  // namespace visbuf
