@@ -138,6 +138,9 @@ void main() {
   uint id = gl_GlobalInvocationID.x;
   bool valid = id < (listed ? min(visibleList[listBase], frame.objectCount) : frame.objectCount);
   if (listed) id = valid ? visibleList[listBase + VISIBLE_LIST_HEADER + id] : 0u;
+  // Hidden objects and free slots are skipped in every phase (their history bit stays: a slot reused or shown
+  // again is drawn early if it was visible, which only costs time).
+  if (valid && (objectAt(id).flags & OBJECT_FLAG_HIDDEN) != 0u) valid = false;
   bool draw = false;
   uint lod = 0;
   uint meshIndex = 0;

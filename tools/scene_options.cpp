@@ -1,5 +1,6 @@
 #include "scene_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -18,7 +19,9 @@ namespace visbuf::tools {
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--scene", o.scene, "field | city | foliage | foliage-opaque | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
       ->capture_default_str();
-  app.add_option("--objects,--instances", o.objects, "number of objects (field: instances; city: approx. total)")
+  app.add_option("--objects,--instances", o.objects,
+                 "number of objects (field: instances; city: approx. total; a pack, or a glTF with skins, morph or "
+                 "node animation: copies of its scene on a grid, each at its own animation phase)")
       ->check(unsignedIn(1, UINT32_MAX));
   app.add_option("--seed", o.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
@@ -101,23 +104,30 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   }
   // A baked pack (told by its magic, or by the .vbp extension so that a damaged pack gets the pack reader's
   // message rather than the glTF parser's).
+  // --objects N > 1: N copies of the pack's scene on a grid, its animated objects each copy at its own phase.
   if (isPackFile(o.scene) || std::filesystem::path(o.scene).extension() == ".vbp") {
-    if (o.objects > 1)
-      return makeError(ErrorCode::InvalidArgument,
-                       "--objects applies to field, city and glTF scenes, not to packs");
-    return readPack(o.scene);
+    Result<Scene> pack = readPack(o.scene);
+    if (!pack || o.objects <= 1) return pack;
+    AnimatedFieldParams p;
+    p.instances = o.objects;
+    p.seed = o.seed;
+    return makeAnimatedField(*pack, p);
   }
-  // A glTF file with --objects N > 1: with skinned meshes, N animated copies (each at its own phase); else
-  // its default scene flattened into one mesh, instanced N times in the field layout.
+  // A glTF file with --objects N > 1: with skinned meshes, animated morph targets or rigid node animation, N
+  // animated copies of its scene (each at its own phase); else its default scene flattened into one mesh,
+  // instanced N times in the field layout.
   if (o.objects > 1) {
     GltfImportReport report;
     Result<ImportedScene> imported = importGltfScene(o.scene, importOptions(o), &report);
-    if (imported && imported->skins.size() > 0) {
+    const bool animated = imported && (!imported->skins.empty() ||
+                                       std::any_of(imported->instances.begin(), imported->instances.end(),
+                                                   [](const ImportedInstance& i) { return i.rigid; }));
+    if (animated) {
       for (const std::string& w : report.warnings)
         std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
       Result<Scene> asset = buildImportedScene(*imported);
       if (!asset) return asset.error();
-      if (!asset->skinnedObjects.empty()) {
+      if (!asset->skinnedObjects.empty() || !asset->rigidObjects.empty()) {
         AnimatedFieldParams p;
         p.instances = o.objects;
         p.seed = o.seed;

@@ -1,14 +1,23 @@
 // Internal to engine/asset: tinygltf configured once for the importer's translation units, the small
-// message/range helpers they share, and the container loader. Not installed as public API.
+// message/range helpers they share, the container loader, and the Importer class whose methods the gltf_*.cpp
+// files define. Not installed as public API.
 #pragma once
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <map>
+#include <optional>
+#include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include <glm/glm.hpp>
+
+#include "visbuf/asset/gltf_import.h"
 #include "visbuf/core/result.h"
 
 // tinygltf is compiled without image codecs (stb is not a dependency; texture_bake.cpp decodes images with
@@ -33,12 +42,6 @@
 #pragma GCC diagnostic ignored "-Wdeprecated-declarations"
 #include <tiny_gltf.h>
 #pragma GCC diagnostic pop
-
-namespace visbuf {
-struct Material;
-struct ImportedImage;
-struct GltfImportOptions;
-}  // namespace visbuf
 
 namespace visbuf::gltf_detail {
 
@@ -112,5 +115,186 @@ Status importMaterials(const tinygltf::Model& model, const std::string& path, co
 // URI) or the resolved path of an external file (`references.imagePaths`, from loadModel; not read here).
 Status collectImages(const tinygltf::Model& model, const std::string& path, const LoadedReferences& references,
                      std::vector<ImportedImage>* out);
+
+// ---------------------------------------------------------------------------------------------------------
+// The importer (gltf_import.cpp: pipeline, node graph and scene walk, entry points; gltf_accessors.cpp: buffer
+// views and accessors; gltf_primitives.cpp: primitive decoding and emission; gltf_scene_mesh.cpp: scene meshes
+// and instances; gltf_instancing.cpp: EXT_mesh_gpu_instancing; gltf_lights.cpp: KHR_lights_punctual).
+
+static_assert(std::endian::native == std::endian::little, "glTF data is little-endian; add byte swapping");
+
+inline constexpr const char* kQuantizationExt = "KHR_mesh_quantization";
+inline constexpr const char* kInstancingExt = "EXT_mesh_gpu_instancing";
+// EXT_mesh_gpu_instancing: instances per node. Each becomes an object (importGltfScene) or a copy of the mesh
+// (importGltfMesh), so the count is bounded like a viewless accessor's.
+inline constexpr uint64_t kMaxInstancesPerNode = uint64_t{1} << 24;
+
+// Accessors without a bufferView are all zeros (plus sparse substitutions). Nothing in the file bounds their
+// count, so cap it to keep a hostile file from requesting terabytes.
+inline constexpr uint64_t kMaxViewlessAccessorCount = uint64_t{1} << 24;
+// meshopt codecs compress at most ~64:1 (vertex codec, all-zero data); refuse claims far beyond that so a
+// 30-byte stream cannot make us allocate gigabytes.
+inline constexpr uint64_t kMaxMeshoptExpansion = 256;
+
+// "%.3g" of a coordinate, for messages.
+std::string fmtCoord(double v);
+// Overflow-safe arithmetic on values read from the file.
+inline bool checkedMul(uint64_t a, uint64_t b, uint64_t* out) { return !__builtin_mul_overflow(a, b, out); }
+inline bool checkedAdd(uint64_t a, uint64_t b, uint64_t* out) { return !__builtin_add_overflow(a, b, out); }
+bool isFinite(const glm::dmat4& m);
+// The rotation matrix of a unit quaternion (x, y, z, w), glTF's order.
+glm::dmat3 quaternionMatrix(double x, double y, double z, double w);
+// A tangent follows the surface like a position difference (the linear part, not the normal matrix). Under a
+// mirroring transform cross(normal', tangent') flips relative to the transformed bitangent, so w flips too.
+glm::vec4 transformTangent(const glm::dmat3& linear, double det, const glm::vec4& t);
+// Optional streams that some primitive had get their defaults for the vertices of the ones emitted after it.
+void padOptionalStreams(MeshSource* m);
+
+// What an attribute accessor may contain (glTF 2.0 core + KHR_mesh_quantization).
+enum class AttributeKind {
+  Position,
+  Normal,
+  TexCoord,
+  Color,
+  MorphDelta,
+  Tangent,
+  Joints,
+  Weights,
+  InstanceVec3,      // EXT_mesh_gpu_instancing TRANSLATION / SCALE
+  InstanceRotation,  // EXT_mesh_gpu_instancing ROTATION
+  Unchecked
+};
+
+struct Bytes {
+  const uint8_t* data = nullptr;
+  uint64_t size = 0;
+};
+
+// A fully validated accessor: every element read through it is in bounds.
+struct AccessorPlan {
+  int componentType = 0;
+  bool normalized = false;
+  int numComponents = 0;
+  uint64_t componentSize = 0;
+  uint64_t elementSize = 0;
+  uint64_t count = 0;
+  const uint8_t* dense = nullptr;  // first element; null: no bufferView, elements are zero
+  uint64_t stride = 0;
+  // Sparse substitution (sparseCount == 0: none). Index and value arrays are tightly packed.
+  uint64_t sparseCount = 0;
+  const uint8_t* sparseIndices = nullptr;
+  uint64_t sparseIndexSize = 0;
+  const uint8_t* sparseValues = nullptr;
+};
+
+// One primitive decoded into local space, before node transform and morph weights.
+struct DecodedPrimitive {
+  bool skipped = false;
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;  // empty: generate
+  std::vector<glm::vec2> uvs;      // empty: none
+  std::vector<uint32_t> colors;    // empty: none
+  std::vector<glm::vec2> uvs1;     // TEXCOORD_1; empty: none
+  std::vector<glm::vec4> tangents; // xyz unit, w = +-1; empty: none (or dropped as invalid)
+  std::vector<glm::u16vec4> joints;  // JOINTS_0 / WEIGHTS_0, empty: none (see convertSkinAttributes)
+  std::vector<glm::vec4> weights;
+  std::vector<glm::u16vec4> joints1;  // JOINTS_1 / WEIGHTS_1 (influences 5-8), empty: none
+  std::vector<glm::vec4> weights1;
+  // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
+  std::vector<std::vector<glm::vec3>> positionDeltas;
+  std::vector<std::vector<glm::vec3>> normalDeltas;
+  std::vector<std::vector<glm::vec3>> tangentDeltas;  // TANGENT (xyz): kept only for animated morph targets
+  std::vector<uint32_t> triangles;  // 3 local indices per triangle, counter-clockwise
+};
+
+class Importer {
+ public:
+  Importer(const std::string& path, const tinygltf::Model& model, const GltfImportOptions& options,
+           const LoadedReferences& references, MemoryBudget* budget, std::vector<std::string>* warnings)
+      : path_(path), model_(model), options_(options), references_(references), budget_(budget),
+        warnings_(warnings) {}
+
+  Result<MeshSource> run();
+  Result<ImportedScene> runScene();
+
+  uint32_t primitivesImported = 0;
+  uint32_t primitivesSkipped = 0;
+
+ private:
+  void warn(const std::string& message) {
+    if (warned_.insert(message).second) warnings_->push_back(message);
+  }
+
+  Status checkRequiredExtensions();
+  Status checkNodeGraph();
+  Status checkCoordinates(const glm::dvec3& lo, const glm::dvec3& hi, const std::string& where);
+  bool isMeshoptFallbackBuffer(int buffer) const;
+  Result<Bytes> viewBytes(int view, const std::string& where);
+  Result<Bytes> plainViewBytes(int view, const std::string& where);
+  Result<Bytes> meshoptViewBytes(int view, const std::string& where);
+
+  Result<AccessorPlan> planAccessor(int accessor, const std::string& where);
+  template <typename Fn>
+  Status forEachElement(const AccessorPlan& plan, const std::string& where, Fn&& fn);
+  Status readFloats(int accessor, AttributeKind kind, const std::string& where, std::vector<float>* out,
+                    int* numComponents);
+  Status readVec3(int accessor, AttributeKind kind, const std::string& where, bool requireFinite,
+                  std::vector<glm::vec3>* out);
+  Status readIndices(int accessor, const std::string& where, std::vector<uint32_t>* out);
+  Status readTexCoords(int accessor, const std::string& where, std::vector<glm::vec2>* out);
+  Status readTangents(int accessor, const std::string& where, std::vector<glm::vec4>* out);
+
+  Result<DecodedPrimitive> decodePrimitive(int mesh, int primitive);
+  Status decodeSkinAttributes(const tinygltf::Primitive& prim, const std::string& where, DecodedPrimitive* out);
+  Status checkSkinnedNode(int nodeIndex, const std::vector<DecodedPrimitive>& prims, const std::string& where);
+  Result<const std::vector<DecodedPrimitive>*> decodedMesh(int mesh);
+  // The mesh node `nodeIndex` instances, decoded, with its effective morph weights (the node's own, else
+  // the mesh's defaults). mesh == nullptr when the node has no mesh.
+  struct NodeMesh {
+    std::string where;  // "file: node N 'name'" for messages
+    const tinygltf::Mesh* mesh = nullptr;
+    const std::vector<DecodedPrimitive>* prims = nullptr;
+    const std::vector<double>* weights = nullptr;
+  };
+  Result<NodeMesh> nodeMesh(int nodeIndex);
+
+  Result<glm::dmat4> localMatrix(int node);
+  Status emitNode(int node, const glm::dmat4& world, MeshSource* out);
+  Status emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& world,
+                       const std::vector<double>& weights, const std::string& where, MeshSource* out);
+  template <typename Visit>
+  Status walkScene(Visit&& visit, std::string* sceneLabel);
+  Status emitSceneNode(int node, const glm::dmat4& world, ImportedScene* scene);
+  Status emitSceneMesh(int node, const glm::dmat4& world, ImportedScene* scene);
+  // EXT_mesh_gpu_instancing: the world transforms of the node's mesh instances, world x T_i x R_i x S_i, or
+  // just {world} when the node does not use the extension (or uses it where it cannot apply: see the .cpp).
+  Result<std::vector<glm::dmat4>> meshInstances(int node, const glm::dmat4& world, bool sceneImport);
+  Status emitNodeLight(int node, const glm::dmat4& world, ImportedScene* scene);
+
+  // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights, morphed,
+  // one-joint). `morphed` marks a mesh that keeps its morph targets (its node's weights are animated);
+  // `one-joint` a mesh whose every vertex follows joint 0 (an unskinned node whose morph weights are animated).
+  using SceneMeshKey = std::tuple<int, int, bool, std::vector<double>, bool, bool>;
+  std::set<int> morphAnimatedNodes_;        // nodes targeted by a weights channel of any clip
+  std::set<int> movingNodes_;               // nodes whose global transform a clip animates (a TRS channel
+                                            // targets them or an ancestor)
+  std::map<int, int32_t> nodeSkins_;        // unskinned animated node -> its one-joint skin
+  std::map<SceneMeshKey, uint32_t> sceneMeshes_;  // -> ImportedScene::meshes index, UINT32_MAX: no triangles
+  std::optional<uint32_t> defaultMaterial_;
+  std::vector<std::optional<std::pair<glm::dvec3, glm::dvec3>>> meshBoxes_;  // object-space box per scene mesh
+
+  const std::string& path_;
+  const tinygltf::Model& model_;
+  const GltfImportOptions& options_;
+  const LoadedReferences& references_;
+  MemoryBudget* budget_;
+  std::vector<std::string>* warnings_;
+  std::set<std::string> warned_;  // de-duplicates warnings of instanced meshes
+  bool meshoptRequired_ = false;
+  bool instancingRequired_ = false;
+  std::map<int, std::vector<uint8_t>> decodedViews_;  // meshopt scratch, by bufferView index
+  std::vector<std::optional<std::vector<DecodedPrimitive>>> meshCache_;
+  bool warnedZeroNormals_ = false;
+};
 
 }  // namespace visbuf::gltf_detail

@@ -194,9 +194,11 @@ Result<MeshSource> importGltfMesh(const std::string& path, const GltfImportOptio
 //     keys x (3 for CUBICSPLINE, else 1) [x morph target count for weights]. Channels without a target node,
 //     with an unknown path, or animating the weights of a node without morph targets are ignored (warning).
 //   - Rigid node animation: an instance of an unskinned node that a translation / rotation / scale channel
-//     moves (the channel targets the node or one of its ancestors, e.g. CesiumMilkTruck's wheels) gets a
-//     one-joint skin whose joint is the node itself (identity inverse bind), as a morph-only mesh does: every
-//     vertex has joint 0 with weight 1, so skinning by global(node) plays the clip exactly.
+//     moves (the channel targets the node or one of its ancestors, e.g. CesiumMilkTruck's wheels) and whose
+//     morph weights no clip animates is a plain instance with ImportedInstance::rigid set: buildImportedScene()
+//     makes it a RigidObject (scene.h) placed by the node's animated global matrix. An unskinned node whose
+//     weights a clip animates gets a one-joint skin whose joint is the node itself (identity inverse bind):
+//     every vertex has joint 0 with weight 1, so skinning by global(node) also plays its TRS channels exactly.
 // Errors: as importGltfMesh(), plus MalformedInput for a primitive's material index that does not exist, for
 // non-finite material factors or texture transforms, for texture / sampler indices that do not exist, for
 // an image bufferView that does not exist or runs past its buffer, and for skin / animation data that cannot
@@ -221,6 +223,7 @@ struct ImportedInstance {
   int32_t skin = -1;          // into ImportedScene::skins when the node is skinned (then `transform` is not
                               // applied to the skinned vertices), -1 otherwise
   bool morphed = false;       // the mesh keeps its morph targets, driven by `node`'s animated weights
+  bool rigid = false;         // unskinned, not morphed, and a TRS channel moves `node` or an ancestor of it
 };
 
 // A glTF image as found in the file, not decoded.

@@ -495,7 +495,8 @@ uint32_t animationSectionElementSize(const std::string& name) {
       {kAnimSamplersSection, sizeof(AnimSamplerRecord)},
       {kAnimChannelsSection, sizeof(AnimChannelRecord)},
       {kAnimTimesSection, sizeof(float)},
-      {kAnimValuesSection, sizeof(float)}};
+      {kAnimValuesSection, sizeof(float)},
+      {kRigidObjectsSection, sizeof(RigidObjectRecord)}};
   for (const auto& [section, size] : kSizes)
     if (name == section) return size;
   return 0;
@@ -508,6 +509,7 @@ Result<std::vector<SectionData>> serializeAnimationSections(const Scene& scene, 
   writeSkinnedMeshes(scene, w);
   writeMorphTargets(scene, w);
   if (Status s = writeAnimations(scene, w); !s) return s.error();
+  serializeRigidObjects(scene, &w.sections);
   return std::move(w.sections);
 }
 
@@ -519,7 +521,8 @@ Status readAnimationSections(const FindSection& find, const ReadString& readStri
   if (Status s = r.readSkinnedMeshes(); !s) return s;
   if (Status s = r.readSkinnedObjects(); !s) return s;
   if (Status s = r.readMorphTargets(); !s) return s;
-  return r.readAnimations();
+  if (Status s = r.readAnimations(); !s) return s;
+  return readRigidObjects(find, label, scene);
 }
 
 }  // namespace visbuf::pack

@@ -42,4 +42,10 @@ using ReadString = std::function<Result<std::string>(StringRef ref, const std::s
 Status readAnimationSections(const FindSection& find, const ReadString& readString, const std::string& label,
                              Scene* scene);
 
+// Section "rigidObjects" (pack_rigid.cpp), called by serializeAnimationSections / readAnimationSections: the
+// section of scene.rigidObjects (none when empty), and the reader, after nodes, clips and skinned objects are
+// read, checking every record's object, node and clip index, time offset and placement.
+void serializeRigidObjects(const Scene& scene, std::vector<SectionData>* out);
+Status readRigidObjects(const FindSection& find, const std::string& label, Scene* scene);
+
 }  // namespace visbuf::pack

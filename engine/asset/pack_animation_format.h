@@ -1,6 +1,6 @@
 // Optional pack sections for skeletal animation (docs/pack-format.md, "Animation sections"): the node
 // hierarchy, skins, per-vertex skin data of skinned meshes, which objects are skinned, animated morph targets,
-// and animation clips.
+// animation clips, and which objects node animation moves rigidly.
 // Same rules as pack_format.h (plain little-endian records copied with memcpy, sizes pinned below). A
 // section that is absent means "none"; a static scene has none of them, and a reader that does not know
 // them skips them (it then draws the rest pose). All "first*" ranges of one kind are disjoint and, summed
@@ -131,6 +131,19 @@ static_assert(sizeof(AnimChannelRecord) == 16);
 // Sections "animTimes" and "animValues": f32 (times in seconds, strictly increasing per sampler; values
 // finite).
 
+// Section "rigidObjects" (version 6): Scene::rigidObjects, objects placed by an animated node's global matrix,
+// at most one record per object, none for a skinned object.
+struct RigidObjectRecord {
+  uint32_t object;       // < object count
+  int32_t node;          // 0 <= node < node count
+  int32_t clip;          // -1 (rest pose) or < animation count
+  uint32_t reserved;     // 0
+  double timeOffset;     // seconds, finite
+  double placement[16];  // column-major, finite, affine (last row 0 0 0 1)
+};
+static_assert(sizeof(RigidObjectRecord) == 152 && offsetof(RigidObjectRecord, timeOffset) == 16 &&
+              offsetof(RigidObjectRecord, placement) == 24);
+
 inline constexpr const char* kNodesSection = "nodes";
 inline constexpr const char* kSkinsSection = "skins";
 inline constexpr const char* kSkinJointsSection = "skinJoints";
@@ -146,5 +159,6 @@ inline constexpr const char* kAnimSamplersSection = "animSamplers";
 inline constexpr const char* kAnimChannelsSection = "animChannels";
 inline constexpr const char* kAnimTimesSection = "animTimes";
 inline constexpr const char* kAnimValuesSection = "animValues";
+inline constexpr const char* kRigidObjectsSection = "rigidObjects";
 
 }  // namespace visbuf::pack

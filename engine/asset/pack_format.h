@@ -35,8 +35,10 @@ inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
 // of "vertices"; exactly one of the two vertex sections is present). 4: animated morph targets (the "morph*"
 // sections of pack_animation_format.h): a mesh with targets stores its base shape, which a version-3 reader
 // would draw without the node's default weights. 5: block-compressed texture classes (TextureClassRecord::format)
-// and meshoptimizer-encoded geometry sections; the file is read in place from a memory mapping.
-inline constexpr uint32_t kVersion = 5;
+// and meshoptimizer-encoded geometry sections; the file is read in place from a memory mapping. 6: rigid node
+// animation ("rigidObjects", pack_animation_format.h): an unskinned object that node animation moves is a plain
+// object listed there (no longer a one-joint skin), which a version-5 reader would draw without its motion.
+inline constexpr uint32_t kVersion = 6;
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
 inline constexpr size_t kSectionNameSize = 16;

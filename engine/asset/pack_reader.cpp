@@ -9,6 +9,7 @@
 //      byte ranges, the codec's largest expansion before allocating, then the decode itself), index values,
 //      finite values, object references, then the optional animation sections (pack_animation.cpp);
 //   6. validateScene() on the result.
+// The Parser (pack_parser.h) reads meshes and their geometry streams in pack_geometry.cpp, the rest here.
 #include "visbuf/asset/pack_reader.h"
 
 #include <fmt/format.h>
@@ -28,22 +29,13 @@
 #include "visbuf/asset/pack_animation.h"
 #include "visbuf/asset/pack_format.h"
 #include "visbuf/asset/pack_geometry.h"
+#include "visbuf/asset/pack_parser.h"
 #include "visbuf/core/file_read.h"
 #include "visbuf/core/mapped_file.h"
 
 namespace visbuf {
 
 namespace {
-
-bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
-  return offset <= limit && size <= limit - offset;
-}
-
-struct SectionView {
-  pack::SectionEntry entry;
-  std::string name;
-  const uint8_t* data = nullptr;
-};
 
 // Expected record size of the sections this reader knows.
 uint32_t expectedElementSize(std::string_view name) {
@@ -72,87 +64,9 @@ constexpr const char* kRequiredSections[] = {pack::kSceneSection,   pack::kStrin
                                              pack::kLodsSection,    pack::kIndicesSection,   pack::kMaterialsSection,
                                              pack::kObjectsSection, pack::kMeshEncodingSection};
 
-// The most a codec can expand its input: the vertex codec spends at least 2 bits per 16 decoded bytes (64x), the
-// triangle codec one byte per triangle (12 decoded bytes), the sequence codec one byte per index (4). Checking a
-// stream's declared decoded size against these before allocating keeps a hostile pack from making the reader
-// allocate more than 64 times the file's size.
-constexpr uint64_t kVertexCodecMaxExpansion = 64;
-constexpr uint64_t kTriangleCodecMaxExpansion = 12;
-constexpr uint64_t kSequenceCodecMaxExpansion = 4;
+}  // namespace
 
-bool expansionFits(uint64_t decodedBytes, uint64_t encodedBytes, uint64_t factor) {
-  return encodedBytes <= std::numeric_limits<uint64_t>::max() / factor && decodedBytes <= encodedBytes * factor;
-}
-
-class Parser {
- public:
-  Parser(const uint8_t* data, size_t size, const std::string& label)
-      : data_(data), size_(size), label_(label) {}
-
-  Result<Scene> run();
-  uint64_t peakScratchBytes() const { return peakScratch_; }
-  uint64_t largestSection() const {
-    uint64_t largest = 0;
-    for (const auto& [name, v] : sections_) largest = std::max(largest, v.entry.size);
-    return largest;
-  }
-
- private:
-  Error fail(std::string message, ErrorCode code = ErrorCode::MalformedInput) const {
-    return makeError(code, label_ + ": " + message);
-  }
-  Status parseTable();
-  template <typename T>
-  T record(const SectionView& s,
-           uint64_t i) const {  // caller guarantees i < count and size == count*sizeof(T)
-    T r;
-    std::memcpy(&r, s.data + i * sizeof(T), sizeof(T));
-    return r;
-  }
-  Result<std::string> string(pack::StringRef ref, const std::string& where) const;
-  Status readScene(Scene* scene);
-  Status readMeshes(Scene* scene);
-  Status readMaterials(Scene* scene);
-  Status readObjects(Scene* scene);
-  Status readMeshStreams(Scene* scene);
-  Status readTextures(Scene* scene);
-  Result<TextureRef> readTextureSlot(const pack::TextureSlotRecord& r, size_t slot, const Scene& scene,
-                                     const std::string& where) const;
-  // An optional section, or an empty view named `name` when the pack has none.
-  SectionView optional(const char* name) const {
-    auto it = sections_.find(name);
-    if (it != sections_.end()) return it->second;
-    SectionView empty{};
-    empty.name = name;
-    return empty;
-  }
-
-  // Decodes one mesh's stream of `section` (bytes [byte, byte + bytes)) into `count` records of `stride` at `out`.
-  Status decodeVertices(void* out, uint64_t count, size_t stride, const SectionView& section, uint64_t byte,
-                        uint64_t bytes, const std::string& where) const;
-  void noteScratch(uint64_t bytes) { peakScratch_ = std::max(peakScratch_, bytes); }
-
-  const uint8_t* data_;
-  size_t size_;
-  const std::string& label_;
-  std::map<std::string, SectionView, std::less<>> sections_;
-  uint64_t peakScratch_ = 0;  // largest decode buffer besides the Scene's own storage
-};
-
-Status Parser::decodeVertices(void* out, uint64_t count, size_t stride, const SectionView& section, uint64_t byte,
-                              uint64_t bytes, const std::string& where) const {
-  if (!rangeFits(byte, bytes, section.entry.size))
-    return fail(fmt::format("{}: encoded bytes [{}, {} + {}) lie outside section '{}' ({} bytes)", where, byte, byte,
-                            bytes, section.name, section.entry.size));
-  if (!expansionFits(count * stride, bytes, kVertexCodecMaxExpansion))
-    return fail(fmt::format("{}: {} bytes cannot encode {} records of {} bytes (the codec expands at most {}x)",
-                            where, bytes, count, stride, kVertexCodecMaxExpansion));
-  const std::string why = pack::decodeVertexStream(out, count, stride, section.data + byte, bytes);
-  if (!why.empty())
-    return fail(fmt::format("{}: the encoded stream in section '{}' (bytes [{}, {} + {})) does not decode to {} "
-                            "records: {}", where, section.name, byte, byte, bytes, count, why));
-  return {};
-}
+namespace pack_detail {
 
 Result<std::string> Parser::string(pack::StringRef ref, const std::string& where) const {
   const SectionView& s = sections_.at(pack::kStringsSection);
@@ -293,13 +207,6 @@ Status Parser::parseTable() {
   return {};
 }
 
-bool allFinite(const double* v, int n) {
-  return std::all_of(v, v + n, [](double x) { return std::isfinite(x); });
-}
-bool allFinite(const float* v, int n) {
-  return std::all_of(v, v + n, [](float x) { return std::isfinite(x); });
-}
-
 Status Parser::readScene(Scene* scene) {
   const SectionView& s = sections_.at(pack::kSceneSection);
   if (s.entry.count != 1) return fail(fmt::format("section 'scene': {} records, expected 1", s.entry.count));
@@ -327,155 +234,6 @@ Status Parser::readScene(Scene* scene) {
   scene->defaultCamera.fovY = r.cameraFovY;
   scene->defaultCamera.nearPlane = r.cameraNear;
   scene->lightDirection = light;
-  return {};
-}
-
-Status Parser::readMeshes(Scene* scene) {
-  const SectionView& meshes = sections_.at(pack::kMeshesSection);
-  const SectionView& lods = sections_.at(pack::kLodsSection);
-  const bool quantized = sections_.count(pack::kQVerticesSection) != 0;
-  const SectionView& vertices = sections_.at(quantized ? pack::kQVerticesSection : pack::kVerticesSection);
-  const SectionView quantization = optional(pack::kQuantizationSection);
-  const SectionView& indices = sections_.at(pack::kIndicesSection);
-  const SectionView& encoding = sections_.at(pack::kMeshEncodingSection);
-  if (meshes.entry.count == 0) return fail("section 'meshes' is empty: a pack needs at least one mesh");
-  if (quantized && quantization.entry.count != meshes.entry.count) {
-    return fail(fmt::format("section 'quantization' has {} records for {} meshes", quantization.entry.count,
-                            meshes.entry.count));
-  }
-  if (encoding.entry.count != meshes.entry.count)
-    return fail(fmt::format("section 'meshEncoding' has {} records for {} meshes", encoding.entry.count,
-                            meshes.entry.count));
-  scene->meshes.reserve(meshes.entry.count);
-  uint64_t vertexTotal = 0, indexTotal = 0;  // the decoded streams so far
-  for (uint64_t i = 0; i < meshes.entry.count; ++i) {
-    const auto r = record<pack::MeshRecord>(meshes, i);
-    std::string where = fmt::format("section 'meshes' record {}", i);
-    auto name = string(r.name, where + " field 'name'");
-    if (!name) return name.error();
-    where += " ('" + *name + "')";
-    auto outside = [&](const char* first, uint64_t firstValue, const char* count, uint64_t countValue,
-                       const SectionView& target) {
-      return fail(fmt::format("{}: fields '{}' {} + '{}' {} run past the {} records of section '{}'", where,
-                              first, firstValue, count, countValue, target.entry.count, target.name));
-    };
-    if (r.vertexCount == 0 || r.indexCount < 3) {
-      return fail(fmt::format("{}: 'vertexCount' {} / 'indexCount' {} (need >= 1 / >= 3)", where,
-                              r.vertexCount, r.indexCount));
-    }
-    if (r.firstVertex != vertexTotal || r.firstIndex != indexTotal)
-      return fail(fmt::format("{}: fields 'firstVertex' {} / 'firstIndex' {} must be {} / {}, the counts of the "
-                              "meshes before it", where, r.firstVertex, r.firstIndex, vertexTotal, indexTotal));
-    vertexTotal += r.vertexCount;
-    indexTotal += r.indexCount;
-    if (r.lodCount == 0 || r.lodCount > MAX_LODS)
-      return fail(fmt::format("{}: field 'lodCount' is {} (1..{})", where, r.lodCount, MAX_LODS));
-    if (!rangeFits(r.firstLod, r.lodCount, lods.entry.count))
-      return outside("firstLod", r.firstLod, "lodCount", r.lodCount, lods);
-    if (!allFinite(r.boundsSphere, 4) || r.boundsSphere[3] < 0.0f)
-      return fail(fmt::format("{}: field 'boundsSphere' is not finite with a radius >= 0", where));
-
-    const auto e = record<pack::MeshEncodingRecord>(encoding, i);
-    const std::string ew = fmt::format("section 'meshEncoding' record {} (mesh '{}')", i, *name);
-    if (e.vertexCount != r.vertexCount || e.indexCount != r.indexCount)
-      return fail(fmt::format("{}: its streams decode to {} vertices / {} indices, but the mesh record has {} / {}",
-                              ew, e.vertexCount, e.indexCount, r.vertexCount, r.indexCount));
-    if (e.reserved != 0) return fail(fmt::format("{}: field 'reserved' is {}, expected 0", ew, e.reserved));
-    if (e.indexCodec != pack::kIndexCodecTriangles && e.indexCodec != pack::kIndexCodecSequence &&
-        e.indexCodec != pack::kIndexCodecRaw)
-      return fail(fmt::format("{}: field 'indexCodec' is {} (0 triangles, 1 sequence, 2 raw)", ew, e.indexCodec));
-    if (!rangeFits(e.indexByte, e.indexBytes, indices.entry.size))
-      return fail(fmt::format("{}: encoded index bytes [{}, {} + {}) lie outside section 'indices' ({} bytes)", ew,
-                              e.indexByte, e.indexByte, e.indexBytes, indices.entry.size));
-    const uint64_t indexExpansion = e.indexCodec == pack::kIndexCodecTriangles ? kTriangleCodecMaxExpansion
-                                    : e.indexCodec == pack::kIndexCodecSequence ? kSequenceCodecMaxExpansion
-                                                                                : 1;
-    if (!expansionFits(uint64_t{r.indexCount} * sizeof(uint32_t), e.indexBytes, indexExpansion))
-      return fail(fmt::format("{}: {} bytes cannot encode {} indices (the codec expands at most {}x)", ew,
-                              e.indexBytes, r.indexCount, indexExpansion));
-
-    Mesh mesh;
-    mesh.name = *name;
-    mesh.boundsSphere = glm::vec4(r.boundsSphere[0], r.boundsSphere[1], r.boundsSphere[2], r.boundsSphere[3]);
-    const size_t vertexStride = quantized ? sizeof(pack::QVertexRecord) : sizeof(gpu::Vertex);
-    // Both checked before any allocation: the range inside the section and the codec's largest expansion.
-    if (!rangeFits(e.vertexByte, e.vertexBytes, vertices.entry.size) ||
-        !expansionFits(uint64_t{r.vertexCount} * vertexStride, e.vertexBytes, kVertexCodecMaxExpansion))
-      return decodeVertices(nullptr, r.vertexCount, vertexStride, vertices, e.vertexByte, e.vertexBytes,
-                            ew + " vertices");
-    mesh.vertices.resize(r.vertexCount);
-    if (quantized) {
-      std::vector<pack::QVertexRecord> decoded(r.vertexCount);
-      noteScratch(decoded.size() * sizeof(pack::QVertexRecord));
-      if (Status st = decodeVertices(decoded.data(), r.vertexCount, vertexStride, vertices, e.vertexByte,
-                                     e.vertexBytes, ew + " vertices");
-          !st)
-        return st;
-      const auto q = record<pack::QuantizationRecord>(quantization, i);
-      const std::string qw = fmt::format("section 'quantization' record {}", i);
-      if (!allFinite(q.positionOffset, 3) || !allFinite(q.uvOffset, 2))
-        return fail(qw + ": field 'positionOffset' or 'uvOffset' is not finite");
-      auto scaleOk = [](const float* scale, int n) {
-        return allFinite(scale, n) && std::all_of(scale, scale + n, [](float x) { return x >= 0.0f; });
-      };
-      if (!scaleOk(q.positionScale, 3) || !scaleOk(q.uvScale, 2))
-        return fail(qw + ": field 'positionScale' or 'uvScale' is not a finite value >= 0");
-      for (uint32_t v = 0; v < r.vertexCount; ++v) {
-        const pack::QVertexRecord& qv = decoded[v];
-        if (qv.reserved != 0) {
-          return fail(fmt::format("section 'qvertices' (mesh {} vertex {}): field 'reserved' is {}, expected 0", i,
-                                  v, qv.reserved));
-        }
-        mesh.vertices[v] = pack::dequantizeVertex(q, qv);
-      }
-    } else if (Status st = decodeVertices(mesh.vertices.data(), r.vertexCount, vertexStride, vertices, e.vertexByte,
-                                          e.vertexBytes, ew + " vertices");
-               !st) {
-      return st;
-    }
-    mesh.indices.resize(r.indexCount);
-    if (const std::string why = pack::decodeIndexStream(mesh.indices.data(), r.indexCount, e.indexCodec,
-                                                        indices.data + e.indexByte, e.indexBytes);
-        !why.empty())
-      return fail(fmt::format("{} indices: the encoded stream in section 'indices' (bytes [{}, {} + {})) does not "
-                              "decode to {} indices: {}", ew, e.indexByte, e.indexByte, e.indexBytes, r.indexCount,
-                              why));
-    // Culling is only conservative if the sphere really contains the mesh: check it (relative slack as in
-    // buildMesh's padding, plus float rounding of the distance).
-    const glm::dvec3 centre(mesh.boundsSphere);
-    const double radius = double(mesh.boundsSphere.w) * (1.0 + 1e-4) + 1e-5;
-    for (uint32_t v = 0; v < r.vertexCount; ++v) {
-      const gpu::Vertex& vx = mesh.vertices[v];
-      if (!std::isfinite(vx.px) || !std::isfinite(vx.py) || !std::isfinite(vx.pz) || !std::isfinite(vx.u) ||
-          !std::isfinite(vx.v)) {
-        return fail(fmt::format("{}: vertex {} has a non-finite position or texture coordinate", where, v));
-      }
-      if (glm::length(glm::dvec3(vx.px, vx.py, vx.pz) - centre) > radius)
-        return fail(fmt::format("{}: vertex {} lies outside field 'boundsSphere'", where, v));
-    }
-    for (uint32_t k = 0; k < r.indexCount; ++k) {
-      if (mesh.indices[k] >= r.vertexCount) {
-        return fail(fmt::format("{}: index {} has value {}, not below 'vertexCount' {}", where, k,
-                                mesh.indices[k], r.vertexCount));
-      }
-    }
-    for (uint32_t l = 0; l < r.lodCount; ++l) {
-      const auto lr = record<pack::LodRecord>(lods, uint64_t{r.firstLod} + l);
-      const std::string lw =
-          fmt::format("{} LOD {} (section 'lods' record {})", where, l, uint64_t{r.firstLod} + l);
-      if (lr.indexCount == 0 || lr.indexCount % 3 != 0)
-        return fail(
-            fmt::format("{}: field 'indexCount' {} is not a positive multiple of 3", lw, lr.indexCount));
-      if (!rangeFits(lr.firstIndex, lr.indexCount, r.indexCount)) {
-        return fail(fmt::format("{}: fields 'firstIndex' {} + 'indexCount' {} run past the mesh's {} indices",
-                                lw, lr.firstIndex, lr.indexCount, r.indexCount));
-      }
-      if (!std::isfinite(lr.error) || lr.error < 0.0f)
-        return fail(fmt::format("{}: field 'error' {} is not a finite value >= 0", lw, lr.error));
-      mesh.lods.push_back({lr.firstIndex, lr.indexCount, lr.error});
-    }
-    scene->meshes.push_back(std::move(mesh));
-  }
   return {};
 }
 
@@ -542,59 +300,6 @@ Status Parser::readMaterials(Scene* scene) {
       *slots[t] = std::move(ref.value());
     }
     scene->materials.push_back(std::move(m));
-  }
-  return {};
-}
-
-Status Parser::readMeshStreams(Scene* scene) {
-  const SectionView s = optional(pack::kMeshStreamsSection);
-  const SectionView tangents = optional(pack::kTangentsSection);
-  const SectionView uvs1 = optional(pack::kUvs1Section);
-  if (s.data == nullptr && (tangents.data != nullptr || uvs1.data != nullptr))
-    return fail("sections 'tangents' / 'uvs1' need section 'meshStreams'");
-  if (s.data == nullptr) return {};
-  if (s.entry.count != scene->meshes.size())
-    return fail(fmt::format("section 'meshStreams' has {} records for {} meshes", s.entry.count, scene->meshes.size()));
-  for (uint64_t i = 0; i < s.entry.count; ++i) {
-    const auto r = record<pack::MeshStreamsRecord>(s, i);
-    Mesh& mesh = scene->meshes[i];
-    const uint64_t n = mesh.vertices.size();
-    const std::string where = fmt::format("section 'meshStreams' record {}", i);
-    if ((r.tangentByte == pack::kNoStream && r.tangentBytes != 0) || (r.uv1Byte == pack::kNoStream && r.uv1Bytes != 0))
-      return fail(where + ": a stream marked absent (kNoStream) has a non-zero byte count");
-    // Range and expansion checked by decodeVertices() before the allocation: a failed check leaves nothing.
-    auto fits = [&](uint64_t byte, uint64_t bytes, const SectionView& section, size_t stride) {
-      return rangeFits(byte, bytes, section.entry.size) &&
-             expansionFits(n * stride, bytes, kVertexCodecMaxExpansion);
-    };
-    if (r.tangentByte != pack::kNoStream) {
-      const std::string tw = where + " ('" + mesh.name + "') tangents";
-      if (!fits(r.tangentByte, r.tangentBytes, tangents, sizeof(glm::vec4)))
-        return decodeVertices(nullptr, n, sizeof(glm::vec4), tangents, r.tangentByte, r.tangentBytes, tw);
-      mesh.tangents.resize(n);
-      if (Status st = decodeVertices(mesh.tangents.data(), n, sizeof(glm::vec4), tangents, r.tangentByte,
-                                     r.tangentBytes, tw);
-          !st)
-        return st;
-      for (uint64_t v = 0; v < n; ++v) {
-        const glm::vec4 t = mesh.tangents[v];
-        const float len = glm::length(glm::vec3(t));
-        const bool none = t == glm::vec4(0.0f);
-        if (!none && !(std::abs(len - 1.0f) < 1e-2f && (t.w == 1.0f || t.w == -1.0f)))
-          return fail(
-              fmt::format("{}: tangent of vertex {} is not a unit vector with w = +-1 (or all zero)", where, v));
-      }
-    }
-    if (r.uv1Byte != pack::kNoStream) {
-      const std::string uw = where + " ('" + mesh.name + "') uvs1";
-      if (!fits(r.uv1Byte, r.uv1Bytes, uvs1, sizeof(glm::vec2)))
-        return decodeVertices(nullptr, n, sizeof(glm::vec2), uvs1, r.uv1Byte, r.uv1Bytes, uw);
-      mesh.uvs1.resize(n);
-      if (Status st = decodeVertices(mesh.uvs1.data(), n, sizeof(glm::vec2), uvs1, r.uv1Byte, r.uv1Bytes, uw); !st)
-        return st;
-      for (const glm::vec2& uv : mesh.uvs1)
-        if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return fail(where + ": non-finite uv1");
-    }
   }
   return {};
 }
@@ -702,7 +407,9 @@ Result<Scene> Parser::run() {
   return scene;
 }
 
-}  // namespace
+}  // namespace pack_detail
+
+using pack_detail::Parser;
 
 Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label, PackReadStats* stats) {
   try {

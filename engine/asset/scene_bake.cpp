@@ -12,6 +12,16 @@
 
 namespace visbuf {
 
+int32_t firstClipMoving(const Scene& scene, int32_t node) {
+  for (size_t c = 0; c < scene.animations.size(); ++c)
+    for (const AnimationChannel& ch : scene.animations[c].channels) {
+      if (ch.path == AnimationPath::Weights) continue;
+      for (int32_t n = node; n >= 0 && size_t(n) < scene.nodes.size(); n = scene.nodes[size_t(n)].parent)
+        if (uint32_t(n) == ch.node) return int32_t(c);
+    }
+  return -1;
+}
+
 Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildOptions& options,
                                  const BakeProgress& progress) {
   Scene scene;
@@ -50,18 +60,25 @@ Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildO
     m.name = "default";
     scene.materials.push_back(m);
   }
-  scene.objects.reserve(imported.instances.size());
-  for (const ImportedInstance& inst : imported.instances) {
-    if (inst.skin >= 0) {
-      SkinnedObject so{uint32_t(scene.objects.size()), uint32_t(inst.skin)};
-      if (inst.morphed) so.morphNode = inst.node;
-      scene.skinnedObjects.push_back(so);
-    }
-    scene.objects.push_back({inst.transform, inst.mesh, inst.material});
-  }
   scene.nodes = imported.nodes;
   scene.skins = imported.skins;
   scene.animations = imported.animations;
+  scene.objects.reserve(imported.instances.size());
+  for (const ImportedInstance& inst : imported.instances) {
+    const uint32_t object = uint32_t(scene.objects.size());
+    scene.objects.push_back({inst.transform, inst.mesh, inst.material});
+    if (inst.skin >= 0) {
+      SkinnedObject so{object, uint32_t(inst.skin)};
+      if (inst.morphed) so.morphNode = inst.node;
+      scene.skinnedObjects.push_back(so);
+    } else if (inst.rigid && inst.node >= 0 && size_t(inst.node) < scene.nodes.size()) {
+      const int32_t clip = firstClipMoving(scene, inst.node);
+      if (clip < 0) continue;
+      RigidObject ro{object, inst.node, clip};
+      scene.objects.back().transform = rigidObjectStartTransform(scene, ro, inst.transform);
+      scene.rigidObjects.push_back(ro);
+    }
+  }
   frameScene(scene);
   return scene;
 }

@@ -31,6 +31,7 @@ class TransparentPass {
   // written. draws: drawn in the given order (sortBackToFront).
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
               const gpu::Image& depth, VkBuffer indexBuffer, const std::vector<TransparentDraw>& draws) const;
+  bool created() const { return pipelines_[0].handle() != VK_NULL_HANDLE; }
 
  private:
   std::array<gpu::Pipeline, 3> pipelines_;  // per face-culling state: DRAW_LIST_OPAQUE, _FLIPPED, _DOUBLE_SIDED

@@ -32,6 +32,8 @@ class AnimationState {
   // Evaluates every instance at `time` seconds and writes the buffers. Returns false, doing nothing, when
   // the poses are already those of `time`.
   bool update(double time);
+  // update(time) would evaluate and rewrite the buffers.
+  bool wouldUpdate(double time) const { return !evaluated_ || time != lastTime_; }
 
   uint32_t instanceCount() const { return uint32_t(regions_.size()); }
   uint32_t maxVertices() const { return maxVertices_; }

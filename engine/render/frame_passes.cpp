@@ -6,18 +6,19 @@
 
 namespace visbuf {
 
-gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options) const {
+gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options,
+                                         const FramePlan& plan) const {
   gpu::FrameData f{};
   f.viewProj = glm::mat4(math.viewProj);
   f.view = glm::mat4(math.view);
   f.projX = float(math.proj[0][0]);
   f.projY = float(math.proj[1][1]);
-  f.pyramidLevels = usePyramid ? pyramid.levels() : 0;
+  f.pyramidLevels = plan.usePyramid ? pyramid.levels() : 0;
   f.cameraOffset = glm::vec4(glm::vec3(scene.anchor - camera.position), 0.0f);
   for (int i = 0; i < 5; ++i) f.frustum[i] = glm::vec4(math.planes[size_t(i)]);
   f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), scene.lightIntensity);
   f.pointLightCount = uint32_t(scene.pointLights.size());
-  f.lightTilesX = cullLights(options) ? lightCull.tilesX() : 0u;
+  f.lightTilesX = plan.lightsCulled ? lightCull.tilesX() : 0u;
   f.viewport = glm::vec4(float(config.width), float(config.height), 1.0f / config.width, 1.0f / config.height);
   f.lodScale = float(math.lodScale);
   f.lodErrorPixels = options.lodErrorPixels;
@@ -32,7 +33,7 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.objectSplit = objectSplit;
   f.vertexWindowShift = vertexShift;
   f.msaaSamples = options.msaa;
-  f.swRaster = swOn ? 1u : 0u;
+  f.swRaster = plan.swOn ? 1u : 0u;
   f.swMaxPixels = options.swRasterPixels;
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
@@ -43,7 +44,7 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
 // same LOD rule. False: culled. centre: the world bounds centre (transparency sorts by it).
 bool Renderer::Impl::cullObject(uint32_t i, const Camera& camera, const FrameMath& math, const FrameOptions& options,
                                 FrameStats& st, passes::ForwardDraw& draw, glm::dvec3& centre) const {
-  const Object& o = scene.objects[i];
+  const Object& o = objects[i];
   const Mesh& mesh = scene.meshes[o.mesh];
   double scale = 0.0;
   glm::dvec4 s;
@@ -71,8 +72,8 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
   // are the transparency pass's.
   std::vector<passes::ForwardDraw> out;
   st.lodHistogram.assign(MAX_LODS, 0);
-  for (uint32_t i = 0; i < scene.objects.size(); ++i) {
-    if (gpuScene.objectList[i] == DRAW_LIST_NONE) continue;
+  for (uint32_t i = 0; i < objects.size(); ++i) {
+    if (gpuScene.objectList[i] == DRAW_LIST_NONE || !isDrawn(i)) continue;
     passes::ForwardDraw d;
     glm::dvec3 centre;
     if (cullObject(i, camera, math, options, st, d, centre)) out.push_back(d);
@@ -80,7 +81,7 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
   if (listMask & ~1u)
     std::stable_sort(out.begin(), out.end(),
                      [](const passes::ForwardDraw& a, const passes::ForwardDraw& b) { return a.list < b.list; });
-  st.objectsTested = uint32_t(scene.objects.size());
+  st.objectsTested = uint32_t(objects.size());
   st.drawsAppended = st.drawsRendered = uint32_t(out.size());
   return out;
 }
@@ -94,12 +95,13 @@ std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camer
   mine.lodHistogram.assign(MAX_LODS, 0);
   const glm::dvec3 forwardDir = glm::normalize(camera.target - camera.position);
   for (uint32_t i : blendObjects) {
+    if (!isDrawn(i)) continue;
     passes::TransparentDraw t;
     glm::dvec3 centre;
     if (!cullObject(i, camera, math, options, mine, t.draw, centre)) continue;
-    const Material& m = scene.materials[scene.objects[i].material];
+    const Material& m = scene.materials[objects[i].material];
     // Face culling as an opaque object of the same winding and sidedness (a skinned object: its placement's).
-    glm::dmat4 placed = scene.objects[i].transform;
+    glm::dmat4 placed = objects[i].transform;
     for (const SkinnedObject& so : scene.skinnedObjects)
       if (so.object == i) placed = so.placement;
     t.draw.list = m.doubleSided                                   ? DRAW_LIST_OPAQUE_DOUBLE_SIDED
@@ -147,11 +149,12 @@ void Renderer::Impl::recordTransparent(const Camera& camera, const FrameMath& ma
 
 // The GPU-culled frame of the visbuf path, and of the G-buffer baseline (same culling and draw lists; its raster
 // writes the attribute targets and its last pass is the deferred lighting instead of the ID resolve).
-void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
+void Renderer::Impl::recordVisbuf(const FrameOptions& options, const FramePlan& plan, uint32_t& used) {
   const uint32_t w = config.width, h = config.height;
   const bool deferred = options.path == RenderPath::GBuffer;
-  const bool frozen = options.freezeCulling && haveDraws;
-  const bool occlusion = (frozen ? lastCull : options.cull) == CullMode::Occlusion;
+  const bool frozen = plan.frozen;
+  const bool occlusion = plan.cull == CullMode::Occlusion;
+  const bool usePyramid = plan.usePyramid;
   constexpr VkPipelineStageFlags2 kDepthStages =
       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
   constexpr VkAccessFlags2 kDepthAccess =
@@ -215,10 +218,10 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
                             VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       else
         gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0,
+                          VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0,
                           VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                        kDepthStages | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, kDepthStages, kDepthAccess);
+                        VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, kDepthStages, kDepthAccess);
     } else {
       // Late phase: keep the early phase's IDs and depth (the pyramid pass read the depth).
       gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
@@ -259,7 +262,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
 
   // Software micro-raster after each raster phase: the routed draws into the 64-bit buffer (cleared by the first
   // phase), then merged into the IDs and depth that the raster left as attachments.
-  const bool sw = !deferred && swOn;
+  const bool sw = !deferred && plan.swOn;
   auto recordSw = [&](uint32_t phase, bool clear, const char* name, const char* mergeName) {
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
@@ -332,7 +335,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
     return;
   }
 
-  if (cullLights(options)) {  // tile light lists from the final depth
+  if (plan.lightsCulled) {  // tile light lists from the final depth
     VkCommandBuffer cmd = cmds[used++];
     beginCmd(cmd);
     gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
@@ -352,7 +355,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   }
 
   // The IDs become the sampled input of the classification (if any) and the shading.
-  const bool classified = shadingFor(options) == ShadingMode::Classified;
+  const bool classified = plan.shading == ShadingMode::Classified;
   VkCommandBuffer cmd = cmds[used++];
   beginCmd(cmd);
   gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
@@ -370,7 +373,7 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, uint32_t& used) {
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
                     VK_ACCESS_2_TRANSFER_WRITE_BIT);
   uint32_t t = timestamps->begin(cmd, "shade");
   VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
@@ -415,7 +418,7 @@ void Renderer::Impl::recordGBufferLighting(uint32_t& used, bool writeAttributes)
                     VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                     VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
   uint32_t t = timestamps->begin(cmd, "lighting");
   VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
@@ -430,6 +433,55 @@ void Renderer::Impl::recordGBufferLighting(uint32_t& used, bool writeAttributes)
   gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height, writeAttributes);
   timestamps->end(cmd, t);
   VK_CHECK(vkEndCommandBuffer(cmd));
+}
+
+// The forward baseline: CPU culling (one draw per object), then one raster pass into colour and depth.
+void Renderer::Impl::recordForward(const Camera& camera, const FrameMath& math, const FrameOptions& options,
+                                   FrameStats& st, uint32_t& used, FrameResult* result) {
+  const uint32_t w = config.width, h = config.height;
+  const bool msaa = options.msaa > 1;
+  std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
+  if (options.readDraws && result)
+    for (const auto& d : fdraws) {
+      const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[d.objectId]];
+      uint32_t lod = 0;
+      while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
+      result->drawnObjects.push_back(d.objectId);
+      result->drawnLods.push_back(lod);
+    }
+  VkCommandBuffer cmd = cmds[used++];
+  beginCmd(cmd);
+  // MSAA: multisampled colour + depth, the colour averaged into `color` at the end (hardware resolve).
+  const gpu::Image& colorTarget = msaa ? colorMs : color;
+  const gpu::Image& depthTarget = msaa ? depthMs : depth;
+  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  if (msaa)
+    gpu::imageBarrier(cmd, colorMs, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, 0,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+  uint32_t t = timestamps->begin(cmd, "forward");
+  if (options.readIds) {
+    if (!forwardIds)
+      forwardIds = gpu::Image(device, VK_FORMAT_R32G32_UINT, w, h,
+                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                              VK_IMAGE_ASPECT_COLOR_BIT);
+    gpu::imageBarrier(cmd, forwardIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  }
+  (msaa ? forwardMs : forward)
+      .record(cmd, pipelineLayout, set, colorTarget, kBackground, depthTarget, gpuScene.indices.handle(), fdraws,
+              options.readIds ? &forwardIds : nullptr, options.countOverdraw, msaa ? &color : nullptr);
+  timestamps->end(cmd, t);
+  VK_CHECK(vkEndCommandBuffer(cmd));
+  st.targetBytesPerPixel = (4 /*depth*/ + 8 /*colour*/) * options.msaa + (msaa ? 8 /*resolved colour*/ : 0);
+  st.rasterBytesPerFragment = 4 /*depth*/ + 8 /*colour*/;
 }
 
 }  // namespace visbuf

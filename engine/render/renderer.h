@@ -4,12 +4,22 @@
 //   auto renderer = Renderer::create(**device, scene, {.width = 1920, .height = 1080});
 //   auto frame = (*renderer)->renderFrame(camera, {});  // colour, IDs, per-pass GPU times, stats
 //
-// The renderer owns the GPU mirror of the scene, the frame's targets and pipelines. One frame is in
-// flight at a time: renderFrame records, submits and waits, then reads back what was asked for.
+// The renderer owns the GPU mirror of the scene, the frame's targets and pipelines. Two ways to run a frame:
+//   - renderFrame records, submits and waits, then reads back what was asked for (tools, tests, headless use);
+//   - record returns the frame's command buffers for the host to submit itself, with up to
+//     RendererConfig::framesInFlight frames queued, and its output images for the host to compose or present:
+//
+//       auto frame = renderer->record({camera, options});       // no wait unless the ring is full (below)
+//       submit(frame->commandBuffers, hostCommandsThatReadFrame->color, fence[frame->index % N]);
+//
+// The scene may change between frames: setTransforms, setVisible, addObject, removeObject (only the changed
+// object records are uploaded, by the next frame's first command buffer).
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -49,6 +59,17 @@ struct RendererConfig {
   uint32_t drawCapacity = 0;  // max draw commands per phase and draw list; 0 = one per object (never overflows)
   bool forceWideIds = false;  // use the 64-bit ID target even when 32 bits fit
   SkinBounds skinBounds = SkinBounds::Joints;
+  // record(): frames whose commands may be pending at once (1..4). Each has its own frame constants, counter
+  // readback, timestamp queries, descriptor set and command buffers.
+  uint32_t framesInFlight = 2;
+  // addObject(): object slots reserved beyond the scene's (every draw list gets room for them).
+  uint32_t spareObjects = 0;
+};
+
+// One object moved (Renderer::setTransforms): its new object -> world transform.
+struct ObjectTransform {
+  uint32_t object = 0;
+  glm::dmat4 transform{1.0};
 };
 
 // One skinned instance as the GPU holds it after the last frame (Renderer::readSkinnedInstance; tests, tools).
@@ -178,6 +199,11 @@ struct FrameStats {
   uint32_t classifiedTiles = 0;
   std::vector<uint32_t> materialTiles;
   std::vector<uint32_t> materialPixels;
+  // Scene changes applied by this frame (setTransforms, setVisible, addObject, removeObject, rigid animation):
+  // object records rewritten, and the bytes uploaded for them.
+  uint32_t objectsUpdated = 0;
+  uint64_t uploadedBytes = 0;
+  uint64_t frameIndex = 0;  // frames recorded before this one (renderFrame and record count alike)
 };
 
 struct FrameResult {
@@ -199,6 +225,35 @@ struct FrameResult {
   FrameStats stats;
 };
 
+// record(): what the host runs and reads. The outputs are the renderer's own images, valid until the next
+// record() or resize(); the host may read them (sampling, blits, copies) after these command buffers and before
+// it submits the next frame's.
+struct FrameImage {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;  // the layout the frame leaves it in
+};
+struct RecordedFrame {
+  uint64_t index = 0;  // frames recorded before this one
+  // Submit these in this order on the renderer's queue (gpu::Device::queue), in one vkQueueSubmit or in
+  // consecutive ones, before any host command that reads the outputs. They are the renderer's, reused by the
+  // frame index + framesInFlight. (One command buffer per pass: Mesa 22.3 lavapipe needs the split.)
+  std::vector<VkCommandBuffer> commandBuffers;
+  // Colour: rgba16f, linear. IDs: r32ui or rg32ui (IdEncoding; the visbuf path only, else null). Depth: D32,
+  // reverse-Z. The last command buffer ends with a barrier that makes every write to them available and visible
+  // to VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT / VK_ACCESS_2_MEMORY_READ_BIT in the layouts given here.
+  FrameImage color, ids, depth;
+  uint32_t width = 0, height = 0;
+};
+struct FrameInputs {
+  Camera camera;
+  FrameOptions options;  // read* and countOverdraw must be false: renderFrame reads back
+  // The colour output's layout at the end of the frame: TRANSFER_SRC_OPTIMAL (blit or copy it),
+  // SHADER_READ_ONLY_OPTIMAL (sample it) or GENERAL.
+  VkImageLayout colorLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+};
+
 class Renderer {
  public:
   static Result<std::unique_ptr<Renderer>> create(gpu::Device& device, const Scene& scene,
@@ -210,6 +265,30 @@ class Renderer {
   // Recreates the screen targets (the ID encoding may change with the capacity, not the size).
   Status resize(uint32_t width, uint32_t height);
   Result<FrameResult> renderFrame(const Camera& camera, const FrameOptions& options);
+
+  // Records frame `index` for the host to submit (RecordedFrame). Contract: before record() of frame n, the host
+  // has waited (fence or timeline) for frame n - framesInFlight to finish; record() itself never waits, except
+  // once for the device to go idle when a frame first needs a lazily created resource (MSAA targets, the
+  // micro-raster buffer, classification). Decisions that feed back (skipping a useless pyramid or micro-raster)
+  // use the newest completed frame's counters.
+  Result<RecordedFrame> record(const FrameInputs& inputs);
+  // The stats of the newest frame whose commands have finished (frame index - framesInFlight, read without
+  // waiting when record() reuses its slot): counters and GPU pass times. Empty before that.
+  const std::optional<FrameStats>& completedStats() const;
+
+  // Scene changes, applied by the next frame recorded (renderFrame or record). Each call either applies all of
+  // its changes or refuses all of them (InvalidArgument), naming the first bad one: an object that is not live, a
+  // skinned or node-animated object (its pose or FrameOptions::animationTime places it), a non-finite or singular
+  // transform; CapacityExceeded for a winding flip into a micro-raster draw list that is full (the winding picks
+  // the draw list; RendererConfig::spareObjects gives every list room).
+  Status setTransforms(std::span<const ObjectTransform> moves);
+  Status setVisible(uint32_t object, bool visible);  // hidden objects are neither drawn nor tested
+  // A new object in a free slot (RendererConfig::spareObjects, then slots freed by removeObject); its ID. Refused:
+  // bad mesh or material, non-finite or singular transform, no free slot (CapacityExceeded).
+  Result<uint32_t> addObject(const Object& object);
+  Status removeObject(uint32_t object);  // frees its slot; skinned objects cannot be removed
+  uint32_t objectSlots() const;          // scene objects + spare slots: object IDs are below this
+  const Object* object(uint32_t id) const;  // the live object with that ID, else nullptr
   const IdEncoding& idEncoding() const;
   // Forgets which objects were visible last frame (as after a camera cut): costs time, never pixels.
   void clearHistory();

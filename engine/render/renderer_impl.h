@@ -5,6 +5,8 @@
 
 #include "visbuf/render/renderer.h"
 
+#include <optional>
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -40,13 +42,48 @@ namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
 constexpr uint32_t kCommandBuffers = 14;  // at most 14: setup, skin, 2 x (cull, raster, micro-raster), pyramid,
-                                          // light cull, classify, shade (or G-buffer lighting), transparent, readback
+                                          // light cull, classify, shade (or G-buffer lighting), transparent, end
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
 // Likewise the micro-raster, after a frame in which it took no draw.
 constexpr uint32_t kSwProbeInterval = 16;
 
 }  // namespace
+
+// Every decision of one frame, taken once by Renderer::Impl::planFrame before anything is recorded.
+struct FramePlan {
+  bool gpuCulled = false;       // visbuf and G-buffer: cull pass and draw lists; forward: CPU culling
+  bool frozen = false;          // redraw the last culled frame's draw lists (freezeCulling)
+  CullMode cull = CullMode::None;  // in effect (a frozen frame: the frozen frame's)
+  bool occlusionFrame = false;  // occlusion culling runs this frame (not frozen)
+  bool usePyramid = false;      // build the depth pyramid (and run the late occlusion test against it)
+  bool swOn = false;            // route small objects to the micro-raster
+  bool lightsCulled = false;    // tile light lists
+  bool readAttributes = false;  // the shading pass writes the attribute record
+  bool msaa = false;
+  ShadingMode shading = ShadingMode::Uber;
+};
+
+// What renderFrame reads back (frame_readback.cpp).
+struct FrameReadback {
+  bool draws = false, pyramid = false, attributes = false;
+  VkDeviceSize attributeBytes = 0, sampleIdBytes = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> pyramidSizes;
+};
+
+// Per-frame resources: a ring of RendererConfig::framesInFlight slots. Frame n uses slot n % framesInFlight.
+struct FrameSlot {
+  VkDescriptorSet set = VK_NULL_HANDLE;  // every binding shared, except BINDING_FRAME: this slot's frameBuffer
+  gpu::Buffer frameBuffer;               // FrameData, host visible
+  gpu::Buffer statsReadback;             // the counters, copied at the end of the frame
+  gpu::Buffer staging;                   // object records the frame uploads, host visible (grown on demand)
+  std::unique_ptr<gpu::TimestampPool> timestamps;
+  std::array<VkCommandBuffer, kCommandBuffers> cmds{};
+  bool pending = false;  // recorded by record(): its counters are read when the slot comes round again
+  FramePlan plan;
+  FrameOptions options;
+  FrameStats stats;      // what recording knew; completed from the counters (Renderer::Impl::collectStats)
+};
 
 std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift);
 bool defaultSwRaster(const gpu::Device& device);
@@ -72,10 +109,41 @@ struct Renderer::Impl {
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
   VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
   VkDescriptorPool pool = VK_NULL_HANDLE;
-  VkDescriptorSet set = VK_NULL_HANDLE;
   VkSampler sampler = VK_NULL_HANDLE;
-  VkFence fence = VK_NULL_HANDLE;
-  std::array<VkCommandBuffer, kCommandBuffers> cmds{};
+  VkFence fence = VK_NULL_HANDLE;  // renderFrame's own wait
+  std::vector<FrameSlot> slots;
+  uint64_t frameCounter = 0;             // frames recorded so far (renderFrame and record)
+  std::optional<FrameStats> completed;   // the newest collected frame's stats (record())
+  // The frame being recorded: its slot's descriptor set, command buffers and timestamps (beginFrame).
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  VkCommandBuffer* cmds = nullptr;
+  gpu::TimestampPool* timestamps = nullptr;
+
+  // The scene as the renderer holds it: Scene::objects, then RendererConfig::spareObjects free slots
+  // (scene_updates.cpp). Object IDs index these; the GPU records follow with the next frame.
+  std::vector<Object> objects;
+  enum SlotState : uint8_t { SlotFree = 0, SlotLive = 1, SlotHidden = 2 };
+  std::vector<uint8_t> slotState;
+  std::vector<uint32_t> freeSlots;      // free IDs, the lowest last (reused first)
+  std::vector<uint32_t> dirty;          // IDs whose GPU record the next frame uploads
+  std::vector<uint8_t> dirtyMark;       // per ID: in `dirty`
+  std::array<uint32_t, DRAW_LISTS> listLive{};  // live objects per draw list (room for addObject / list changes)
+  std::vector<uint8_t> skinnedObject;   // per ID: a skinned instance (its pose places it: not movable)
+  std::vector<uint8_t> rigidObject;     // per ID: posed by a Scene::rigidObjects clip (until removed)
+  double rigidTime = 0.0;               // the animation time rigid objects were last posed at
+  bool rigidPosed = false;
+  bool isLive(uint32_t id) const { return id < slotState.size() && slotState[id] != SlotFree; }
+  bool isDrawn(uint32_t id) const { return id < slotState.size() && slotState[id] == SlotLive; }
+  void markDirty(uint32_t id);
+  // Writes the dirty records into the slot's staging buffer and records their copies (setup command buffer).
+  void recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, FrameStats& st);
+  gpu::ObjectData objectRecord(uint32_t id) const;
+  Status checkTransform(uint32_t id, const glm::dmat4& m, const char* what) const;
+  // Poses the scene's rigid (node-animated) objects at `time` when it differs from the last posed time: each
+  // changed transform is rewritten on the CPU and marked dirty (so uploaded with the frame's other changes). A pose
+  // that is singular or non-finite (a clip scaling to zero) keeps the object's previous transform; so does a
+  // winding flip into a micro-raster list without room.
+  void poseRigidObjects(double time);
 
   passes::CullPass cull;
   passes::VisibilityPass visibility;
@@ -93,7 +161,6 @@ struct Renderer::Impl {
   // Software micro-raster (FrameOptions::swRaster): its pipelines (created with the renderer when some list can
   // use it) and its 64-bit per-pixel buffer (created by the first frame that uses it, dropped by a resize).
   passes::SwRasterPass swRaster;
-  bool swOn = false;           // this frame routes small objects to it (set in render())
   bool lastSwOn = false;       // the last unfrozen frame did (a frozen frame redraws that frame's draw lists)
   uint32_t swSkipFrames = 0;   // frames left before it is probed again after a frame in which it took nothing
   // Point lights (scenes with any): anchor-relative records and the tile lists. Empty otherwise.
@@ -110,13 +177,10 @@ struct Renderer::Impl {
   gpu::Buffer attributes;           // float[ATTRIBUTE_FLOATS] per pixel; a 64-byte placeholder until asked for
   gpu::Buffer attributesReadback;
   uint32_t pyramidSkipFrames = 0;  // frames left before the pyramid is probed again
-  bool usePyramid = true;          // this frame builds the pyramid (set in render())
 
-  gpu::Buffer frameBuffer;  // FrameData, host visible
   gpu::Buffer draws;        // DrawCommand[capacity]
   gpu::BufferView drawTexels;  // the same as R32UI (BINDING_DRAW_TEXELS): the shading's per-pixel fetch
   gpu::Buffer stats;        // uint[STAT_COUNT]
-  gpu::Buffer statsReadback;
   gpu::Image ids, depth, color;
   // MSAA (FrameOptions::msaa > 1): multisampled IDs and depth (visbuf, forward shares the depth) and forward
   // colour, created by the first frame at a count (msaaSamples) and dropped by a resize; the single-sample ids and
@@ -131,13 +195,13 @@ struct Renderer::Impl {
   gpu::Image overdraw;    // r32ui, GENERAL: raster writes per pixel (countOverdraw)
   gpu::Image forwardIds;  // forward path with readIds only (rg32ui: object + 1, triangle); lazily created
   gpu::Buffer colorReadback, idsReadback, drawsReadback;
-  std::unique_ptr<gpu::TimestampPool> timestamps;
 
   Impl(gpu::Device& d, const Scene& s) : device(d), scene(s) {}
   ~Impl() {
     VkDevice dev = device.device();
     vkDeviceWaitIdle(dev);
-    vkFreeCommandBuffers(dev, device.commandPool(), kCommandBuffers, cmds.data());
+    for (FrameSlot& f : slots)
+      if (f.cmds[0]) vkFreeCommandBuffers(dev, device.commandPool(), kCommandBuffers, f.cmds.data());
     vkDestroyFence(dev, fence, nullptr);
     vkDestroySampler(dev, sampler, nullptr);
     vkDestroyDescriptorPool(dev, pool, nullptr);
@@ -197,7 +261,26 @@ struct Renderer::Impl {
     vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1, &region);
   }
 
-  gpu::FrameData frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options) const;
+  gpu::FrameData frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options,
+                           const FramePlan& plan) const;
+  // The frame's decisions (FramePlan) from its options, the scene and the history of earlier frames.
+  FramePlan planFrame(const FrameOptions& options) const;
+  // Checks the camera and the options against the scene and device; creates what the frame needs lazily.
+  Status prepareFrame(const Camera& camera, const FrameOptions& options);
+  // Records the frame into the slot's command buffers (all but renderFrame's readback); returns how many.
+  // The last one is left open (vkEndCommandBuffer is the caller's) for the readback or the output barrier.
+  uint32_t recordFrame(const Camera& camera, const FrameOptions& options, const FramePlan& plan, FrameSlot& slot,
+                       FrameResult* result);
+  // Fills the counters and GPU times of a finished frame into slot.stats and updates the history decisions.
+  void collectStats(FrameSlot& slot, bool synchronous);
+  void recordReadback(VkCommandBuffer cmd, const FrameOptions& options, const FramePlan& plan, FrameReadback& rb);
+  void decodeReadback(const FrameOptions& options, const FramePlan& plan, const FrameReadback& rb,
+                      const FrameSlot& frame, FrameResult& result);
+  // record(): the outputs' final layouts and the barrier that publishes them (end of the last command buffer).
+  void recordOutputs(VkCommandBuffer cmd, const FramePlan& plan, const FrameInputs& inputs, RecordedFrame& out);
+  Result<RecordedFrame> record(const FrameInputs& inputs);
+  FrameSlot& beginFrame();
+  void writeDescriptorSet(const FrameSlot& slot);
 
   // This frame routes small objects to the software micro-raster: asked for, the visbuf path, single-sampled, no
   // overdraw count (it counts hardware raster writes), a list it may take, and its buffer within one range.
@@ -217,8 +300,10 @@ struct Renderer::Impl {
     return options.path == RenderPath::Visbuf && options.tiledLights && hasPointLights();
   }
   Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
-  void recordVisbuf(const FrameOptions& options, uint32_t& used);
+  void recordVisbuf(const FrameOptions& options, const FramePlan& plan, uint32_t& used);
   void recordGBufferLighting(uint32_t& used, bool writeAttributes);
+  void recordForward(const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
+                     uint32_t& used, FrameResult* result);
   std::vector<passes::ForwardDraw> forwardCull(const Camera& camera, const FrameMath& math,
                                                const FrameOptions& options, FrameStats& stats) const;
   bool cullObject(uint32_t i, const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,

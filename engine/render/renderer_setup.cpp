@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -76,22 +77,34 @@ void Renderer::Impl::createLayouts() {
   pci.pushConstantRangeCount = 1;
   pci.pPushConstantRanges = &range;
   VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
-  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 17 + 2 /*lights*/ + 2 /*classification*/},
-                                  {VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
-                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 + GBUFFER_TARGETS + 1 + 1 /*light depth*/},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
-                                  {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 7}};
+  // One set per frame slot, each the layout's full count of every descriptor type.
+  const uint32_t n = uint32_t(slots.size());
+  std::map<VkDescriptorType, uint32_t> perType;
+  for (const VkDescriptorSetLayoutBinding& x : b) perType[x.descriptorType] += x.descriptorCount;
+  std::vector<VkDescriptorPoolSize> sizes;
+  for (auto [type, count] : perType) sizes.push_back({type, count * n});
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  dpci.maxSets = 1;
-  dpci.poolSizeCount = uint32_t(std::size(sizes));
-  dpci.pPoolSizes = sizes;
+  dpci.maxSets = n;
+  dpci.poolSizeCount = uint32_t(sizes.size());
+  dpci.pPoolSizes = sizes.data();
   VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
-  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-  ai.descriptorPool = pool;
-  ai.descriptorSetCount = 1;
-  ai.pSetLayouts = &setLayout;
-  VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &set));
+  for (FrameSlot& f : slots) {
+    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorPool = pool;
+    ai.descriptorSetCount = 1;
+    ai.pSetLayouts = &setLayout;
+    VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &f.set));
+    VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    cai.commandPool = device.commandPool();
+    cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    cai.commandBufferCount = kCommandBuffers;
+    VK_CHECK(vkAllocateCommandBuffers(dev, &cai, f.cmds.data()));
+    f.frameBuffer =
+        gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, gpu::MemoryUse::HostVisible);
+    f.statsReadback = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                  gpu::MemoryUse::HostVisible);
+    f.timestamps = std::make_unique<gpu::TimestampPool>(device, 16);
+  }
   VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
   sci.magFilter = sci.minFilter = VK_FILTER_NEAREST;
   sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
@@ -99,11 +112,6 @@ void Renderer::Impl::createLayouts() {
   VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler));
   VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
   VK_CHECK(vkCreateFence(dev, &fci, nullptr, &fence));
-  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  cai.commandPool = device.commandPool();
-  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  cai.commandBufferCount = kCommandBuffers;
-  VK_CHECK(vkAllocateCommandBuffers(dev, &cai, cmds.data()));
 }
 
 void Renderer::Impl::createTargets(uint32_t width, uint32_t height) {
@@ -157,13 +165,21 @@ void Renderer::Impl::resizeAttributes(VkDeviceSize bytes) {
   attributesReadback.reset();
 }
 
+// Every slot's set. A set may be in use by a pending frame: the device goes idle first (only lazily created
+// resources and resizes get here, never a steady frame).
 void Renderer::Impl::writeDescriptors() {
+  vkDeviceWaitIdle(device.device());
+  for (const FrameSlot& f : slots) writeDescriptorSet(f);
+}
+
+void Renderer::Impl::writeDescriptorSet(const FrameSlot& slot) {
+  const VkDescriptorSet set = slot.set;
   // Objects: two windows of one buffer, split where one descriptor range would end (objectWindowSplit).
   const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
   const bool highUsed = objectSplit < gpuScene.objectCount;
   const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
   VkDescriptorBufferInfo bufs[17] = {
-      {frameBuffer.handle(), 0, VK_WHOLE_SIZE},
+      {slot.frameBuffer.handle(), 0, VK_WHOLE_SIZE},
       {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
       {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
       {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
@@ -392,9 +408,17 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   if (config.width == 0 || config.height == 0 || config.width > 16384 || config.height > 16384)
     return makeError(ErrorCode::InvalidArgument,
                      fmt::format("image size {}x{} outside 1..16384", config.width, config.height));
+  if (config.framesInFlight < 1 || config.framesInFlight > 4)
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("framesInFlight {} outside 1..4", config.framesInFlight));
+  if (uint64_t(scene.objects.size()) + config.spareObjects > (1ull << 31))
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("{} objects + {} spare slots: more than 2^31 object IDs", scene.objects.size(),
+                                 config.spareObjects));
   auto impl = std::make_unique<Impl>(device, scene);
   impl->config = config;
-  Result<GpuScene> g = uploadScene(device, scene);
+  impl->slots.resize(config.framesInFlight);
+  Result<GpuScene> g = uploadScene(device, scene, config.spareObjects);
   if (!g) return g.error();
   impl->gpuScene = std::move(g.value());
   // Default capacity: one draw per object, as far as one descriptor range holds both phases' draw lists
@@ -406,13 +430,27 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   // config.drawCapacity (per list) or, by default, shared out so that both phases fit one descriptor range.
   std::array<uint64_t, DRAW_LISTS> listObjects{};
   uint64_t listed = 0;
-  for (uint32_t i = 0; i < impl->gpuScene.objectCount; ++i) {
+  const uint32_t sceneObjects = uint32_t(scene.objects.size());
+  for (uint32_t i = 0; i < sceneObjects; ++i) {
     const uint32_t l = impl->gpuScene.objectList[i];
     if (l == DRAW_LIST_NONE)
       impl->blendObjects.push_back(i);
     else
-      ++listObjects[l], ++listed;
+      ++listObjects[l], ++listed, ++impl->listLive[l];
   }
+  // Spare slots: every list has room for all of them (an added object may land in any list).
+  if (config.spareObjects)
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l) listObjects[l] += config.spareObjects, listed += config.spareObjects;
+  impl->objects = scene.objects;
+  impl->objects.resize(sceneObjects + config.spareObjects);
+  impl->slotState.assign(sceneObjects + config.spareObjects, Impl::SlotFree);
+  std::fill_n(impl->slotState.begin(), sceneObjects, Impl::SlotLive);
+  for (uint32_t i = sceneObjects + config.spareObjects; i-- > sceneObjects;) impl->freeSlots.push_back(i);
+  impl->dirtyMark.assign(impl->slotState.size(), 0);
+  impl->skinnedObject.assign(impl->slotState.size(), 0);
+  impl->rigidObject.assign(impl->slotState.size(), 0);
+  for (const RigidObject& ro : impl->scene.rigidObjects) impl->rigidObject[ro.object] = 1;
+  for (const SkinnedObject& so : scene.skinnedObjects) impl->skinnedObject[so.object] = 1;
   const uint64_t rangeSlots = maxRange / (2 * sizeof(gpu::DrawCommand));
   for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
     uint64_t c = listObjects[l];
@@ -460,8 +498,6 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
   std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
   impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
-  impl->frameBuffer = gpu::Buffer(device, sizeof(gpu::FrameData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                                  gpu::MemoryUse::HostVisible);
   impl->draws = gpu::Buffer(device, drawBytes,
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
@@ -472,8 +508,6 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             gpu::MemoryUse::DeviceLocal);
-  impl->statsReadback = gpu::Buffer(device, STAT_COUNT * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                    gpu::MemoryUse::HostVisible);
   impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::DeviceLocal);
@@ -482,7 +516,6 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                                       VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                                   gpu::MemoryUse::DeviceLocal);
   impl->pyramid.create(device);
-  impl->timestamps = std::make_unique<gpu::TimestampPool>(device, 16);
   if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
     std::vector<gpu::PointLightData> lights;
     for (const PointLight& l : scene.pointLights) {

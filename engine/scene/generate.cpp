@@ -189,13 +189,14 @@ Result<Scene> makeCityScene(const CityParams& params) {
 }
 
 Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& params) {
-  if (asset.skinnedObjects.empty())
-    return makeError(ErrorCode::InvalidArgument, "animated field: the asset has no skinned objects");
+  if (asset.objects.empty()) return makeError(ErrorCode::InvalidArgument, "animated field: the asset has no objects");
   if (params.instances == 0) return makeError(ErrorCode::InvalidArgument, "animated field: 0 instances");
   Scene s;
   s.name = "animated-field";
   s.meshes = asset.meshes;
   s.materials = asset.materials;
+  s.textures = asset.textures;
+  s.textureClasses = asset.textureClasses;
   s.nodes = asset.nodes;
   s.skins = asset.skins;
   s.animations = asset.animations;
@@ -210,8 +211,9 @@ Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& p
   const glm::dvec3 centre = 0.5 * (lo + hi);
   const double unit = 1.0 / std::max(0.5 * glm::length(hi - lo), 1e-9);
   const uint32_t side = uint32_t(std::ceil(std::sqrt(double(params.instances))));
-  std::vector<int32_t> skinnedIndex(asset.objects.size(), -1);
+  std::vector<int32_t> skinnedIndex(asset.objects.size(), -1), rigidIndex(asset.objects.size(), -1);
   for (size_t i = 0; i < asset.skinnedObjects.size(); ++i) skinnedIndex[asset.skinnedObjects[i].object] = int32_t(i);
+  for (size_t i = 0; i < asset.rigidObjects.size(); ++i) rigidIndex[asset.rigidObjects[i].object] = int32_t(i);
   Rng rng(params.seed);
   for (uint32_t k = 0; k < params.instances; ++k) {
     const double x = (double(k % side) - 0.5 * side + rng.uniform(-0.3, 0.3)) * params.spacing;
@@ -224,6 +226,15 @@ Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& p
     for (size_t i = 0; i < asset.objects.size(); ++i) {
       const Object& o = asset.objects[i];
       s.objects.push_back({place * o.transform, o.mesh, o.material});
+      if (rigidIndex[i] >= 0) {  // its own placement and phase; its transform the pose at time 0
+        RigidObject ro = asset.rigidObjects[size_t(rigidIndex[i])];
+        ro.object = uint32_t(s.objects.size() - 1);
+        ro.placement = place * ro.placement;
+        if (ro.clip >= 0 && size_t(ro.clip) < s.animations.size())
+          ro.timeOffset += phase * s.animations[size_t(ro.clip)].duration;
+        s.objects.back().transform = rigidObjectStartTransform(s, ro, place * o.transform);
+        s.rigidObjects.push_back(ro);
+      }
       if (skinnedIndex[i] < 0) continue;
       SkinnedObject so = asset.skinnedObjects[size_t(skinnedIndex[i])];
       so.object = uint32_t(s.objects.size() - 1);

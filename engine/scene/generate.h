@@ -32,10 +32,13 @@ struct AnimatedFieldParams {
   uint64_t seed = 1;
   double spacing = 3.0;  // instances stand on a jittered grid in the XZ plane, this far apart (normalised units)
 };
-// Many copies of an asset with skinned objects (a baked glTF such as Fox or CesiumMan), each scaled to a unit
-// bounding radius, standing upright on a jittered grid with a random heading, playing clip 0 at its own random
-// phase. The asset's meshes, skins, clips and node hierarchy are shared; every copy of a skinned object is a
-// skinned instance of its own (its own vertex region and pose). Fails when the asset has no skinned objects.
+// Many copies of an asset (a baked glTF such as Fox, CesiumMan or CesiumMilkTruck, or a pack), each scaled to a
+// unit bounding radius, standing upright on a jittered grid with a random heading, its animated objects playing
+// their clip at the copy's own random phase. The asset's meshes, materials, textures, skins, clips and node
+// hierarchy are shared; every copy of a skinned object is a skinned instance of its own (its own vertex region
+// and pose), every copy of a rigid object a rigid object of its own (placement: the copy's placement times the
+// asset's; time offset: the asset's plus the copy's phase x the clip's duration; its object's transform
+// rigidObjectStartTransform()). Static objects are copied as they are. Fails when the asset has no objects.
 Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& params);
 
 struct CityParams {

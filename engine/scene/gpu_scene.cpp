@@ -166,7 +166,7 @@ uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount) {
   return uint32_t(std::min<uint64_t>(objectCount, perWindow));
 }
 
-Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
+Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t spareObjects) {
   Status valid = validateScene(scene);
   if (!valid) return valid.error();
   GpuScene g;
@@ -205,6 +205,12 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene) {
   objects.reserve(scene.objects.size());
   for (const Object& o : scene.objects) objects.push_back(packObject(o, scene));
   for (uint32_t i = 0; i < scene.objects.size(); ++i) g.objectMesh.push_back(scene.objects[i].mesh);
+  for (uint32_t i = 0; i < spareObjects; ++i) {
+    gpu::ObjectData spare{};
+    spare.flags = OBJECT_FLAG_HIDDEN | 15u << OBJECT_DRAW_LIST_SHIFT;
+    objects.push_back(spare);
+    g.objectMesh.push_back(0);
+  }
   // Skinned instances: a region of skinned vertices each (position and normal; tangents where the mesh has
   // them) and a mesh slot of their own that keeps the rest mesh's vertices (uv, colour); the skin vertices of
   // each source mesh once.

@@ -124,6 +124,8 @@ gpu::Image uploadTextureClass(gpu::Device& device, const TextureClass& textureCl
 // maxBufferSize / maxMemoryAllocationSize). The geometry pools and tables are written mesh by mesh through one
 // reused staging buffer (a quarter of the largest buffer, 64 KiB..8 MiB; a wait between chunks), never assembled
 // on the host: stagingBytes / uploadHostBytes report what that cost.
-Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene);
+// spareObjects: free object slots after the scene's (hidden records, mesh 0), for objects added later
+// (Renderer::addObject); they count in objectCount.
+Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t spareObjects = 0);
 
 }  // namespace visbuf

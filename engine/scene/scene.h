@@ -132,6 +132,22 @@ struct SkinnedObject {
   bool operator==(const SkinnedObject&) const = default;
 };
 
+// An unskinned object moved by node animation (glTF: a translation / rotation / scale channel on its mesh node or
+// on an ancestor of it, as CesiumMilkTruck's wheels). It is a plain object (no skin, no per-vertex work): its
+// object -> world transform at animation time t is rigidObjectTransform(scene, *this, t). Its Object::transform
+// holds rigidObjectStartTransform(): that transform at time 0 (the clip's pose at clip time timeOffset for the
+// nodes the clip animates, the rest TRS for the others), so drawing the objects as they are shows the time-0
+// pose. The object's mesh winding (and mirrored variant) was chosen for the rest pose: a pose that is singular
+// or flips the handedness cannot be drawn with it.
+struct RigidObject {
+  uint32_t object = 0;        // into Scene::objects; not a skinned object
+  int32_t node = 0;           // into Scene::nodes: the mesh node, whose global matrix places the object
+  int32_t clip = 0;           // Scene::animations index played (looping); -1: the rest pose
+  double timeOffset = 0.0;    // seconds added to the animation time: each instance its own phase
+  glm::dmat4 placement{1.0};  // world placement of the node's global matrix (identity for a file's own objects)
+  bool operator==(const RigidObject&) const = default;
+};
+
 struct Scene {
   std::string name;
   std::vector<Mesh> meshes;
@@ -145,6 +161,7 @@ struct Scene {
   std::vector<Skin> skins;
   std::vector<AnimationClip> animations;
   std::vector<SkinnedObject> skinnedObjects;
+  std::vector<RigidObject> rigidObjects;  // at most one entry per object, none for a skinned object
   glm::dvec3 anchor{0.0};  // GPU positions are relative to this point
   Camera defaultCamera;
   glm::vec3 lightDirection = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));  // towards the light
@@ -159,8 +176,22 @@ struct Scene {
 // validateSceneAnimation().
 Status validateScene(const Scene& scene);
 // The animation part (scene_animation.cpp): validateNodes / validateSkin / validateClip, skin vertex counts
-// and weights, skinned objects' object/skin references, and joint indices below the skin's joint count.
+// and weights, skinned objects' object/skin references, joint indices below the skin's joint count, and rigid
+// objects' object / node / clip references (each object once, never a skinned one), finite time offsets and
+// finite affine placements.
 Status validateSceneAnimation(const Scene& scene);
+// The object -> world transform of rigid object `ro` at animation time `time` (double precision):
+// ro.placement * global(ro.node) with the node chain posed by clip ro.clip at time + ro.timeOffset (looping;
+// restPose + sampleClip + globalMatrices of animation.h; the rest pose when clip is -1). The node's own
+// static TRS and those of its ancestors are part of global(node). Precondition: validateSceneAnimation passed.
+glm::dmat4 rigidObjectTransform(const Scene& scene, const RigidObject& ro, double time);
+// What the importer and makeAnimatedField store in Object::transform for rigid object `ro`: rigidObjectTransform
+// at time 0 when it is finite, has |det| >= 1e-30 (validateScene's bound) and the handedness of `rest`; else
+// `rest` (the object's transform in the file's rest pose, e.g. for a clip that starts at scale 0).
+glm::dmat4 rigidObjectStartTransform(const Scene& scene, const RigidObject& ro, const glm::dmat4& rest);
+// rigidObjectTransform of every Scene::rigidObjects entry at `time` (result[i] for rigidObjects[i]); objects that
+// share a clip and clip time share one pose evaluation.
+std::vector<glm::dmat4> rigidObjectTransforms(const Scene& scene, double time);
 // The joint matrices (double precision, skin space) of skinned object `so` at animation time `time` (plus its
 // timeOffset, its clip looping; the rest pose without a clip): the pose the skinning pass skins with.
 std::vector<glm::dmat4> skinnedObjectJoints(const Scene& scene, const SkinnedObject& so, double time);

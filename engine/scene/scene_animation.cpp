@@ -1,6 +1,8 @@
 // validateSceneAnimation (scene.h): the animation data of a Scene is consistent with itself and with the
 // meshes and objects, so that sampling, skinning and the bounds of skinned objects never index out of range.
 #include <cmath>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -60,6 +62,35 @@ Status checkMorphTargets(const Mesh& mesh, size_t meshIndex) {
   return {};
 }
 
+bool isAffine(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return m[0][3] == 0.0 && m[1][3] == 0.0 && m[2][3] == 0.0 && m[3][3] == 1.0;
+}
+
+// Rigid objects: object, node and clip exist, each object at most once and never a skinned object (`seen` marks
+// the skinned ones), finite time offset, finite affine placement.
+Status validateRigidObjects(const Scene& scene, std::vector<uint8_t>& seen) {
+  for (size_t i = 0; i < scene.rigidObjects.size(); ++i) {
+    const RigidObject& ro = scene.rigidObjects[i];
+    const std::string where = fmt::format("rigid object {}", i);
+    if (ro.object >= scene.objects.size())
+      return malformed(fmt::format("{}: object {} out of range ({} objects)", where, ro.object, scene.objects.size()));
+    if (ro.node < 0 || size_t(ro.node) >= scene.nodes.size())
+      return malformed(fmt::format("{}: node {} out of range ({} nodes)", where, ro.node, scene.nodes.size()));
+    if (ro.clip < -1 || (ro.clip >= 0 && size_t(ro.clip) >= scene.animations.size()))
+      return malformed(fmt::format("{}: clip {} is not -1 or an animation index ({} animations)", where, ro.clip,
+                                   scene.animations.size()));
+    if (!std::isfinite(ro.timeOffset))
+      return malformed(fmt::format("{}: time offset {} is not finite", where, ro.timeOffset));
+    if (!isAffine(ro.placement)) return malformed(where + ": placement is not a finite affine matrix");
+    if (seen[ro.object]++)
+      return malformed(fmt::format("{}: object {} is listed twice (or is also a skinned object)", where, ro.object));
+  }
+  return {};
+}
+
 }  // namespace
 
 Status validateSceneAnimation(const Scene& scene) {
@@ -100,6 +131,7 @@ Status validateSceneAnimation(const Scene& scene) {
       return malformed(fmt::format("{}: mesh {} '{}' uses joint index {}, skin {} has {} joints", where, mesh,
                                    scene.meshes[mesh].name, maxJoint[mesh], so.skin, joints));
   }
+  if (Status st = validateRigidObjects(scene, seen); !st) return st;
   return {};
 }
 
@@ -121,6 +153,43 @@ std::vector<double> skinnedObjectMorphWeights(const Scene& scene, const SkinnedO
   const std::vector<double>& animated = pose.weights[size_t(so.morphNode)];
   for (size_t t = 0; t < animated.size() && t < weights.size(); ++t) weights[t] = animated[t];
   return weights;
+}
+
+glm::dmat4 rigidObjectTransform(const Scene& scene, const RigidObject& ro, double time) {
+  Pose pose = restPose(scene.nodes);
+  if (ro.clip >= 0 && size_t(ro.clip) < scene.animations.size())
+    sampleClip(scene.animations[size_t(ro.clip)], time + ro.timeOffset, true, pose);
+  return ro.placement * globalMatrices(scene.nodes, pose)[size_t(ro.node)];
+}
+
+glm::dmat4 rigidObjectStartTransform(const Scene& scene, const RigidObject& ro, const glm::dmat4& rest) {
+  const glm::dmat4 posed = rigidObjectTransform(scene, ro, 0.0);
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(posed[c][r])) return rest;
+  const double det = glm::determinant(glm::dmat3(posed));
+  if (!(std::abs(det) >= 1e-30) || (det < 0.0) != (glm::determinant(glm::dmat3(rest)) < 0.0)) return rest;
+  return posed;
+}
+
+std::vector<glm::dmat4> rigidObjectTransforms(const Scene& scene, double time) {
+  std::vector<glm::dmat4> out(scene.rigidObjects.size());
+  // Global matrices per (clip, clip time): instances that play in phase share them.
+  std::map<std::pair<int32_t, double>, std::vector<glm::dmat4>> globals;
+  for (size_t i = 0; i < scene.rigidObjects.size(); ++i) {
+    const RigidObject& ro = scene.rigidObjects[i];
+    const bool animated = ro.clip >= 0 && size_t(ro.clip) < scene.animations.size();
+    const int32_t clip = animated ? ro.clip : -1;
+    const double t = animated ? clipTime(scene.animations[size_t(clip)], time + ro.timeOffset, true) : 0.0;
+    auto it = globals.find({clip, t});
+    if (it == globals.end()) {
+      Pose pose = restPose(scene.nodes);
+      if (animated) sampleClip(scene.animations[size_t(clip)], t, false, pose);
+      it = globals.emplace(std::pair{clip, t}, globalMatrices(scene.nodes, pose)).first;
+    }
+    out[i] = ro.placement * it->second[size_t(ro.node)];
+  }
+  return out;
 }
 
 MorphedVertex morphVertex(const Mesh& mesh, uint32_t v, std::span<const double> weights) {

@@ -80,6 +80,7 @@ struct ObjectData {
   uint flags;      // OBJECT_FLAG_*
 };
 #define OBJECT_FLAG_FLIP_WINDING 1u  // negative determinant: front faces are clockwise
+#define OBJECT_FLAG_HIDDEN 2u        // neither tested nor drawn: hidden (Renderer::setVisible) or a free slot
 #define OBJECT_DRAW_LIST_SHIFT 4u     // bits 4..7: the object's draw list (drawListOf at upload), 15: none (BLEND)
 
 // The draw list of an object (config.h DRAW_LIST_*) from its flags and its material's flags; DRAW_LIST_NONE for

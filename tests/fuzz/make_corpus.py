@@ -8,8 +8,10 @@ input runs faster. Sources:
   fuzz_gltf_import   small sample files of the repository's assets/ (licences: assets/README.md), made
                      self-contained (GLB, or .gltf with data: URIs) since the target has one file to read,
                      plus a synthesised GLB that uses materials, textures (embedded PNG and data: URI),
-                     samplers, KHR_texture_transform, lights, a camera and a mirrored node, and a minimal .gltf.
-  fuzz_pack_reader   packs baked by `visbuf bake` from some of those glTF seeds (animated, skinned, textured).
+                     samplers, KHR_texture_transform, lights, a camera and a mirrored node, a minimal .gltf, and a
+                     synthesised .gltf with rigid node animation.
+  fuzz_pack_reader   packs baked by `visbuf bake` from some of those glTF seeds (animated, skinned, textured,
+                     rigid node animation).
   fuzz_image_decode  tiny PNGs (every colour type, 16-bit, Adam7, palette + tRNS) written here, tiny JPEGs
                      (baseline with Exif + IPTC, greyscale, progressive, 4:2:0) written by oiiotool, and
                      regression_*: inputs that once crashed or exhausted memory, derived from those.
@@ -256,6 +258,39 @@ def textured_glb(image_png, uri_png):
     return glb(doc, bin_)
 
 
+def rigid_gltf():
+    """Rigid node animation: a triangle on a child node whose parent a LINEAR rotation and a STEP translation
+    channel move (pack section "rigidObjects")."""
+    data = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)                      # positions
+    data += struct.pack("<2f", 0, 1)                                          # key times
+    data += struct.pack("<8f", 0, 0, 0, 1, 0, 0.7071068, 0, 0.7071068)        # rotations
+    data += struct.pack("<6f", 0, 0, 0, 1, 2, 3)                              # translations
+    doc = {
+        "asset": {"version": "2.0", "generator": "visbuf tests/fuzz/make_corpus.py"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "spinner", "children": [1], "scale": [2, 2, 2]},
+                  {"name": "arm", "mesh": 0, "translation": [0.5, 0, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "animations": [{"name": "spin", "samplers": [{"input": 1, "output": 2},
+                                                     {"input": 1, "output": 3, "interpolation": "STEP"}],
+                        "channels": [{"sampler": 0, "target": {"node": 0, "path": "rotation"}},
+                                     {"sampler": 1, "target": {"node": 0, "path": "translation"}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 3,
+                       "min": [0, 0, 0], "max": [1, 1, 0]},
+                      {"bufferView": 1, "componentType": 5126, "type": "SCALAR", "count": 2, "min": [0], "max": [1]},
+                      {"bufferView": 2, "componentType": 5126, "type": "VEC4", "count": 2},
+                      {"bufferView": 3, "componentType": 5126, "type": "VEC3", "count": 2}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": 8},
+                        {"buffer": 0, "byteOffset": 44, "byteLength": 32},
+                        {"buffer": 0, "byteOffset": 76, "byteLength": 24}],
+        "buffers": [{"byteLength": len(data),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+    }
+    return compact(doc)
+
+
 def gltf_seeds(images):
     seeds = {
         "minimal.gltf": compact({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{}]}),
@@ -270,6 +305,7 @@ def gltf_seeds(images):
         "TriangleStripIndexed.gltf": embedded("Mesh_PrimitiveMode/Mesh_PrimitiveMode/Mesh_PrimitiveMode_11.gltf"),
         "TriangleFan.gltf": embedded("Mesh_PrimitiveMode/Mesh_PrimitiveMode/Mesh_PrimitiveMode_05.gltf"),
         "Textured.glb": textured_glb(images["rgba8_2x2.png"], images["grey8_4x4_up.png"]),
+        "RigidSpin.gltf": rigid_gltf(),
     }
     return seeds
 
@@ -281,6 +317,7 @@ def pack_seeds(visbuf, tmp):
                                ("SimpleMorph.vbp", "SimpleMorph.gltf", ["--lod-count", "2"]),
                                ("RiggedSimple.vbp", "RiggedSimple.glb", ["--lod-count", "1"]),
                                ("Textured.vbp", "Textured.glb", ["--max-texture-size", "4"]),
+                               ("RigidSpin.vbp", "RigidSpin.gltf", ["--lod-count", "1"]),
                                ("BoxInterleaved_quantized.vbp", "BoxInterleaved.glb", ["--quantize", "--lod-count", "2"])]:
         src = os.path.join(tmp, source)
         out = os.path.join(tmp, name)

@@ -81,6 +81,7 @@ inline void expectAnimationEqual(const Scene& a, const Scene& b) {
   EXPECT_TRUE(a.skins == b.skins);
   EXPECT_TRUE(a.animations == b.animations);
   EXPECT_TRUE(a.skinnedObjects == b.skinnedObjects);
+  EXPECT_TRUE(a.rigidObjects == b.rigidObjects);
   ASSERT_EQ(a.meshes.size(), b.meshes.size());
   for (size_t i = 0; i < a.meshes.size(); ++i) {
     const auto& x = a.meshes[i].skinVertices;

@@ -73,6 +73,8 @@ Scene makeTestScene(uint32_t knotSegments = 64, uint32_t knotSides = 12) {
   scene.defaultCamera.nearPlane = 0.01;
   scene.lightDirection = glm::normalize(glm::vec3(-1.0f, 2.0f, 0.5f));
   test::addTestAnimation(scene, 1, 1);
+  // Object 2 is moved rigidly by node 1 ("hip") of the first clip, with a phase and a placement.
+  scene.rigidObjects.push_back({2, 1, 0, 0.625, glm::translate(glm::dmat4(1.0), {1e6, -2e5, 3.0})});
   return scene;
 }
 
@@ -414,7 +416,7 @@ TEST(PackRoundTrip, TexturedSceneInMemory) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(scene, &report);
   ASSERT_TRUE(bytes) << bytes.error().message;
-  EXPECT_EQ(report.sections.size(), 15u + 15u);  // 9 required, meshStreams, tangents, uvs1, 3 texture, 15 animation
+  EXPECT_EQ(report.sections.size(), 15u + 16u);  // 9 required, meshStreams, tangents, uvs1, 3 texture, 16 animation
   Result<Scene> back = parse(*bytes);
   ASSERT_TRUE(back) << back.error().message;
   expectScenesEqual(scene, *back);
@@ -498,7 +500,7 @@ TEST(PackReader, FlippedByteInEachSectionIsAChecksumError) {
   PackWriteReport report;
   Result<std::vector<uint8_t>> bytes = serializePack(makeTestScene(), &report);
   ASSERT_TRUE(bytes);
-  ASSERT_EQ(report.sections.size(), 9u + 15u);  // required + animation sections (4 of them morph targets)
+  ASSERT_EQ(report.sections.size(), 9u + 16u);  // required + animation sections (4 morph targets, 1 rigid objects)
   PackWriteReport texturedReport;
   Result<std::vector<uint8_t>> textured = serializePack(makeTexturedTestScene(), &texturedReport);
   ASSERT_TRUE(textured);
@@ -536,15 +538,19 @@ TEST(PackReader, WrongMagicAndVersion) {
   reseal(v);
   EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
                         ErrorCode::Unsupported));
-  // Version 4 packs (raw geometry sections, RGBA8 textures only) are refused too: the user re-bakes.
-  EXPECT_EQ(pack::kVersion, 5u);
-  v = *bytes;
-  h = headerOf(v);
-  h.version = 4;
-  std::memcpy(v.data(), &h, sizeof(h));
-  reseal(v);
-  EXPECT_TRUE(failsWith(parse(v), "pack format version 4 is not supported by this build (it reads version 5); re-bake",
-                        ErrorCode::Unsupported));
+  // Version 5 packs (rigid node animation as one-joint skins) and older are refused too: the user re-bakes.
+  EXPECT_EQ(pack::kVersion, 6u);
+  for (uint32_t old : {4u, 5u}) {
+    v = *bytes;
+    h = headerOf(v);
+    h.version = old;
+    std::memcpy(v.data(), &h, sizeof(h));
+    reseal(v);
+    EXPECT_TRUE(failsWith(parse(v),
+                          "pack format version " + std::to_string(old) +
+                              " is not supported by this build (it reads version 6); re-bake",
+                          ErrorCode::Unsupported));
+  }
   v = *bytes;
   v[0] = 'X';
   EXPECT_TRUE(failsWith(parse(v), "not a visbuf pack"));
@@ -772,6 +778,20 @@ TEST(PackReader, BadReferencesInAnimationSections) {
   EXPECT_TRUE(failsWith(edit("animChannels", 1, 8, uint32_t{4}), "'path' 4 out of range"));
   EXPECT_TRUE(failsWith(edit("animTimes", 1, 0, 0.0f), "key times are not strictly increasing (key 1"));
   EXPECT_TRUE(failsWith(edit("animValues", 4, 0, INFINITY), "output value 4 is not finite"));
+  // Rigid objects (object 2, node 1, clip 0).
+  EXPECT_TRUE(hasSection(*bytes, "rigidObjects"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 4, int32_t{4}),
+                        "section 'rigidObjects' record 0: field 'node' 4 out of range (4 nodes)"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 4, int32_t{-1}), "section 'rigidObjects' record 0: field 'node' -1"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 0, uint32_t{3}),
+                        "section 'rigidObjects' record 0: field 'object' 3 out of range (3 objects)"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 0, uint32_t{1}), "object 1 is listed twice or is a skinned object"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 8, int32_t{2}),
+                        "field 'clip' 2 is not -1 or an animation index (2 animations)"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 12, uint32_t{1}), "section 'rigidObjects' record 0: field 'reserved'"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 16, double(NAN)), "field 'timeOffset' is not finite"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 24 + 3 * 8, 0.5), "field 'placement' is not affine"));
+  EXPECT_TRUE(failsWith(edit("rigidObjects", 0, 24 + 12 * 8, double(INFINITY)), "field 'placement' is not finite"));
 }
 
 // --- quantised packs

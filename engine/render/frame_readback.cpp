@@ -1,0 +1,266 @@
+// What a headless frame reads back (renderFrame) and how the counters of a finished frame become its stats:
+// the colour, the ID target decoded to (object + 1, triangle), draws, pyramid, overdraw and attributes.
+#include "visbuf/render/renderer_impl.h"
+
+#include <algorithm>
+
+#include <glm/gtc/packing.hpp>
+
+namespace visbuf {
+
+// The copies into host-visible buffers, after every pass of the frame.
+void Renderer::Impl::recordReadback(VkCommandBuffer cmd, const FrameOptions& options, const FramePlan& plan,
+                                    FrameReadback& rb) {
+  const uint32_t w = config.width, h = config.height;
+  const bool gpuCulled = plan.gpuCulled, msaa = plan.msaa;
+  const bool readIds = options.readIds;
+  const gpu::Image* colorSource = &color;
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+  if (plan.lightsCulled) lightCull.recordReadback(cmd);
+  if (options.readColor) {
+    VkImageLayout from = gpuCulled ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    gpu::imageBarrier(cmd, *colorSource, from, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                      VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, *colorSource, colorReadback);
+  }
+  rb.draws = (readIds || options.readDraws) && gpuCulled;
+  if (rb.draws) {
+    if (!drawsReadback)
+      drawsReadback = gpu::Buffer(device, draws.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+    VkBufferCopy dc{0, 0, draws.size()};
+    vkCmdCopyBuffer(cmd, draws.handle(), drawsReadback.handle(), 1, &dc);
+  }
+  rb.pyramid = plan.usePyramid && options.readPyramid;
+    if (rb.pyramid) {
+    uint32_t lw = w, lh = h;
+    VkDeviceSize offset = 0;
+    std::vector<VkBufferImageCopy> regions;
+    for (uint32_t k = 0; k < pyramid.levels(); ++k) {
+      VkBufferImageCopy region{};
+      region.bufferOffset = offset;
+      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, k, 0, 1};
+      region.imageExtent = {lw, lh, 1};
+      regions.push_back(region);
+      rb.pyramidSizes.emplace_back(lw, lh);
+      offset += VkDeviceSize(lw) * lh * 4;
+      lw = (lw + 1) / 2;
+      lh = (lh + 1) / 2;
+    }
+    if (!pyramidReadback || pyramidReadback.size() < offset)
+      pyramidReadback = gpu::Buffer(device, offset, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
+    gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    vkCmdCopyImageToBuffer(cmd, pyramid.pyramid().handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                           pyramidReadback.handle(), uint32_t(regions.size()), regions.data());
+    gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  if (options.countOverdraw) {
+    if (!overdrawReadback)
+      overdrawReadback = gpu::Buffer(device, VkDeviceSize(w) * h * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                     gpu::MemoryUse::HostVisible);
+    gpu::imageBarrier(cmd, overdraw, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, overdraw, overdrawReadback);
+    gpu::imageBarrier(cmd, overdraw, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
+  }
+  if (rb.attributes) {
+    if (!attributesReadback)
+      attributesReadback = gpu::Buffer(device, attributes.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                       gpu::MemoryUse::HostVisible);
+    VkBufferCopy ac{0, 0, rb.attributeBytes};
+    vkCmdCopyBuffer(cmd, attributes.handle(), attributesReadback.handle(), 1, &ac);
+  }
+  if (readIds && options.path == RenderPath::Visbuf && msaa) {  // the sample-ID copy (shading command buffer)
+    VkBufferCopy c{0, 0, rb.sampleIdBytes};
+    vkCmdCopyBuffer(cmd, attributes.handle(), idsReadback.handle(), 1, &c);
+  } else if (readIds && options.path == RenderPath::Visbuf) {
+    gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                      VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, ids, idsReadback);
+  } else if (readIds) {
+    gpu::imageBarrier(cmd, forwardIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    copyImageToBuffer(cmd, forwardIds, idsReadback);
+  }
+}
+
+// The counters and GPU times of a finished frame (slot.stats already holds what recording knew), and the
+// decisions later frames take from them (skipping a pyramid or micro-raster that did nothing). synchronous:
+// renderFrame, which also reads the light and classification statistics (their buffers are single).
+void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
+  slot.pending = false;
+  FrameStats& st = slot.stats;
+  const FrameOptions& options = slot.options;
+  const bool gpuCulled = slot.plan.gpuCulled, msaa = slot.plan.msaa, frozen = slot.plan.frozen;
+  const bool swOn = slot.plan.swOn, usePyramid = slot.plan.usePyramid;
+  st.passMs = slot.timestamps->read();
+  if (st.lightsCulled && synchronous) {
+    const passes::LightCullStats ls = lightCull.stats();
+    st.lightTileOverflow = ls.overflowTiles;
+    st.lightsDropped = ls.droppedLights;
+    st.maxLightsPerTile = ls.maxPerTile;
+    st.meanLightsPerTile = double(ls.pairs) / (double(lightCull.tilesX()) * lightCull.tilesY());
+  }
+  for (auto& p : st.passMs) st.gpuMs += p.second;
+  if (st.shading == ShadingMode::Classified && synchronous) {
+    passes::ClassifyStats cs = classify.stats();
+    st.materialsPresent = cs.materialsPresent;
+    st.classifiedTiles = cs.pairs;
+    st.materialTiles = std::move(cs.tiles);
+    st.materialPixels = std::move(cs.pixels);
+  }
+  if (gpuCulled) {
+    const uint32_t* s = static_cast<const uint32_t*>(slot.statsReadback.mapped());
+    st.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
+    st.objectsTested = gpuScene.objectCount;
+    st.frustumCulled = s[STAT_FRUSTUM_CULLED];
+    st.occlusionCulled = s[STAT_OCCLUSION_CULLED];
+    st.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
+    st.refineTested = s[STAT_REFINE_TESTED];
+    st.refineOccluded = s[STAT_REFINE_OCCLUDED];
+    st.drawsEarly = st.drawsLate = 0;
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+      st.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_EARLY, l);
+      st.drawsLate += listDrawn(s, CULL_PHASE_LATE, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
+      st.swDraws += listSwDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
+    }
+    st.swRaster = swOn;
+    st.swTriangles = s[STAT_SW_TRIANGLES];
+    st.swOversize = s[STAT_SW_OVERSIZE];
+    // "Skip what the scene does not need": a frame whose micro-raster took nothing (Auto on a GPU: less than pays
+    // for its merges) routes everything to the hardware raster for a while, then probes again.
+    if (!frozen) {
+      const uint64_t worth = options.swRaster == SwRasterMode::Auto && !device.isCpu() ? kGpuSwMinTriangles : 1;
+      if (swOn)
+        swSkipFrames = st.swTriangles < worth ? kSwProbeInterval : 0;
+      else if (swSkipFrames > 0)
+        --swSkipFrames;
+    }
+    st.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
+    st.drawsRendered = st.drawsEarly + st.drawsLate;
+    st.drawOverflow = s[STAT_DRAW_OVERFLOW];
+    st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
+    st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
+    // "Skip what the scene does not need": a pyramid that hid nothing is not built again for a while.
+    // Only a pyramid built from a non-empty early phase is evidence (a first frame or a cut has none).
+    if (usePyramid)
+      pyramidSkipFrames =
+          options.skipUselessPyramid && st.drawsEarly > 0 && st.occlusionCulled == 0 ? kPyramidProbeInterval : 0;
+    else if (pyramidSkipFrames > 0)
+      --pyramidSkipFrames;
+  }
+  while (!st.lodHistogram.empty() && st.lodHistogram.back() == 0) st.lodHistogram.pop_back();
+
+}
+
+void Renderer::Impl::decodeReadback(const FrameOptions& options, const FramePlan& plan, const FrameReadback& rb,
+                                    const FrameSlot& frame, FrameResult& result) {
+  const uint32_t w = config.width, h = config.height;
+  const bool gpuCulled = plan.gpuCulled, msaa = plan.msaa;
+  const bool readIds = options.readIds;
+  FrameStats& st = result.stats;
+  result.width = w;
+  result.height = h;
+  const size_t pixels = size_t(w) * h;
+  if (options.readColor) {
+    result.color.resize(pixels * 4);
+    const uint16_t* half = static_cast<const uint16_t*>(colorReadback.mapped());
+    for (size_t i = 0; i < pixels * 4; ++i) result.color[i] = glm::unpackHalf1x16(half[i]);
+  }
+  if (rb.draws) {
+    const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
+    auto add = [&](const gpu::DrawCommand& d) {
+      result.drawnObjects.push_back(d.firstInstance);
+      const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[d.firstInstance]];
+      uint32_t lod = 0;
+      while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
+      result.drawnLods.push_back(lod);
+    };
+    const uint32_t* s = static_cast<const uint32_t*>(frame.statsReadback.mapped());
+    for (uint32_t phase : {CULL_PHASE_EARLY, CULL_PHASE_LATE})
+      for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+        for (uint32_t i = 0; i < listDrawn(s, phase, l); ++i) add(dr[phase * capacity + listFirst[l] + i]);
+        for (uint32_t i = 0; i < listSwDrawn(s, phase, l); ++i)
+          add(dr[phase * capacity + listFirst[l] + listCapacity[l] - 1 - i]);
+      }
+  }
+  if (rb.pyramid) {
+    const float* p = static_cast<const float*>(pyramidReadback.mapped());
+    for (auto [lw, lh] : rb.pyramidSizes) {
+      result.pyramid.push_back({lw, lh, std::vector<float>(p, p + size_t(lw) * lh)});
+      p += size_t(lw) * lh;
+    }
+  }
+  if (options.countOverdraw) {
+    const uint32_t* o = static_cast<const uint32_t*>(overdrawReadback.mapped());
+    result.overdraw.assign(o, o + pixels);
+    uint64_t fragments = 0, covered = 0;
+    for (uint32_t n : result.overdraw) {
+      fragments += n;
+      covered += n > 0;
+    }
+    st.rasterWritesPerPixel = double(fragments) / double(pixels);
+    const double resolveBytes = gpuCulled ? 8.0 * double(covered) / double(pixels) : 0.0;  // colour, covered only
+    // Classified shading also writes its tile list (4 B per (tile, material) pair) and the per-material records.
+    const double classifyBytes =
+        st.shading == ShadingMode::Classified
+            ? (4.0 * st.classifiedTiles + double(sizeof(gpu::MaterialTiles)) * st.materialTiles.size()) / double(pixels)
+            : 0.0;
+    st.bytesWrittenPerPixel = st.rasterWritesPerPixel * st.rasterBytesPerFragment + resolveBytes + classifyBytes;
+  }
+  if (rb.attributes) {
+    const float* a = static_cast<const float*>(attributesReadback.mapped());
+    result.attributes.assign(a, a + pixels * ATTRIBUTE_FLOATS);
+  }
+  if (readIds && options.path == RenderPath::Forward) {  // already (object + 1, triangle)
+    const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
+    result.ids.assign(raw, raw + pixels * 2);
+  } else if (readIds) {
+    const size_t samples = size_t(options.msaa);  // MSAA: every sample (2 uints each, like wide IDs)
+    result.ids.assign(pixels * samples * 2, 0);
+    const uint32_t* s = static_cast<const uint32_t*>(frame.statsReadback.mapped());
+    auto slotWritten = [&](uint32_t slot) {  // within the part of its list's region the cull pass wrote
+      if (slot >= 2 * capacity) return false;
+      const uint32_t phase = slot < capacity ? 0 : 1, local = slot - phase * capacity;
+      for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+        if (local >= listFirst[l] && local < listFirst[l] + listCapacity[l])
+          return local - listFirst[l] < listDrawn(s, phase, l) ||
+                 listFirst[l] + listCapacity[l] - local <= listSwDrawn(s, phase, l);
+      return false;
+    };
+    const uint32_t* raw = static_cast<const uint32_t*>(idsReadback.mapped());
+    const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
+    const size_t stride = encoding.wide || msaa ? 2 : 1;  // the sample-ID copy writes (x, y) even for r32ui
+    for (size_t i = 0; i < pixels * samples; ++i) {
+      uint32_t slot, tri;
+      if (encoding.wide) {
+        if (raw[2 * i] == VIS_NOTHING) continue;
+        slot = raw[2 * i] - 1;
+        tri = raw[2 * i + 1];
+      } else {
+        if (raw[stride * i] == VIS_NOTHING) continue;
+        uint32_t v = raw[stride * i] - 1;
+        slot = v >> encoding.triangleBits;
+        tri = v & ((1u << encoding.triangleBits) - 1u);
+      }
+      if (!slotWritten(slot)) {  // GPU misbehaved: loud
+        result.ids[2 * i] = 0xFFFFFFFFu;
+        continue;
+      }
+      result.ids[2 * i] = dr[slot].firstInstance + 1;
+      result.ids[2 * i + 1] = tri;
+    }
+  }
+
+}
+
+}  // namespace visbuf

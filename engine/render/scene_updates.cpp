@@ -1,0 +1,233 @@
+// Scenes that change between frames: moved, hidden, added and removed objects. The renderer keeps the scene's
+// objects (plus RendererConfig::spareObjects free slots) on the CPU; a change rewrites the CPU record at once and
+// marks the object, and the next frame's setup command buffer copies the marked records from the frame slot's
+// staging buffer into the object buffer. Nothing else is uploaded.
+//
+// Occlusion history stays conservative without any change to it: a moved object is tested where it is now (the
+// early phase redraws last frame's visible set at their new places; everything else meets the late test), a
+// hidden or removed object is skipped by the cull pass (OBJECT_FLAG_HIDDEN), and a slot reused by a new object
+// keeps its old visibility bit, which at worst draws it in the early phase for one frame.
+#include "visbuf/render/renderer_impl.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace visbuf {
+
+void Renderer::Impl::markDirty(uint32_t id) {
+  if (dirtyMark[id]) return;
+  dirtyMark[id] = 1;
+  dirty.push_back(id);
+}
+
+// The GPU record of an object ID: its packed object (a skinned instance: its placement and mesh slot), with
+// OBJECT_FLAG_HIDDEN when hidden; a free slot is a hidden record of nothing.
+gpu::ObjectData Renderer::Impl::objectRecord(uint32_t id) const {
+  gpu::ObjectData d{};
+  if (slotState[id] == SlotFree) {
+    d.flags = OBJECT_FLAG_HIDDEN | 15u << OBJECT_DRAW_LIST_SHIFT;
+    return d;
+  }
+  d = packObject(objects[id], scene);
+  if (skinnedObject[id])
+    for (size_t k = 0; k < gpuScene.skinned.size(); ++k)
+      if (gpuScene.skinned[k].object == id) {
+        d = packSkinnedObject(objects[id], scene.skinnedObjects[k].placement, scene);
+        d.meshIndex = gpuScene.skinned[k].meshSlot;
+      }
+  if (slotState[id] == SlotHidden) d.flags |= OBJECT_FLAG_HIDDEN;
+  return d;
+}
+
+Status Renderer::Impl::checkTransform(uint32_t id, const glm::dmat4& m, const char* what) const {
+  if (!isLive(id))
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("{}: object {} is not a live object (IDs below {}, not removed)", what, id,
+                                 slotState.size()));
+  if (skinnedObject[id])
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("{}: object {} is skinned: its pose and placement place it", what, id));
+  if (rigidObject[id])
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("{}: object {} is node-animated: FrameOptions::animationTime places it", what, id));
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r]))
+        return makeError(ErrorCode::InvalidArgument,
+                         fmt::format("{}: object {}: the transform has a non-finite element", what, id));
+  const double det = glm::determinant(glm::dmat3(m));
+  if (!(std::abs(det) > 0.0) || !std::isfinite(det))
+    return makeError(ErrorCode::InvalidArgument, fmt::format("{}: object {}: the transform is singular", what, id));
+  return {};
+}
+
+Status Renderer::setTransforms(std::span<const ObjectTransform> moves) {
+  Impl& r = *impl_;
+  // All or nothing: every move is checked (draw-list room included) before any is applied.
+  std::array<uint32_t, DRAW_LISTS> live = r.listLive;
+  std::vector<uint32_t> lists(moves.size());
+  for (size_t i = 0; i < moves.size(); ++i) {
+    const ObjectTransform& m = moves[i];
+    if (Status s = r.checkTransform(m.object, m.transform, "setTransforms"); !s.ok()) return s;
+    Object moved = r.objects[m.object];
+    moved.transform = m.transform;
+    lists[i] = gpu::objectDrawList(packObject(moved, r.scene).flags);
+    const uint32_t from = r.gpuScene.objectList[m.object];
+    if (lists[i] == from) continue;
+    // The winding flipped: the object changes draw list; a list the micro-raster fills from its end must have room.
+    if (lists[i] != DRAW_LIST_NONE && (r.swListMask >> lists[i] & 1u) && live[lists[i]] >= r.listCapacity[lists[i]])
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("setTransforms: object {} flips its winding into draw list {}, which is full "
+                                   "(capacity {}); reserve RendererConfig::spareObjects",
+                                   m.object, lists[i], r.listCapacity[lists[i]]));
+    if (from != DRAW_LIST_NONE) --live[from];
+    if (lists[i] != DRAW_LIST_NONE) ++live[lists[i]];
+  }
+  for (size_t i = 0; i < moves.size(); ++i) {
+    r.objects[moves[i].object].transform = moves[i].transform;
+    r.gpuScene.objectList[moves[i].object] = lists[i];
+    r.markDirty(moves[i].object);
+  }
+  r.listLive = live;
+  return {};
+}
+
+Status Renderer::setVisible(uint32_t object, bool visible) {
+  Impl& r = *impl_;
+  if (!r.isLive(object))
+    return makeError(ErrorCode::InvalidArgument, fmt::format("setVisible: object {} is not a live object", object));
+  const uint8_t state = visible ? Impl::SlotLive : Impl::SlotHidden;
+  if (r.slotState[object] == state) return {};
+  r.slotState[object] = state;
+  r.markDirty(object);
+  return {};
+}
+
+Result<uint32_t> Renderer::addObject(const Object& object) {
+  Impl& r = *impl_;
+  if (object.mesh >= r.scene.meshes.size())
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("addObject: mesh {} (the scene has {})", object.mesh, r.scene.meshes.size()));
+  if (object.material >= r.scene.materials.size())
+    return makeError(ErrorCode::InvalidArgument, fmt::format("addObject: material {} (the scene has {})",
+                                                             object.material, r.scene.materials.size()));
+  if (r.freeSlots.empty())
+    return makeError(ErrorCode::CapacityExceeded,
+                     fmt::format("addObject: no free object slot ({} in use); create the renderer with more "
+                                 "RendererConfig::spareObjects",
+                                 r.slotState.size()));
+  const uint32_t id = r.freeSlots.back();
+  r.slotState[id] = Impl::SlotLive;  // (for checkTransform; undone below on refusal)
+  Status s = r.checkTransform(id, object.transform, "addObject");
+  const uint32_t list = gpu::objectDrawList(packObject(object, r.scene).flags);
+  if (s.ok() && list != DRAW_LIST_NONE && r.listLive[list] >= r.listCapacity[list])
+    s = makeError(ErrorCode::CapacityExceeded, fmt::format("addObject: draw list {} is full (capacity {})", list,
+                                                            r.listCapacity[list]));
+  if (!s.ok()) {
+    r.slotState[id] = Impl::SlotFree;
+    return s.error();
+  }
+  r.freeSlots.pop_back();
+  r.objects[id] = object;
+  r.gpuScene.objectMesh[id] = object.mesh;
+  r.gpuScene.objectList[id] = list;
+  if (list != DRAW_LIST_NONE) {
+    ++r.listLive[list];
+  } else {
+    if (!r.transparent.created()) r.transparent = passes::TransparentPass::create(r.device, r.pipelineLayout, r.textured);
+    r.blendObjects.push_back(id);
+  }
+  r.markDirty(id);
+  return id;
+}
+
+Status Renderer::removeObject(uint32_t object) {
+  Impl& r = *impl_;
+  if (!r.isLive(object))
+    return makeError(ErrorCode::InvalidArgument, fmt::format("removeObject: object {} is not a live object", object));
+  if (r.skinnedObject[object])
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("removeObject: object {} is skinned (hide it with setVisible)", object));
+  const uint32_t list = r.gpuScene.objectList[object];
+  if (list != DRAW_LIST_NONE)
+    --r.listLive[list];
+  else
+    r.blendObjects.erase(std::remove(r.blendObjects.begin(), r.blendObjects.end(), object), r.blendObjects.end());
+  r.slotState[object] = Impl::SlotFree;
+  r.rigidObject[object] = 0;  // a new object in this slot is the host's to place
+  r.gpuScene.objectList[object] = DRAW_LIST_NONE;
+  r.freeSlots.push_back(object);
+  std::sort(r.freeSlots.rbegin(), r.freeSlots.rend());  // the lowest free ID is reused first
+  r.markDirty(object);
+  return {};
+}
+
+void Renderer::Impl::poseRigidObjects(double time) {
+  if (scene.rigidObjects.empty() || (rigidPosed && time == rigidTime)) return;
+  rigidPosed = true;
+  rigidTime = time;
+  const std::vector<glm::dmat4> poses = rigidObjectTransforms(scene, time);
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const uint32_t id = scene.rigidObjects[i].object;
+    if (!rigidObject[id] || poses[i] == objects[id].transform) continue;
+    const glm::dmat4& m = poses[i];
+    bool finite = true;
+    for (int c = 0; c < 4; ++c)
+      for (int k = 0; k < 4; ++k) finite = finite && std::isfinite(m[c][k]);
+    const double det = glm::determinant(glm::dmat3(m));
+    if (!finite || !(std::abs(det) >= 1e-30) || !std::isfinite(det)) continue;
+    Object moved = objects[id];
+    moved.transform = m;
+    const uint32_t list = gpu::objectDrawList(packObject(moved, scene).flags);
+    const uint32_t from = gpuScene.objectList[id];
+    if (list != from) {
+      if (list != DRAW_LIST_NONE && (swListMask >> list & 1u) && listLive[list] >= listCapacity[list]) continue;
+      if (from != DRAW_LIST_NONE) --listLive[from];
+      if (list != DRAW_LIST_NONE) ++listLive[list];
+      gpuScene.objectList[id] = list;
+    }
+    objects[id].transform = m;
+    markDirty(id);
+  }
+}
+
+uint32_t Renderer::objectSlots() const { return uint32_t(impl_->slotState.size()); }
+
+const Object* Renderer::object(uint32_t id) const {
+  return impl_->isLive(id) ? &impl_->objects[id] : nullptr;
+}
+
+void Renderer::Impl::recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, FrameStats& st) {
+  if (dirty.empty()) return;
+  std::sort(dirty.begin(), dirty.end());
+  const VkDeviceSize bytes = VkDeviceSize(dirty.size()) * sizeof(gpu::ObjectData);
+  if (slot.staging.size() < bytes)
+    slot.staging = gpu::Buffer(device, std::max<VkDeviceSize>(bytes, 2 * slot.staging.size()),
+                               VK_BUFFER_USAGE_TRANSFER_SRC_BIT, gpu::MemoryUse::HostVisible);
+  auto* records = static_cast<gpu::ObjectData*>(slot.staging.mapped());
+  std::vector<VkBufferCopy> regions;
+  constexpr VkDeviceSize kRecord = sizeof(gpu::ObjectData);
+  for (size_t i = 0; i < dirty.size(); ++i) {
+    records[i] = objectRecord(dirty[i]);
+    const VkDeviceSize src = i * kRecord, dst = VkDeviceSize(dirty[i]) * kRecord;
+    if (!regions.empty() && regions.back().srcOffset + regions.back().size == src &&
+        regions.back().dstOffset + regions.back().size == dst)
+      regions.back().size += kRecord;
+    else
+      regions.push_back({src, dst, kRecord});
+    dirtyMark[dirty[i]] = 0;
+  }
+  // Earlier frames' passes read the records being replaced; every later pass reads the new ones.
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                     VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  vkCmdCopyBuffer(cmd, slot.staging.handle(), gpuScene.objects.handle(), uint32_t(regions.size()), regions.data());
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
+  st.objectsUpdated = uint32_t(dirty.size());
+  st.uploadedBytes = bytes;
+  dirty.clear();
+}
+
+}  // namespace visbuf
