@@ -134,4 +134,33 @@ struct StressCommand {
 void addStressCommand(CLI::App& app, StressCommand& cmd, int argc, char** argv);
 int runStress(const StressCommand& cmd);
 
+// visbuf view (tools/view_command.cpp; built when GLFW is found): a window onto a scene with a fly camera, its
+// own Vulkan instance / device / swapchain handed to visbuf (gpu::Device::adopt, Renderer::record). Exit codes:
+// 0 ok; 1 bad input, no display or no device; 2 usage; 3 validation messages.
+struct ViewCommand {
+  SceneOptions scene;
+  CameraOptions camera;
+  std::string size = "1280x720";
+  std::string path = "visbuf";
+  std::string device = "auto";
+  std::string cull = "occlusion";
+  float lodError = 1.0f;
+  bool noLod = false;
+  std::string swRaster = "auto";  // auto | on | off (FrameOptions::swRaster); key M toggles on / off
+  std::string shading = "auto";
+  uint32_t drawCapacity = 0;
+  bool wideIds = false;
+  bool validation = false;        // the viewer's own instance: validation layer + counting messenger
+  uint32_t framesInFlight = 2;    // RendererConfig::framesInFlight and the viewer's fences / semaphores
+  std::string present = "fifo";   // fifo | mailbox
+  std::string surface = "srgb";   // srgb | unorm (the swapchain format family)
+  uint32_t frames = 0;            // exit after N presented frames; 0: when the window closes
+  std::string screenshot;         // write the last frame's colour output here, then exit
+  double time = 0.0;              // animation time (s)
+  bool animate = false;           // play the animation
+};
+
+void addViewCommand(CLI::App& app, ViewCommand& cmd);
+int runView(const ViewCommand& cmd);
+
 }  // namespace visbuf::tools

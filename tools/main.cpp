@@ -25,6 +25,10 @@ int main(int argc, char** argv) {
   visbuf::tools::addBenchBakeCommand(app, benchBake, argc, argv);
   visbuf::tools::StressCommand stress;
   visbuf::tools::addStressCommand(app, stress, argc, argv);
+#ifdef VISBUF_HAVE_VIEW
+  visbuf::tools::ViewCommand view;
+  visbuf::tools::addViewCommand(app, view);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ValidationError& e) {
@@ -45,6 +49,9 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("bench")) return visbuf::tools::runBench(bench);
     if (app.got_subcommand("bench-bake")) return visbuf::tools::runBenchBake(benchBake);
     if (app.got_subcommand("stress")) return visbuf::tools::runStress(stress);
+#ifdef VISBUF_HAVE_VIEW
+    if (app.got_subcommand("view")) return visbuf::tools::runView(view);
+#endif
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr,
                  "visbuf: error (out of memory): an allocation failed: the input needs more memory than this process "
