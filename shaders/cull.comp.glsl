@@ -138,9 +138,14 @@ void main() {
   uint id = gl_GlobalInvocationID.x;
   bool valid = id < (listed ? min(visibleList[listBase], frame.objectCount) : frame.objectCount);
   if (listed) id = valid ? visibleList[listBase + VISIBLE_LIST_HEADER + id] : 0u;
-  // Hidden objects and free slots are skipped in every phase (their history bit stays: a slot reused or shown
-  // again is drawn early if it was visible, which only costs time).
-  if (valid && (objectAt(id).flags & OBJECT_FLAG_HIDDEN) != 0u) valid = false;
+  // Hidden objects and free slots are skipped in every phase. The late phase clears their history bit: the early
+  // phase draws only listed objects and the late phase takes a set bit for "drawn early", so a bit without a list
+  // entry would lose the object when it is shown again or its slot reused (a hidden object is never listed).
+  if (valid && (objectAt(id).flags & OBJECT_FLAG_HIDDEN) != 0u) {
+    valid = false;
+    if (frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE && !refine && history[id] != 0u)
+      history[id] = 0u;
+  }
   bool draw = false;
   uint lod = 0;
   uint meshIndex = 0;

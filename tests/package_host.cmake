@@ -12,8 +12,11 @@ execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK}/host RESULT_VARIABLE rc
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "host build failed:\n${o}\n${e}")
 endif()
-execute_process(COMMAND ${WORK}/host/visbuf_host RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
-if(NOT rc EQUAL 0 OR NOT o MATCHES "objects drawn")
+# The host's own device, command buffers and fence ring: 60 frames, 3 in flight, validation on (exit 3 on any
+# message), the composed last frame checked against renderFrame.
+execute_process(COMMAND ${WORK}/host/visbuf_host --frames 60 --in-flight 3 --validation
+                RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
+if(NOT rc EQUAL 0 OR NOT o MATCHES "60 frames recorded with 3 in flight" OR NOT o MATCHES "objects drawn")
   message(FATAL_ERROR "host run failed (${rc}):\n${o}\n${e}")
 endif()
 message(STATUS "${o}")

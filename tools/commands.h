@@ -40,6 +40,8 @@ struct RenderCommand {
   uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
   std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
   float swRasterPixels = 64.0f;  // its object size bound in pixels (FrameOptions::swRasterPixels)
+  double moving = 0.0;  // fraction of the movable objects moved every frame (SceneMotion)
+  double churn = 0.0;   // fraction of the objects removed, added and hidden every frame (SceneMotion)
 };
 
 // visbuf render (tools/render_command.cpp). Exit codes: 0 ok; 1 bad input (an option value out of range, not

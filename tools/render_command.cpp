@@ -17,6 +17,7 @@
 #include "visbuf/gpu/device.h"
 #include "visbuf/passes/depth_pyramid_pass.h"
 #include "visbuf/render/renderer.h"
+#include "visbuf/render/scene_motion.h"
 #include "visbuf/scene/generate.h"
 #include "render_budget.h"
 #include "skin_check.h"
@@ -99,6 +100,17 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--sw-raster-px", c.swRasterPixels, "--sw-raster: the object size bound in pixels (0, 94]")
       ->check(finiteNumber(0.0, 94.0, true, false))
       ->capture_default_str();
+  sub->add_option("--moving", c.moving,
+                  "every frame, move this fraction of the objects (not skinned or node-animated) along deterministic "
+                  "closed paths through the renderer's scene-update API; the JSON gets per-frame uploaded bytes and "
+                  "culling counters (use with --frames)")
+      ->check(finiteNumber(0.0, 1.0))
+      ->capture_default_str();
+  sub->add_option("--churn", c.churn,
+                  "every frame, remove, add and hide this fraction of the objects (at least one each; hidden ones "
+                  "reappear 3 frames later)")
+      ->check(finiteNumber(0.0, 0.5))
+      ->capture_default_str();
   sub->add_flag("--freeze-culling", c.freezeCulling,
                 "cull from the scene's default camera, then render from --camera-pos/--camera-target with that "
                 "frame's draw lists (shows what the first camera culled)");
@@ -153,6 +165,10 @@ int runRender(const RenderCommand& c) {
   if (int(c.reference) + int(c.referenceFull) + int(c.referenceLights) > 1)
     return usage("--reference, --reference-full and --reference-lights are exclusive");
   if (c.freezeCulling && c.path == "forward") return usage("--freeze-culling needs --path visbuf or gbuffer");
+  const bool moving = c.moving > 0.0 || c.churn > 0.0;
+  if (moving && (c.reference || c.referenceFull || c.referenceLights))
+    return usage("--moving and --churn change the scene every frame: the --reference options compare one fixed scene");
+  if (moving && c.freezeCulling) return usage("--moving and --churn do not combine with --freeze-culling");
   if (const uint32_t levels = passes::pyramidLevelCount(size->first, size->second);
       c.pyramidLevel >= 0 && uint32_t(c.pyramidLevel) >= levels)
     return badValue(fmt::format("--pyramid-level {}: a {}x{} frame's depth pyramid has levels 0..{}", c.pyramidLevel,
@@ -217,7 +233,14 @@ int runRender(const RenderCommand& c) {
   auto camera = makeCamera(c.camera, *scene);
   if (!camera) return fail(camera.error());
 
+  std::optional<SceneMotion> motion;
+  if (moving) {
+    auto m = SceneMotion::create(*scene, {.moving = c.moving, .churn = c.churn, .seed = 1});
+    if (!m) return fail(m.error());
+    motion.emplace(std::move(m.value()));
+  }
   RendererConfig rc;
+  rc.spareObjects = motion ? motion->spareObjects() : 0;
   rc.width = size->first;
   rc.height = size->second;
   rc.drawCapacity = c.drawCapacity;
@@ -238,9 +261,21 @@ int runRender(const RenderCommand& c) {
   fo.swRaster = parseSwRasterMode(c.swRaster);
   fo.swRasterPixels = c.swRasterPixels;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
+  // --moving / --churn: the scene changes before every frame; perFrame gets each frame's changes and counters.
+  nlohmann::json perFrame = nlohmann::json::array();
+  Status motionStatus;
   auto run = [&](FrameOptions options, bool readColor, Result<FrameResult>& frame) -> FrameStats {
     std::vector<FrameStats> runs;
     for (uint32_t i = 0; i < c.frames; ++i) {
+      SceneMotionFrame changed;
+      if (motion) {
+        auto m = motion->apply(**renderer, i);
+        if (!m) {
+          motionStatus = m.error();
+          return {};
+        }
+        changed = *m;
+      }
       const bool last = i + 1 == c.frames;
       options.readColor = last && readColor;
       options.readIds = last && !c.idsOut.empty();
@@ -252,6 +287,7 @@ int runRender(const RenderCommand& c) {
       frame = (*renderer)->renderFrame(*camera, options);
       if (!frame) return {};
       runs.push_back(frame->stats);
+      if (motion) perFrame.push_back(motionFrameJson(changed, frame->stats));
     }
     FrameStats stats = frame->stats;
     if (runs.size() > 1) {
@@ -292,6 +328,7 @@ int runRender(const RenderCommand& c) {
   }
   Result<FrameResult> frame = makeError(ErrorCode::InvalidArgument, "no frame");
   FrameStats stats = run(fo, !c.output.empty() || compare, frame);
+  if (!motionStatus) return fail(motionStatus.error());
   if (!frame) return fail(frame.error());
 
   uint64_t sceneTriangles = 0;
@@ -301,6 +338,7 @@ int runRender(const RenderCommand& c) {
               (unsigned long long)sceneTriangles);
   std::printf("%s", formatStats(stats).c_str());
   if (c.frames > 1) std::printf("(times: median of %u frames after 1 warm-up)\n", c.frames - 1);
+  if (motion) std::printf("%s", formatMotion(perFrame, motion->movingObjects()).c_str());
   if (!c.output.empty() && c.view != "shaded") {
     auto view = buildDebugView(c.view, *frame, *scene, *camera, std::max(c.pyramidLevel, 0));
     if (!view) return fail(view.error());
@@ -366,6 +404,11 @@ int runRender(const RenderCommand& c) {
     j["frames"] = c.frames;
     j["lodErrorPixels"] = fo.lodErrorPixels;
     j["cull"] = c.cull;
+    if (motion) {
+      j["moving"] = c.moving;
+      j["churn"] = c.churn;
+      j["perFrame"] = perFrame;
+    }
     Status s = writeJsonFile(c.json, j);
     if (!s) return fail(s.error());
   }

@@ -128,6 +128,9 @@ nlohmann::json statsToJson(const FrameStats& s) {
                              {"materialTiles", s.materialTiles}, {"materialPixels", s.materialPixels}};
   }
   j["sceneBytes"] = s.sceneBytes;
+  j["objectsUpdated"] = s.objectsUpdated;
+  j["uploadedBytes"] = s.uploadedBytes;
+  j["frameIndex"] = s.frameIndex;
   j["textures"] = {{"classes", s.textureClasses}, {"bytes", s.textureBytes}, {"decompressed", s.texturesDecompressed}};
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
   j["msaa"] = {{"samples", s.msaaSamples}, {"perSamplePixels", s.perSamplePixels}};
@@ -137,6 +140,44 @@ nlohmann::json statsToJson(const FrameStats& s) {
     j["bytesWrittenPerPixel"] = s.bytesWrittenPerPixel;
   }
   return j;
+}
+
+nlohmann::json motionFrameJson(const SceneMotionFrame& m, const FrameStats& s) {
+  return {{"frame", s.frameIndex},
+          {"moved", m.moved},
+          {"added", m.added},
+          {"removed", m.removed},
+          {"hidden", m.hidden},
+          {"shown", m.shown},
+          {"objectsUpdated", s.objectsUpdated},
+          {"uploadedBytes", s.uploadedBytes},
+          {"objectsTested", s.objectsTested},
+          {"frustumCulled", s.frustumCulled},
+          {"occlusionCulled", s.occlusionCulled},
+          {"subpixelCulled", s.subpixelCulled},
+          {"drawsEarly", s.drawsEarly},
+          {"drawsLate", s.drawsLate},
+          {"drawsRendered", s.drawsRendered},
+          {"trianglesDrawn", s.trianglesDrawn},
+          {"gpuMs", s.gpuMs},
+          {"cpuRecordMs", s.cpuRecordMs}};
+}
+
+std::string formatMotion(const nlohmann::json& perFrame, uint32_t movingObjects) {
+  if (perFrame.empty()) return {};
+  uint64_t bytes = 0, updated = 0, added = 0, removed = 0, hidden = 0;
+  for (const nlohmann::json& f : perFrame) {
+    bytes += f["uploadedBytes"].get<uint64_t>();
+    updated += f["objectsUpdated"].get<uint64_t>();
+    added += f["added"].get<uint64_t>();
+    removed += f["removed"].get<uint64_t>();
+    hidden += f["hidden"].get<uint64_t>();
+  }
+  const double n = double(perFrame.size());
+  return fmt::format("scene changes {} moving objects; per frame (mean of {}): {:.0f} added, {:.0f} removed, {:.0f} "
+                     "hidden, {:.0f} records = {:.1f} KiB uploaded\n",
+                     movingObjects, perFrame.size(), double(added) / n, double(removed) / n, double(hidden) / n,
+                     double(updated) / n, double(bytes) / n / 1024.0);
 }
 
 Status writeTextFile(const std::string& path, const std::string& text) {

@@ -8,6 +8,7 @@
 
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"
+#include "object_scatter.comp.h"
 #include "sw_merge.frag.h"
 #include "sw_merge.vert.h"
 #include "sw_merge_wide.frag.h"
@@ -78,6 +79,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
 #define VB_SHADER(file, sym) \
   if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
   VB_SHADER("cull.comp", spv_cull_comp)
+  VB_SHADER("object_scatter.comp", spv_object_scatter_comp)
   VB_SHADER("sw_raster.comp", spv_sw_raster_comp)
   VB_SHADER("sw_raster_cpu.comp", spv_sw_raster_cpu_comp)
   VB_SHADER("sw_merge.vert", spv_sw_merge_vert)

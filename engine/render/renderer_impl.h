@@ -27,6 +27,7 @@
 #include "visbuf/passes/gbuffer_lighting_pass.h"
 #include "visbuf/passes/gbuffer_pass.h"
 #include "visbuf/passes/light_cull_pass.h"
+#include "visbuf/passes/object_upload_pass.h"
 #include "visbuf/passes/shade_pass.h"
 #include "visbuf/passes/skin_pass.h"
 #include "visbuf/passes/sw_raster_pass.h"
@@ -145,6 +146,7 @@ struct Renderer::Impl {
   // winding flip into a micro-raster list without room.
   void poseRigidObjects(double time);
 
+  passes::ObjectUploadPass objectUpload;  // scene changes (scene_updates.cpp)
   passes::CullPass cull;
   passes::VisibilityPass visibility;
   passes::ShadePass shade;

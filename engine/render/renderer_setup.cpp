@@ -485,6 +485,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
                                      impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
   impl->cull = passes::CullPass::create(device, impl->pipelineLayout, textured);
+  impl->objectUpload.create(device);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
   if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->pipelineLayout, textured);

@@ -201,31 +201,30 @@ const Object* Renderer::object(uint32_t id) const {
 
 void Renderer::Impl::recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, FrameStats& st) {
   if (dirty.empty()) return;
-  std::sort(dirty.begin(), dirty.end());
-  const VkDeviceSize bytes = VkDeviceSize(dirty.size()) * sizeof(gpu::ObjectData);
+  // The slot's staging buffer: the records, then their object IDs; one scatter dispatch writes them into place
+  // (a copy command would need one region per run of consecutive IDs: thousands for scattered changes).
+  const uint32_t count = uint32_t(dirty.size());
+  constexpr VkDeviceSize kRecord = sizeof(gpu::ObjectData);
+  const VkDeviceSize idsOffset = VkDeviceSize(count) * kRecord, bytes = idsOffset + VkDeviceSize(count) * 4;
   if (slot.staging.size() < bytes)
     slot.staging = gpu::Buffer(device, std::max<VkDeviceSize>(bytes, 2 * slot.staging.size()),
-                               VK_BUFFER_USAGE_TRANSFER_SRC_BIT, gpu::MemoryUse::HostVisible);
-  auto* records = static_cast<gpu::ObjectData*>(slot.staging.mapped());
-  std::vector<VkBufferCopy> regions;
-  constexpr VkDeviceSize kRecord = sizeof(gpu::ObjectData);
-  for (size_t i = 0; i < dirty.size(); ++i) {
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                               gpu::MemoryUse::HostVisible);
+  auto* base = static_cast<uint8_t*>(slot.staging.mapped());
+  auto* records = reinterpret_cast<gpu::ObjectData*>(base);
+  auto* ids = reinterpret_cast<uint32_t*>(base + idsOffset);
+  for (uint32_t i = 0; i < count; ++i) {
     records[i] = objectRecord(dirty[i]);
-    const VkDeviceSize src = i * kRecord, dst = VkDeviceSize(dirty[i]) * kRecord;
-    if (!regions.empty() && regions.back().srcOffset + regions.back().size == src &&
-        regions.back().dstOffset + regions.back().size == dst)
-      regions.back().size += kRecord;
-    else
-      regions.push_back({src, dst, kRecord});
+    ids[i] = dirty[i];
     dirtyMark[dirty[i]] = 0;
   }
   // Earlier frames' passes read the records being replaced; every later pass reads the new ones.
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                     VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  vkCmdCopyBuffer(cmd, slot.staging.handle(), gpuScene.objects.handle(), uint32_t(regions.size()), regions.data());
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  objectUpload.record(cmd, slot.staging, idsOffset, gpuScene.objects, count);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
-  st.objectsUpdated = uint32_t(dirty.size());
+  st.objectsUpdated = count;
   st.uploadedBytes = bytes;
   dirty.clear();
 }

@@ -399,7 +399,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
     md.skinnedTangentHigh = uint32_t(t >> 32);
   }
   g.meshes = staging.upload(g.meshTable, ssbo | texel | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
-  g.objects = staging.upload(objects, ssbo | texel);
+  // Device address: frames scatter changed records into it (passes/object_upload_pass.h).
+  g.objects = staging.upload(objects, ssbo | texel | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT);
   g.materials = staging.upload(materials, ssbo | texel);
   {
     const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
