@@ -46,53 +46,6 @@ Error vkError(const char* what, VkResult r) {
     if (viewResult_ != VK_SUCCESS) return vkError(#call, viewResult_);     \
   } while (0)
 
-// visbuf's required features (gpu::Device::requiredFeaturesText()), as one chain for query and enable.
-struct FeatureChain {
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  FeatureChain() {
-    f2.pNext = &f11;
-    f11.pNext = &f12;
-    f12.pNext = &f13;
-  }
-  FeatureChain(const FeatureChain&) = delete;
-  FeatureChain& operator=(const FeatureChain&) = delete;
-  void requireAll() {
-    f2.features.multiDrawIndirect = VK_TRUE;
-    f2.features.drawIndirectFirstInstance = VK_TRUE;
-    f2.features.geometryShader = VK_TRUE;
-    f2.features.fragmentStoresAndAtomics = VK_TRUE;
-    f2.features.shaderInt64 = VK_TRUE;
-    f11.shaderDrawParameters = VK_TRUE;
-    f12.drawIndirectCount = VK_TRUE;
-    f12.bufferDeviceAddress = VK_TRUE;
-    f12.shaderBufferInt64Atomics = VK_TRUE;
-    f13.dynamicRendering = VK_TRUE;
-    f13.synchronization2 = VK_TRUE;
-  }
-  // The required features this device lacks, by name.
-  std::vector<std::string> missing() const {
-    std::vector<std::string> out;
-    auto need = [&](VkBool32 have, const char* name) {
-      if (!have) out.push_back(name);
-    };
-    need(f2.features.multiDrawIndirect, "multiDrawIndirect");
-    need(f2.features.drawIndirectFirstInstance, "drawIndirectFirstInstance");
-    need(f2.features.geometryShader, "geometryShader");
-    need(f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
-    need(f2.features.shaderInt64, "shaderInt64");
-    need(f11.shaderDrawParameters, "shaderDrawParameters");
-    need(f12.drawIndirectCount, "drawIndirectCount");
-    need(f12.bufferDeviceAddress, "bufferDeviceAddress");
-    need(f12.shaderBufferInt64Atomics, "shaderBufferInt64Atomics");
-    need(f13.dynamicRendering, "dynamicRendering");
-    need(f13.synchronization2, "synchronization2");
-    return out;
-  }
-};
-
 bool hasLayer(const char* name) {
   uint32_t count = 0;
   vkEnumerateInstanceLayerProperties(&count, nullptr);
@@ -272,7 +225,7 @@ Status ViewHost::pickDevice(const ViewHostOptions& options) {
     vkGetPhysicalDeviceProperties(pd, &props);
     std::vector<std::string> why;
     if (props.apiVersion < VK_API_VERSION_1_3) why.push_back("Vulkan < 1.3");
-    FeatureChain fc;
+    gpu::RequiredFeatures fc;
     vkGetPhysicalDeviceFeatures2(pd, &fc.f2);
     for (const std::string& m : fc.missing()) why.push_back("no " + m);
     if (!hasDeviceExtension(pd, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) why.push_back("no VK_KHR_swapchain");
@@ -337,7 +290,7 @@ Status ViewHost::pickDevice(const ViewHostOptions& options) {
 }
 
 Status ViewHost::createDevice() {
-  FeatureChain fc;
+  gpu::RequiredFeatures fc;
   fc.requireAll();
   VkPhysicalDeviceFeatures have{};
   vkGetPhysicalDeviceFeatures(physical_, &have);

@@ -22,20 +22,6 @@ const char* typeName(VkPhysicalDeviceType type) {
   }
 }
 
-// The feature chain we enable. Kept in one place so check and enable cannot disagree.
-struct FeatureChain {
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  FeatureChain() {
-    f2.pNext = &f11;
-    f11.pNext = &f12;
-    f12.pNext = &f13;
-  }
-  FeatureChain(const FeatureChain&) = delete;
-};
-
 // Returns the list of missing requirements (empty = suitable).
 std::vector<std::string> missingRequirements(VkPhysicalDevice pd, uint32_t* queueFamilyOut) {
   std::vector<std::string> missing;
@@ -44,22 +30,9 @@ std::vector<std::string> missingRequirements(VkPhysicalDevice pd, uint32_t* queu
   if (props.apiVersion < VK_API_VERSION_1_3)
     missing.push_back(fmt::format("Vulkan {}.{} < 1.3", VK_API_VERSION_MAJOR(props.apiVersion),
                                   VK_API_VERSION_MINOR(props.apiVersion)));
-  FeatureChain fc;
+  RequiredFeatures fc;
   vkGetPhysicalDeviceFeatures2(pd, &fc.f2);
-  auto need = [&](VkBool32 have, const char* name) {
-    if (!have) missing.push_back(std::string("no ") + name);
-  };
-  need(fc.f2.features.multiDrawIndirect, "multiDrawIndirect");
-  need(fc.f2.features.drawIndirectFirstInstance, "drawIndirectFirstInstance");
-  need(fc.f2.features.geometryShader, "geometryShader (gl_PrimitiveID in fragment shaders)");
-  need(fc.f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
-  need(fc.f11.shaderDrawParameters, "shaderDrawParameters");
-  need(fc.f12.drawIndirectCount, "drawIndirectCount");
-  need(fc.f12.bufferDeviceAddress, "bufferDeviceAddress");
-  need(fc.f2.features.shaderInt64, "shaderInt64");
-  need(fc.f12.shaderBufferInt64Atomics, "shaderBufferInt64Atomics (the software micro-raster's depth + ID atomics)");
-  need(fc.f13.dynamicRendering, "dynamicRendering");
-  need(fc.f13.synchronization2, "synchronization2");
+  for (const std::string& m : fc.missing()) missing.push_back("no " + m);
   if (props.limits.timestampPeriod <= 0.0f) missing.push_back("no timestamps");
 
   uint32_t count = 0;
@@ -108,6 +81,39 @@ Result<DeviceOptions> parseDeviceOption(const std::string& text, DeviceOptions b
     base.index = static_cast<uint32_t>(v);
   }
   return base;
+}
+
+void RequiredFeatures::requireAll() {
+  f2.features.multiDrawIndirect = VK_TRUE;
+  f2.features.drawIndirectFirstInstance = VK_TRUE;
+  f2.features.geometryShader = VK_TRUE;
+  f2.features.fragmentStoresAndAtomics = VK_TRUE;
+  f2.features.shaderInt64 = VK_TRUE;
+  f11.shaderDrawParameters = VK_TRUE;
+  f12.drawIndirectCount = VK_TRUE;
+  f12.shaderBufferInt64Atomics = VK_TRUE;  // sw_raster.comp: atomicMax of (depth << 32 | payload)
+  f12.bufferDeviceAddress = VK_TRUE;  // skinned vertices (MeshData.skinnedVertex*), object-record scatter
+  f13.dynamicRendering = VK_TRUE;
+  f13.synchronization2 = VK_TRUE;
+}
+
+std::vector<std::string> RequiredFeatures::missing() const {
+  std::vector<std::string> out;
+  auto need = [&](VkBool32 have, const char* name) {
+    if (!have) out.push_back(name);
+  };
+  need(f2.features.multiDrawIndirect, "multiDrawIndirect");
+  need(f2.features.drawIndirectFirstInstance, "drawIndirectFirstInstance");
+  need(f2.features.geometryShader, "geometryShader (gl_PrimitiveID in fragment shaders)");
+  need(f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
+  need(f11.shaderDrawParameters, "shaderDrawParameters");
+  need(f12.drawIndirectCount, "drawIndirectCount");
+  need(f12.bufferDeviceAddress, "bufferDeviceAddress");
+  need(f2.features.shaderInt64, "shaderInt64");
+  need(f12.shaderBufferInt64Atomics, "shaderBufferInt64Atomics (the software micro-raster's depth + ID atomics)");
+  need(f13.dynamicRendering, "dynamicRendering");
+  need(f13.synchronization2, "synchronization2");
+  return out;
 }
 
 const char* Device::requiredFeaturesText() {
@@ -230,18 +236,8 @@ Result<std::unique_ptr<Device>> Device::create(const DeviceOptions& options) {
   dev->selectionReport_ = report;
   if (options.verbose) std::fprintf(stderr, "%s", report.c_str());
 
-  FeatureChain fc;  // enable exactly what we require
-  fc.f2.features.multiDrawIndirect = VK_TRUE;
-  fc.f2.features.drawIndirectFirstInstance = VK_TRUE;
-  fc.f2.features.geometryShader = VK_TRUE;
-  fc.f2.features.fragmentStoresAndAtomics = VK_TRUE;
-  fc.f11.shaderDrawParameters = VK_TRUE;
-  fc.f12.drawIndirectCount = VK_TRUE;
-  fc.f2.features.shaderInt64 = VK_TRUE;
-  fc.f12.shaderBufferInt64Atomics = VK_TRUE;  // sw_raster.comp: atomicMax of (depth << 32 | payload)
-  fc.f12.bufferDeviceAddress = VK_TRUE;  // skinned vertices (MeshData.skinnedVertex*): one buffer past 4 windows
-  fc.f13.dynamicRendering = VK_TRUE;
-  fc.f13.synchronization2 = VK_TRUE;
+  RequiredFeatures fc;  // enable exactly what we require
+  fc.requireAll();
   // Optional: block-compressed textures are sampled as such where the device has BC formats; elsewhere the
   // texture upload decompresses them to RGBA8 (scene/gpu_textures.cpp).
   {

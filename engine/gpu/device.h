@@ -25,6 +25,25 @@ struct DeviceOptions {
 // Parses "auto", "cpu", "gpu" or a device index.
 Result<DeviceOptions> parseDeviceOption(const std::string& text, DeviceOptions base = {});
 
+// The Vulkan 1.1-1.3 feature chain visbuf needs (requiredFeaturesText()), for a host that creates its own device:
+// query a physical device into it (vkGetPhysicalDeviceFeatures2(pd, &chain.f2)) and read missing(), or call
+// requireAll() and chain f2 into VkDeviceCreateInfo::pNext. Not copyable (the chain points into itself).
+struct RequiredFeatures {
+  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
+  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+  RequiredFeatures() {
+    f2.pNext = &f11;
+    f11.pNext = &f12;
+    f12.pNext = &f13;
+  }
+  RequiredFeatures(const RequiredFeatures&) = delete;
+  RequiredFeatures& operator=(const RequiredFeatures&) = delete;
+  void requireAll();                     // sets every required feature (and nothing else)
+  std::vector<std::string> missing() const;  // the required features this chain does not have, by name
+};
+
 // What a host engine hands in when it owns the Vulkan objects. The device must have been created
 // with the features listed by requiredFeaturesText() and a queue supporting graphics + compute.
 struct ExternalDevice {

@@ -67,36 +67,6 @@ struct HostVulkan {
   }
 };
 
-// The features visbuf requires (visbuf::gpu::Device::requiredFeaturesText()), one chain for query and enable.
-struct Features {
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  Features() {
-    f2.pNext = &f11;
-    f11.pNext = &f12;
-    f12.pNext = &f13;
-  }
-  Features(const Features&) = delete;
-  Features& operator=(const Features&) = delete;
-  // Each required feature as (have/enable flag, name).
-  template <typename F>
-  void each(F&& f) {
-    f(f2.features.multiDrawIndirect, "multiDrawIndirect");
-    f(f2.features.drawIndirectFirstInstance, "drawIndirectFirstInstance");
-    f(f2.features.geometryShader, "geometryShader");
-    f(f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
-    f(f2.features.shaderInt64, "shaderInt64");
-    f(f11.shaderDrawParameters, "shaderDrawParameters");
-    f(f12.drawIndirectCount, "drawIndirectCount");
-    f(f12.bufferDeviceAddress, "bufferDeviceAddress");
-    f(f12.shaderBufferInt64Atomics, "shaderBufferInt64Atomics");
-    f(f13.dynamicRendering, "dynamicRendering");
-    f(f13.synchronization2, "synchronization2");
-  }
-};
-
 bool createHostVulkan(HostVulkan& h, bool validation) {
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
   app.pApplicationName = "visbuf_host";
@@ -139,12 +109,10 @@ bool createHostVulkan(HostVulkan& h, bool validation) {
   for (VkPhysicalDevice pd : devices) {
     VkPhysicalDeviceProperties props;
     vkGetPhysicalDeviceProperties(pd, &props);
-    Features have;
+    visbuf::gpu::RequiredFeatures have;  // what visbuf needs, queried
     vkGetPhysicalDeviceFeatures2(pd, &have.f2);
     std::string missing;
-    have.each([&](VkBool32 f, const char* name) {
-      if (!f) missing += std::string(missing.empty() ? "" : ", ") + name;
-    });
+    for (const std::string& m : have.missing()) missing += (missing.empty() ? "" : ", ") + m;
     uint32_t fc = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(pd, &fc, nullptr);
     std::vector<VkQueueFamilyProperties> fams(fc);
@@ -158,8 +126,8 @@ bool createHostVulkan(HostVulkan& h, bool validation) {
                    !missing.empty() ? ("lacks " + missing).c_str() : "no Vulkan 1.3 or no graphics+compute queue");
       continue;
     }
-    Features enable;
-    enable.each([](VkBool32& f, const char*) { f = VK_TRUE; });
+    visbuf::gpu::RequiredFeatures enable;
+    enable.requireAll();
     float prio = 1.0f;
     VkDeviceQueueCreateInfo q{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
     q.queueFamilyIndex = family;
