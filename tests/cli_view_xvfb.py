@@ -6,7 +6,8 @@ Starts its own Xvfb on a free display number (stopped at exit), runs
 fixed camera, then `visbuf render` of the same camera and size to B.png, and requires: both exit 0, the viewer
 printed `presented 30 frames` and `validation messages: 0` (and no validation line on stderr), and
 `oiiotool --diff` of A.png against B.png gives a PSNR of at least 40 dB. Also checks that without a display
-the viewer exits non-zero with its one-line "no display" message.
+the viewer exits non-zero with its one-line "no display" message, and that the debug view `--view objects`
+presents the image `visbuf render --view objects` writes (PSNR >= 40 dB).
 
 usage: cli_view_xvfb.py VISBUF OUT_FOLDER
 """
@@ -119,6 +120,25 @@ def main():
           f"screenshot vs render PSNR {'inf' if math.isinf(psnr) else f'{psnr:.1f}'} dB")
     if not psnr >= MIN_PSNR:
         fail(f"screenshot vs render: PSNR {psnr} dB < {MIN_PSNR} dB:\n{r.stdout}")
+
+    # A debug view (key V, or --view): the viewer presents render --view's image of the same frame.
+    c = os.path.join(out, "C.png")
+    d = os.path.join(out, "D.png")
+    for f in (c, d):
+        if os.path.exists(f):
+            os.remove(f)
+    rc, so, se = run([visbuf, "view", "--validation", "--view", "objects", "--screenshot", c, "--frames", "3", *SIZE,
+                      *CAMERA], env)
+    if rc != 0 or not re.search(r"^presented 3 frames$", so, re.M) or "validation messages: 0" not in so:
+        fail(f"visbuf view --view objects exited {rc}:\n{so}{se}")
+    rc, so, se = run([visbuf, "render", "--validation", "--view", "objects", "-o", d, *SIZE, *CAMERA], env)
+    if rc != 0:
+        fail(f"visbuf render --view objects exited {rc}:\n{so}{se}")
+    r = subprocess.run([oiiotool, "-v", c, d, "--diff"], capture_output=True, text=True, timeout=60)
+    m = re.search(r"Peak SNR = (\S+)", r.stdout)
+    if not m or not float(m.group(1)) >= MIN_PSNR:
+        fail(f"view --view objects vs render --view objects:\n{r.stdout}{r.stderr}")
+    print(f"cli_view_xvfb: debug view 'objects' presented, vs render --view objects PSNR {m.group(1)} dB")
 
 
 if __name__ == "__main__":

@@ -160,6 +160,7 @@ struct ViewCommand {
   std::string screenshot;         // write the last frame's colour output here, then exit
   double time = 0.0;              // animation time (s)
   bool animate = false;           // play the animation
+  std::string view = "shaded";    // shaded, or a debug view of render --view (key V cycles them)
 };
 
 void addViewCommand(CLI::App& app, ViewCommand& cmd);

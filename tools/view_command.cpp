@@ -16,6 +16,7 @@
 
 #include "cli_checks.h"
 #include "commands.h"
+#include "debug_views.h"
 #include "stats_output.h"
 #include "view_host.h"
 #include "visbuf/core/image_io.h"
@@ -34,15 +35,21 @@ constexpr const char* kKeys =
     "  C            culling: none -> frustum -> occlusion\n"
     "  M            micro-raster (software raster of small objects) on / off\n"
     "  F            freeze culling (keep the draw lists of the frame it was pressed on; visbuf and gbuffer paths)\n"
+    "  V            debug view: shaded -> objects -> triangles -> lod -> culled -> pyramid -> overdraw (render --view;\n"
+    "               built from read-back IDs, draw lists and pyramid levels: each such frame is a renderFrame)\n"
     "  R            back to the start camera          P   print the newest finished frame's stats\n"
-    "  Esc          quit\n"
-    "Debug views (render --view objects|triangles|lod|...) are not offered: the public frame options have no view\n"
-    "switch (render builds them from read-back IDs).\n";
+    "  Esc          quit\n";
 
 int fail(const Error& e) {
   std::fprintf(stderr, "visbuf view: error (%s): %s\n", errorCodeName(e.code),
                printable(e.message, e.code == ErrorCode::NoDevice).c_str());
   return 1;
+}
+
+// Options that contradict each other: a usage error (exit 2).
+int usage(const std::string& message) {
+  std::fprintf(stderr, "visbuf view: %s (see visbuf view --help)\n", printable(message).c_str());
+  return 2;
 }
 
 int badValue(const std::string& message) {
@@ -174,6 +181,11 @@ void addViewCommand(CLI::App& app, ViewCommand& c) {
       ->capture_default_str();
   sub->add_flag("--animate", c.animate,
                 "play the animation from --time (real time; with --screenshot 1/30 s per frame)");
+  std::vector<std::string> views{"shaded"};
+  for (const std::string& v : debugViewNames()) views.push_back(v);
+  sub->add_option("--view", c.view, "start in this view: shaded | objects | triangles | lod | culled | pyramid | overdraw")
+      ->check(CLI::IsMember(views))
+      ->capture_default_str();
   sub->footer(std::string(kKeys) +
               "Without a display (no DISPLAY / WAYLAND_DISPLAY, or the window system cannot be opened) view exits 1: "
               "use visbuf render for headless images.\n"
@@ -249,6 +261,12 @@ int runView(const ViewCommand& c) {
   if (!screenshot) std::printf("%s", kKeys);
   std::fflush(stdout);
 
+  std::string view = c.view;
+  // Debug views other than overdraw read back the visbuf path's IDs, draw lists or pyramid (as render --view).
+  auto viewSupported = [&](const std::string& v) {
+    return v == "shaded" || v == "overdraw" || fo.path == RenderPath::Visbuf;
+  };
+  if (!viewSupported(view)) return usage(fmt::format("--view {} needs --path visbuf", view));
   FlyCamera fly(*startCamera);
   KeyEdges keys;
   bool looking = false;
@@ -259,6 +277,8 @@ int runView(const ViewCommand& c) {
   const auto start = Clock::now();
   auto last = start, titleAt = start;
   uint64_t titleFrames = 0;
+  std::vector<float> viewShot;  // a debug view's screenshot: the CPU image itself
+  uint32_t viewShotWidth = 0, viewShotHeight = 0;
 
   while (!glfwWindowShouldClose(window) && (frames == 0 || presented < frames)) {
     glfwPollEvents();
@@ -321,6 +341,14 @@ int runView(const ViewCommand& c) {
           std::printf("culling %s\n", fo.freezeCulling ? "FROZEN" : "live");
         }
       }
+      if (keys.pressed(window, GLFW_KEY_V)) {
+        std::vector<std::string> cycle{"shaded"};
+        for (const std::string& v : debugViewNames())
+          if (viewSupported(v)) cycle.push_back(v);
+        const auto at = std::find(cycle.begin(), cycle.end(), view);
+        view = at == cycle.end() || at + 1 == cycle.end() ? cycle.front() : *(at + 1);
+        std::printf("view %s\n", view.c_str());
+      }
       if (keys.pressed(window, GLFW_KEY_R)) fly.reset();
       if (keys.pressed(window, GLFW_KEY_P)) {
         if (const auto& st = (*renderer)->completedStats()) std::printf("%s", formatStats(*st).c_str());
@@ -340,10 +368,28 @@ int runView(const ViewCommand& c) {
       recreate = true;
       continue;
     }
-    auto frame = (*renderer)->record({fly.camera(), fo, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL});
-    if (!frame) return fail(frame.error());
     const bool readback = screenshot && presented + 1 == frames;
-    auto result = (*host)->submitAndPresent(slot, *frame, readback);
+    Result<ViewHost::Presented> result = ViewHost::Presented{};
+    if (view == "shaded") {
+      auto frame = (*renderer)->record({fly.camera(), fo, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL});
+      if (!frame) return fail(frame.error());
+      result = (*host)->submitAndPresent(slot, *frame, readback);
+    } else {
+      // A debug view: the frame is rendered and read back (renderFrame waits for it), the view is built on the CPU
+      // as render --view builds it, and the image is presented like a frame.
+      FrameOptions vo = fo;
+      prepareViewOptions(view, vo);
+      auto frame = (*renderer)->renderFrame(fly.camera(), vo);
+      if (!frame) return fail(frame.error());
+      auto image = buildDebugView(view, *frame, *scene, fly.camera(), 0);
+      if (!image) return fail(image.error());
+      result = (*host)->presentPixels(slot, *image, frame->width, frame->height);
+      if (readback) {
+        viewShot = std::move(image.value());
+        viewShotWidth = frame->width;
+        viewShotHeight = frame->height;
+      }
+    }
     if (!result) return fail(result.error());
     ++recorded;
     if (result->presented) {
@@ -359,6 +405,7 @@ int runView(const ViewCommand& c) {
       if (const auto& st = (*renderer)->completedStats())
         title += fmt::format(" | GPU {:.2f} ms | {} draws | {} tris", st->gpuMs, count(st->drawsRendered),
                              count(st->trianglesDrawn));
+      if (view != "shaded") title += " | view " + view;
       title += fmt::format(" | {} | cull {}{} | LOD {} | micro-raster {}", renderPathName(fo.path),
                            cullModeName(fo.cull), fo.freezeCulling ? " (frozen)" : "",
                            fo.lodErrorPixels > 0.0f ? fmt::format("{:g} px", double(fo.lodErrorPixels))
@@ -372,8 +419,9 @@ int runView(const ViewCommand& c) {
   (*host)->waitIdle();
 
   if (screenshot) {
-    uint32_t w = 0, h = 0;
-    auto color = (*host)->readColor(w, h);
+    uint32_t w = viewShotWidth, h = viewShotHeight;
+    Result<std::vector<float>> color = std::move(viewShot);
+    if (view == "shaded") color = (*host)->readColor(w, h);
     if (!color) return fail(color.error());
     if (Status s = writeColorImage(c.screenshot, w, h, *color); !s) return fail(s.error());
     std::printf("screenshot    %s (%ux%u, frame %llu)\n", printable(c.screenshot).c_str(), w, h,

@@ -517,6 +517,72 @@ Status ViewHost::createIntermediates() {
   return {};
 }
 
+uint32_t ViewHost::memoryType(uint32_t typeBits, VkMemoryPropertyFlags want) const {
+  for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i)
+    if ((typeBits & (1u << i)) && (memory_.memoryTypes[i].propertyFlags & want) == want) return i;
+  return UINT32_MAX;
+}
+
+void ViewHost::destroyUpload(Slot& s) {
+  if (s.upload) vkDestroyBuffer(device_, s.upload, nullptr);
+  if (s.uploadMemory) vkFreeMemory(device_, s.uploadMemory, nullptr);
+  if (s.uploadImage) vkDestroyImage(device_, s.uploadImage, nullptr);
+  if (s.uploadImageMemory) vkFreeMemory(device_, s.uploadImageMemory, nullptr);
+  s.upload = VK_NULL_HANDLE;
+  s.uploadMemory = VK_NULL_HANDLE;
+  s.uploadMapped = nullptr;
+  s.uploadImage = VK_NULL_HANDLE;
+  s.uploadImageMemory = VK_NULL_HANDLE;
+  s.uploadWidth = s.uploadHeight = 0;
+}
+
+Result<ViewHost::Presented> ViewHost::presentPixels(uint32_t slot, const std::vector<float>& rgba, uint32_t width,
+                                                    uint32_t height) {
+  if (rgba.size() != size_t(width) * height * 4)
+    return makeError(ErrorCode::InvalidArgument, "presentPixels: the image is not width x height RGBA");
+  Slot& s = slots_[slot];  // beginFrame waited for this slot's last frame: its upload objects are free
+  if (s.uploadWidth != width || s.uploadHeight != height) {
+    destroyUpload(s);
+    VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    bci.size = VkDeviceSize(rgba.size()) * sizeof(float);
+    bci.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+    VIEW_TRY(vkCreateBuffer(device_, &bci, nullptr, &s.upload));
+    VkMemoryRequirements req{};
+    vkGetBufferMemoryRequirements(device_, s.upload, &req);
+    VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    mai.allocationSize = req.size;
+    mai.memoryTypeIndex =
+        memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    if (mai.memoryTypeIndex == UINT32_MAX) return makeError(ErrorCode::NoDevice, "no host-visible memory for a view");
+    VIEW_TRY(vkAllocateMemory(device_, &mai, nullptr, &s.uploadMemory));
+    VIEW_TRY(vkBindBufferMemory(device_, s.upload, s.uploadMemory, 0));
+    VIEW_TRY(vkMapMemory(device_, s.uploadMemory, 0, VK_WHOLE_SIZE, 0, &s.uploadMapped));
+    VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    ici.imageType = VK_IMAGE_TYPE_2D;
+    ici.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+    ici.extent = {width, height, 1};
+    ici.mipLevels = ici.arrayLayers = 1;
+    ici.samples = VK_SAMPLE_COUNT_1_BIT;
+    ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+    ici.usage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    VIEW_TRY(vkCreateImage(device_, &ici, nullptr, &s.uploadImage));
+    vkGetImageMemoryRequirements(device_, s.uploadImage, &req);
+    mai.allocationSize = req.size;
+    mai.memoryTypeIndex = memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (mai.memoryTypeIndex == UINT32_MAX) mai.memoryTypeIndex = memoryType(req.memoryTypeBits, 0);
+    VIEW_TRY(vkAllocateMemory(device_, &mai, nullptr, &s.uploadImageMemory));
+    VIEW_TRY(vkBindImageMemory(device_, s.uploadImage, s.uploadImageMemory, 0));
+    s.uploadWidth = width;
+    s.uploadHeight = height;
+  }
+  std::memcpy(s.uploadMapped, rgba.data(), rgba.size() * sizeof(float));
+  RecordedFrame frame;
+  frame.color = {s.uploadImage, VK_NULL_HANDLE, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
+  frame.width = width;
+  frame.height = height;
+  return submitAndPresent(slot, frame, false);
+}
+
 Result<bool> ViewHost::beginFrame(uint32_t slot) {
   Slot& s = slots_[slot];
   VIEW_TRY(vkWaitForFences(device_, 1, &s.fence, VK_TRUE, UINT64_MAX));
@@ -570,6 +636,16 @@ Result<ViewHost::Presented> ViewHost::submitAndPresent(uint32_t slot, const Reco
   // frame.color.layout; the swapchain image's transition waits on the acquire semaphore (same stage).
   imageBarrier(s.cmd, target, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, transfer, 0, transfer,
                VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  if (s.uploadImage && frame.color.image == s.uploadImage) {  // presentPixels: the staged pixels into the image
+    imageBarrier(s.cmd, s.uploadImage, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, transfer, 0,
+                 transfer, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {frame.width, frame.height, 1};
+    vkCmdCopyBufferToImage(s.cmd, s.upload, s.uploadImage, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    imageBarrier(s.cmd, s.uploadImage, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                 transfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, transfer, VK_ACCESS_2_TRANSFER_READ_BIT);
+  }
   const VkImage blitTarget = s.intermediate ? s.intermediate : target;
   if (s.intermediate)
     imageBarrier(s.cmd, s.intermediate, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, transfer, 0,
@@ -674,6 +750,7 @@ ViewHost::~ViewHost() {
     if (readbackMemory_) vkFreeMemory(device_, readbackMemory_, nullptr);
     destroySwapchainObjects(false);
     for (Slot& s : slots_) {
+      destroyUpload(s);
       if (s.fence) vkDestroyFence(device_, s.fence, nullptr);
       if (s.acquired) vkDestroySemaphore(device_, s.acquired, nullptr);
     }

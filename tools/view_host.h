@@ -73,6 +73,10 @@ class ViewHost {
     bool recreate = false;   // the swapchain is out of date or suboptimal: recreate it before the next frame
   };
   Result<Presented> submitAndPresent(uint32_t slot, const RecordedFrame& frame, bool readback);
+  // Presents a CPU image instead of a rendered frame (the debug views: RGBA float, linear, top row first,
+  // width x height): copied into the slot's own upload image, then blitted like a frame's colour output. Needs
+  // beginFrame(slot) first, as submitAndPresent.
+  Result<Presented> presentPixels(uint32_t slot, const std::vector<float>& rgba, uint32_t width, uint32_t height);
   // The colour output copied by the last submitAndPresent with readback, as RGBA float (linear, top row
   // first); waits for the device to go idle first.
   Result<std::vector<float>> readColor(uint32_t& width, uint32_t& height);
@@ -98,7 +102,16 @@ class ViewHost {
     // swapchain image unchanged.
     VkImage intermediate = VK_NULL_HANDLE;
     VkDeviceMemory intermediateMemory = VK_NULL_HANDLE;
+    // presentPixels: a host-visible staging buffer and an RGBA32F image of the pixels' size.
+    VkBuffer upload = VK_NULL_HANDLE;
+    VkDeviceMemory uploadMemory = VK_NULL_HANDLE;
+    void* uploadMapped = nullptr;
+    VkImage uploadImage = VK_NULL_HANDLE;
+    VkDeviceMemory uploadImageMemory = VK_NULL_HANDLE;
+    uint32_t uploadWidth = 0, uploadHeight = 0;
   };
+  void destroyUpload(Slot& s);
+  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags want) const;  // UINT32_MAX: none
 
   GLFWwindow* window_ = nullptr;
   VkInstance instance_ = VK_NULL_HANDLE;
