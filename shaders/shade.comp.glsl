@@ -25,6 +25,9 @@ layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) readonly buffer Materi
 };
 layout(std430, set = 0, binding = BINDING_TILE_LIST) readonly buffer TileListBlock { uint tileList[]; };
 #endif
+#if COVERED  // (buffer references: common.glsl)
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer CoveredTileList { uint words[]; };
+#endif
 #if WRITE_ATTRIBUTES
 layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
 
@@ -118,6 +121,13 @@ void main() {
   uint entry = gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x;  // (the last row may be partial)
   if (entry >= materialTiles[pc.material].tiles) return;
   uint tile = tileList[materialTiles[pc.material].first + entry];
+  ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
+#elif COVERED
+  // One workgroup per covered tile (covered_tiles.comp listed them; rows of CLASSIFY_DISPATCH_WIDTH).
+  CoveredTileList list = CoveredTileList(uvec2(frame.coveredTilesLow, frame.coveredTilesHigh));
+  uint entry = gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x;
+  if (entry >= list.words[3]) return;
+  uint tile = list.words[COVERED_TILES_HEADER + entry];
   ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
 #else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);

@@ -9,6 +9,9 @@
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"
 #include "object_scatter.comp.h"
+#include "covered_tiles.comp.h"
+#include "shade_covered.comp.h"
+#include "shade_covered_textured.comp.h"
 #include "sw_merge.frag.h"
 #include "sw_merge.vert.h"
 #include "sw_merge_wide.frag.h"
@@ -89,6 +92,9 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("visibility.frag", spv_visibility_frag)
   VB_SHADER("visibility_wide.frag", spv_visibility_wide_frag)
   VB_SHADER("shade.comp", spv_shade_comp)
+  VB_SHADER("shade_covered.comp", spv_shade_covered_comp)
+  VB_SHADER("shade_covered_textured.comp", spv_shade_covered_textured_comp)
+  VB_SHADER("covered_tiles.comp", spv_covered_tiles_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
   VB_SHADER("skin.comp", spv_skin_comp)
   VB_SHADER("skin_bounds.comp", spv_skin_bounds_comp)

@@ -1,6 +1,8 @@
 #include "visbuf/passes/shade_pass.h"
 
+#include "visbuf/gpu/resources.h"
 #include "visbuf/shared/config.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 
@@ -8,6 +10,8 @@ ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout, gpu::S
   ShadePass p;
   p.pipeline = gpu::createComputePipeline(device, layout, "shade.comp", spec);
   p.attributesPipeline = gpu::createComputePipeline(device, layout, "shade_attributes.comp", spec);
+  p.coveredPipeline = gpu::createComputePipeline(device, layout, "shade_covered.comp", spec);
+  p.coveredTilesPipeline = gpu::createComputePipeline(device, layout, "covered_tiles.comp", spec);
   return p;
 }
 
@@ -30,6 +34,34 @@ void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescripto
                        uint32_t height, Variant variant) const {
   dispatchPixels(cmd, layout, set,
                  variant == Msaa ? msaaPipeline : variant == Attributes ? attributesPipeline : pipeline, width, height);
+}
+
+void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+                              const gpu::Buffer& tiles, uint32_t width, uint32_t height) const {
+  const uint32_t tileCount = ((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
+  // The previous frame's shading read the list (indirect and storage) that this frame rewrites.
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0,
+                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  vkCmdFillBuffer(cmd, tiles.handle(), 0, COVERED_TILES_HEADER * sizeof(uint32_t), 0);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredTilesPipeline.handle());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  gpu::PassConstants pc{};
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  vkCmdDispatch(cmd, (tileCount + COVERED_TILES_WORKGROUP - 1) / COVERED_TILES_WORKGROUP, 1, 1);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  pc.variant = 1;  // the indirect dispatch from the count
+  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  vkCmdDispatch(cmd, 1, 1, 1);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredPipeline.handle());
+  vkCmdDispatchIndirect(cmd, tiles.handle(), 0);
 }
 
 void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,

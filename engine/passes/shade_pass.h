@@ -4,6 +4,7 @@
 #pragma once
 
 #include "visbuf/gpu/pipeline.h"
+#include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 
@@ -16,10 +17,17 @@ struct ShadePass {
   gpu::Pipeline attributesPipeline;  // same shading, plus the attribute record (stress suite)
   gpu::Pipeline msaaPipeline;        // created by createMsaa (the first MSAA frame): it compiles the materials again
   gpu::Pipeline sampleIdsPipeline;
+  gpu::Pipeline coveredPipeline;       // one workgroup per listed tile (shade.comp COVERED)
+  gpu::Pipeline coveredTilesPipeline;  // covered_tiles.comp: the list and its indirect dispatch
   static ShadePass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   void createMsaa(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width, uint32_t height,
               Variant variant) const;
+  // The ubershader over the covered tiles only: covered_tiles.comp lists the 8x8 tiles whose IDs show anything
+  // into `tiles` (FrameData.coveredTiles* holds its address) and writes the indirect dispatch, then one workgroup
+  // per listed tile shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
+  void recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& tiles,
+                     uint32_t width, uint32_t height) const;
   void recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
                        uint32_t height) const;
 };

@@ -37,6 +37,12 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.swMaxPixels = options.swRasterPixels;
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
+  if (plan.coveredTiles) {
+    const VkDeviceAddress a = coveredTiles.address();
+    f.coveredTilesLow = uint32_t(a);
+    f.coveredTilesHigh = uint32_t(a >> 32);
+    f.coveredTilesX = (config.width + SHADE_TILE_X - 1) / SHADE_TILE_X;
+  }
   return f;
 }
 
@@ -394,6 +400,8 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, const FramePlan& 
   }
   if (classified)
     classify.recordShade(cmd, pipelineLayout, set);
+  else if (plan.coveredTiles)
+    shade.recordCovered(cmd, pipelineLayout, set, coveredTiles, w, h);
   else
     shade.record(cmd, pipelineLayout, set, w, h,
                  msaa                     ? passes::ShadePass::Msaa

@@ -151,6 +151,8 @@ FramePlan Renderer::Impl::planFrame(const FrameOptions& options) const {
   p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
   p.msaa = options.msaa > 1;
   p.shading = shadingFor(options);
+  p.coveredTiles = options.path == RenderPath::Visbuf && !p.msaa && !p.readAttributes &&
+                   p.shading == ShadingMode::Uber;
   return p;
 }
 

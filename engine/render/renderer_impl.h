@@ -63,6 +63,9 @@ struct FramePlan {
   bool readAttributes = false;  // the shading pass writes the attribute record
   bool msaa = false;
   ShadingMode shading = ShadingMode::Uber;
+  // The ubershader over the covered tiles only (covered_tiles.comp lists them): single-sampled visbuf frames
+  // without the attribute record.
+  bool coveredTiles = false;
 };
 
 // What renderFrame reads back (frame_readback.cpp).
@@ -184,6 +187,7 @@ struct Renderer::Impl {
   gpu::BufferView drawTexels;  // the same as R32UI (BINDING_DRAW_TEXELS): the shading's per-pixel fetch
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Image ids, depth, color;
+  gpu::Buffer coveredTiles;  // covered-tile shading: COVERED_TILES_HEADER uints + one per shading tile
   // MSAA (FrameOptions::msaa > 1): multisampled IDs and depth (visbuf, forward shares the depth) and forward
   // colour, created by the first frame at a count (msaaSamples) and dropped by a resize; the single-sample ids and
   // depth above stay allocated (the descriptor set's stand-ins). Pipelines for that count likewise.

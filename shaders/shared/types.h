@@ -170,6 +170,13 @@ struct FrameData {
   float swMaxPixels;
   uint swMaxTriangles;
   uint swTriangleBits;     // payload = (slot << swTriangleBits) | triangle (wide IDs); narrow: the encoded ID
+  // Covered-tile shading (covered_tiles.comp, shade.comp COVERED): the device address of the covered-tile buffer
+  // (COVERED_TILES_HEADER uints: the dispatch's x, y, z and the tile count; then one (x | y << 16) per tile) and
+  // the shading tiles per row. 0: the shading pass dispatches over every pixel.
+  uint coveredTilesLow;
+  uint coveredTilesHigh;
+  uint coveredTilesX;
+  uint coveredTilesPad;
 };
 
 // A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;
