@@ -68,10 +68,10 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "wide"}));
   sub->add_option("--shading", c.shading,
-                  "visbuf shading: auto (the device type's default), uber (one dispatch), classified (per-material "
-                  "tile lists and dispatches)")
+                  "visbuf shading: auto (the device type's default), uber (one dispatch over every pixel), covered "
+                  "(over the tiles that show anything), classified (per-material tile lists and dispatches)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"auto", "uber", "classified"}));
+      ->check(CLI::IsMember({"auto", "uber", "covered", "classified"}));
   sub->add_option("--sw-raster", c.swRaster,
                   "visbuf software micro-raster of small objects: auto (the device type's default), on, off (the "
                   "references always use the hardware raster)")

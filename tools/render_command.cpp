@@ -88,9 +88,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::IsMember({"1", "2", "4"}))
       ->capture_default_str();
   sub->add_option("--shading", c.shading,
-                  "visbuf shading: auto (the device type's default) | uber (one dispatch) | classified (per-material "
-                  "tile lists, one indirect dispatch per material; MSAA frames: uber)")
-      ->check(CLI::IsMember({"auto", "uber", "classified"}))
+                  "visbuf shading: auto (the device type's default: covered on a CPU device, uber on a GPU) | uber (one "
+                  "dispatch over every pixel) | covered (one workgroup per 8x8 tile that shows anything) | classified "
+                  "(per-material tile lists, one indirect dispatch per material); MSAA frames: uber")
+      ->check(CLI::IsMember({"auto", "uber", "covered", "classified"}))
       ->capture_default_str();
   sub->add_option("--sw-raster", c.swRaster,
                   "software micro-raster (auto: on; on a GPU only while it takes >= 262,144 triangles, as measured): objects whose screen box is at most --sw-raster-px per side are "

@@ -54,6 +54,8 @@ std::string formatStats(const FrameStats& s) {
                              "8x8 tiles\n",
                              s.materialsPresent, s.materialPixels.size(), s.classifiedTiles,
                              ((s.width + 7) / 8) * ((s.height + 7) / 8))
+           : s.shading == ShadingMode::Covered
+               ? std::string("shading       covered (the ubershader over the 8x8 tiles that show anything)\n")
                : std::string("shading       uber (one dispatch, every material)\n");
   for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
   out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);

@@ -152,8 +152,8 @@ void addViewCommand(CLI::App& app, ViewCommand& c) {
   sub->add_option("--sw-raster", c.swRaster, "starting micro-raster: auto | on | off (key M toggles on / off)")
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
-  sub->add_option("--shading", c.shading, "visbuf shading: auto | uber | classified")
-      ->check(CLI::IsMember({"auto", "uber", "classified"}))
+  sub->add_option("--shading", c.shading, "visbuf shading: auto | uber | covered | classified (as render --shading)")
+      ->check(CLI::IsMember({"auto", "uber", "covered", "classified"}))
       ->capture_default_str();
   sub->add_option("--draw-capacity", c.drawCapacity, "max draw commands per phase and draw list (default: one per object)")
       ->check(unsignedIn(1, UINT32_MAX));

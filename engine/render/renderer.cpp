@@ -28,17 +28,28 @@ const char* cullModeName(CullMode mode) {
   return mode == CullMode::None ? "none" : mode == CullMode::Frustum ? "frustum" : "occlusion";
 }
 const char* shadingModeName(ShadingMode mode) {
-  return mode == ShadingMode::Auto ? "auto" : mode == ShadingMode::Uber ? "uber" : "classified";
+  switch (mode) {
+    case ShadingMode::Auto: return "auto";
+    case ShadingMode::Uber: return "uber";
+    case ShadingMode::Classified: return "classified";
+    case ShadingMode::Covered: return "covered";
+  }
+  return "auto";
 }
 ShadingMode parseShadingMode(const std::string& name) {
-  return name == "uber" ? ShadingMode::Uber : name == "classified" ? ShadingMode::Classified : ShadingMode::Auto;
+  return name == "uber"         ? ShadingMode::Uber
+         : name == "classified" ? ShadingMode::Classified
+         : name == "covered"    ? ShadingMode::Covered
+                                : ShadingMode::Auto;
 }
-// The benchmark's verdict per device type (docs/benchmarks.md, "Textured visibility buffer vs G-buffer vs forward,
-// and material classification"): the ubershader on both measured so far.
+// The benchmark's verdict per device type (docs/benchmarks.md, "Shading only covered tiles" and "Textured
+// visibility buffer vs G-buffer vs forward, and material classification"). Classification loses on both
+// (lavapipe: two passes over the IDs cost more than the shading saves; H100: many small per-material dispatches
+// shade slower than one divergent dispatch). Covered tiles win on lavapipe, where each workgroup has a fixed cost
+// (an empty 1024x768 frame shaded in 30.4 ms, with covered tiles 1.2 ms), and lose a little on the H200, where a
+// background pixel's early exit is free and the listing adds ~15 us (0.127 -> 0.144 ms at 10k kittens).
 ShadingMode defaultShading(const gpu::Device& device) {
-  if (device.isCpu())  // lavapipe: classifying (two passes over the IDs) costs more than the shading saves
-    return ShadingMode::Uber;
-  return ShadingMode::Uber;  // H100: many small per-material dispatches shade slower than one divergent dispatch
+  return device.isCpu() ? ShadingMode::Covered : ShadingMode::Uber;
 }
 
 const char* swRasterModeName(SwRasterMode mode) {
@@ -151,8 +162,7 @@ FramePlan Renderer::Impl::planFrame(const FrameOptions& options) const {
   p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
   p.msaa = options.msaa > 1;
   p.shading = shadingFor(options);
-  p.coveredTiles = options.path == RenderPath::Visbuf && !p.msaa && !p.readAttributes &&
-                   p.shading == ShadingMode::Uber;
+  p.coveredTiles = p.shading == ShadingMode::Covered;  // (shadingFor: visbuf, single-sampled, no attributes)
   return p;
 }
 

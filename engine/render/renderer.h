@@ -34,15 +34,16 @@ namespace visbuf {
 // (the baseline of the benchmark; no IDs).
 enum class RenderPath { Visbuf, Forward, GBuffer };
 enum class CullMode { None, Frustum, Occlusion };
-// How the visbuf path's shading pass runs: one "ubershader" dispatch over every pixel (Uber), or material
+// How the visbuf path's shading pass runs: one "ubershader" dispatch over every pixel (Uber), the ubershader
+// over the 8x8 tiles that show anything (Covered: covered_tiles.comp lists them first), or material
 // classification followed by one indirect dispatch per material (Classified, passes/classify_pass.h). Auto:
 // the faster one for the device type, as measured by the benchmark (docs/benchmarks.md, defaultShading).
-enum class ShadingMode { Auto, Uber, Classified };
+enum class ShadingMode { Auto, Uber, Classified, Covered };
 
 const char* renderPathName(RenderPath path);
 const char* cullModeName(CullMode mode);
 const char* shadingModeName(ShadingMode mode);
-ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified", anything else: Auto
+ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified", "covered", anything else: Auto
 // What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs).
 ShadingMode defaultShading(const gpu::Device& device);
 
@@ -119,7 +120,7 @@ struct FrameOptions {
   SwRasterMode swRaster = SwRasterMode::Auto;
   float swRasterPixels = 64.0f;  // (0, SW_RASTER_MAX_EXTENT - 2]
   ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
-                                            // ubershader (its attributes / MSAA variant)
+                                            // ubershader over every pixel (its attributes / MSAA variant)
 };
 
 // How the visibility target's bits are split (DESIGN.md property 4).

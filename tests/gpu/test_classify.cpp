@@ -160,5 +160,48 @@ TEST(Classification, UntexturedAutoAndAttributes) {
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
+// Covered-tile shading (covered_tiles.comp, then one workgroup per listed tile): the ubershader's image exactly, at a
+// size with partial tiles and more covered tiles than one dispatch row, after a resize, and for a frame that shows
+// nothing (no tile listed: the cleared background).
+TEST(Classification, CoveredTilesEqualUbershader) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  const Scene s = classificationScene(40);
+  auto r = Renderer::create(dev, s, {.width = 160, .height = 96});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  FrameOptions fo;
+  fo.readIds = true;
+  fo.shading = ShadingMode::Covered;
+  ASSERT_TRUE((*r)->renderFrame(s.defaultCamera, fo).ok());
+  ASSERT_TRUE((*r)->resize(333, 171).ok());
+  Camera away = s.defaultCamera;
+  away.target = away.position + (away.position - s.defaultCamera.target);  // looking the other way
+  for (const Camera& cam : {s.defaultCamera, away}) {
+    fo.shading = ShadingMode::Uber;
+    auto uber = (*r)->renderFrame(cam, fo);
+    fo.shading = ShadingMode::Covered;
+    auto covered = (*r)->renderFrame(cam, fo);
+    ASSERT_TRUE(uber.ok() && covered.ok());
+    EXPECT_EQ(covered->stats.shading, ShadingMode::Covered);
+    EXPECT_EQ(covered->ids, uber->ids);
+    EXPECT_EQ(compareColor(covered->color, uber->color).maxAbs, 0.0);
+    size_t pixels = 0;
+    std::set<uint32_t> tiles;
+    for (uint32_t y = 0; y < 171; ++y)
+      for (uint32_t x = 0; x < 333; ++x)
+        if (uber->ids[2 * (size_t(y) * 333 + x)] != 0) {
+          ++pixels;
+          tiles.insert((y / 8) * 42 + x / 8);
+        }
+    std::printf("covered tiles: %zu pixels in %zu of %u tiles, image identical to the ubershader's\n", pixels,
+                tiles.size(), 42u * 22u);
+    if (&cam == &s.defaultCamera) {
+      EXPECT_GT(tiles.size(), CLASSIFY_DISPATCH_WIDTH) << "the dispatch must span several rows";
+      EXPECT_LT(tiles.size(), 42u * 22u) << "some tiles must show nothing";
+    }
+  }
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
 }  // namespace
 }  // namespace visbuf

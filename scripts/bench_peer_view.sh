@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The peer-view rows of docs/benchmarks.md: the field of kittens seen from the origin along +z (vertical field of
+# view 70 degrees, near plane 0.5), 1024x768, N = 10k, 100k and 1M objects. Per N: the median GPU time of each pass
+# over the frames after the first, the triangles drawn, and (N <= 100k) the error against the exact image of the
+# same frame (no culling, no LOD: render --reference-full).
+# Usage: scripts/bench_peer_view.sh [--device cpu|gpu] [--frames N] [--counts "10000 100000"] [OUTDIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+device=cpu frames=5 out=bench-peer counts="10000 100000 1000000"
+while (($#)); do
+  case "$1" in
+    --device) device=$2; shift 2 ;;
+    --frames) frames=$2; shift 2 ;;
+    --counts) counts=$2; shift 2 ;;
+    *) out=$1; shift ;;
+  esac
+done
+bin=${VISBUF_BIN:-build/tools/visbuf}
+kitten=${VISBUF_KITTEN:-assets/Kitten/kitten.glb}
+mkdir -p "$out"
+for n in $counts; do
+  reference=()
+  if ((n <= 100000)); then reference=(--reference-full); fi
+  echo "== peer view, $n kittens: visbuf render --device $device --frames $frames ${reference[*]}" | tee "$out/peer_$n.txt"
+  "$bin" render --device "$device" --scene field --mesh "$kitten" --objects "$n" --size 1024x768 \
+    --camera-pos 0,0,0 --camera-target 0,0,1 --fov 70 --near 0.5 --frames "$frames" -o "" \
+    --json "$out/peer_$n.json" "${reference[@]}" 2>&1 | grep -v '^  \[' | tee -a "$out/peer_$n.txt"
+done
+python3 - "$out" $counts <<'PY' | tee "$out/table.md"
+import json, sys
+out, counts = sys.argv[1], sys.argv[2:]
+print("| objects | frame ms (GPU) | largest passes (ms) | triangles drawn | PSNR vs exact (dB) | max error |")
+print("|---|---|---|---|---|---|")
+for n in counts:
+    j = json.load(open(f"{out}/peer_{n}.json"))
+    passes = sorted(j["passMs"].items(), key=lambda kv: -kv[1])[:4]
+    ref = j.get("reference", {}).get("error")
+    psnr = f"{ref['psnr']:.1f}" if ref else "-"
+    err = f"{ref['maxAbs']:.4f}" if ref else "-"
+    print(f"| {int(n):,} | {j['gpuMs']:.1f} | " + ", ".join(f"{k} {v:.1f}" for k, v in passes) +
+          f" | {j['trianglesDrawn']:,} | {psnr} | {err} |")
+PY
