@@ -113,8 +113,12 @@ Buffer uploadVector(Device& device, const std::vector<T>& v, VkBufferUsageFlags 
 // waiting for the copy (one-shot submission: for tests and tools, never inside a frame).
 std::vector<uint8_t> downloadBuffer(Device& device, const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes);
 
-// Image layout transition (synchronization2), whole image, all previous work to all later work of the
-// given stages. Used by the frame script only.
+// Image layout transition (synchronization2) of a single-level, single-layer colour image that is not a
+// gpu::Image (a host's own image, a swapchain image).
+void imageBarrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to,
+                  VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                  VkAccessFlags2 dstAccess);
+// Image layout transition (synchronization2), whole image (every level and layer).
 void imageBarrier(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
                   VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
                   VkAccessFlags2 dstAccess);

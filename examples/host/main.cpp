@@ -22,6 +22,7 @@
 #include <vulkan/vulkan.h>
 
 #include <visbuf/gpu/device.h>
+#include <visbuf/gpu/resources.h>
 #include <visbuf/render/renderer.h>
 #include <visbuf/render/scene_motion.h>
 #include <visbuf/scene/generate.h>
@@ -204,20 +205,11 @@ void createTarget(const HostVulkan& h, HostTarget& t, uint32_t w, uint32_t hgt) 
   HOST_CHECK(vkMapMemory(h.device, t.readbackMemory, 0, VK_WHOLE_SIZE, 0, &t.mapped));
 }
 
+// Transfer-to-transfer layout changes of the host's own image (visbuf::gpu::imageBarrier takes a raw VkImage).
 void imageBarrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to) {
-  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
-  b.srcStageMask = b.dstStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-  b.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT;
-  b.dstAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT;
-  b.oldLayout = from;
-  b.newLayout = to;
-  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image;
-  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  dep.imageMemoryBarrierCount = 1;
-  dep.pImageMemoryBarriers = &b;
-  vkCmdPipelineBarrier2(cmd, &dep);
+  constexpr VkAccessFlags2 rw = VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT;
+  visbuf::gpu::imageBarrier(cmd, image, from, to, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, rw,
+                            VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, rw);
 }
 
 visbuf::Camera orbit(const visbuf::Scene& scene, uint32_t frame) {
