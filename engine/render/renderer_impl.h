@@ -130,7 +130,8 @@ struct Renderer::Impl {
   std::vector<uint8_t> slotState;
   std::vector<uint32_t> freeSlots;      // free IDs, the lowest last (reused first)
   std::vector<uint32_t> dirty;          // IDs whose GPU record the next frame uploads
-  std::vector<uint8_t> dirtyMark;       // per ID: in `dirty`
+  std::vector<gpu::ObjectData> dirtyRecords;  // their records, packed when the change was made (parallel to dirty)
+  std::vector<uint32_t> dirtyIndex;     // per ID: 1 + its index in `dirty`, 0 when not there
   std::array<uint32_t, DRAW_LISTS> listLive{};  // live objects per draw list (room for addObject / list changes)
   std::vector<uint8_t> skinnedObject;   // per ID: a skinned instance (its pose places it: not movable)
   std::vector<uint8_t> rigidObject;     // per ID: posed by a Scene::rigidObjects clip (until removed)
@@ -138,7 +139,10 @@ struct Renderer::Impl {
   bool rigidPosed = false;
   bool isLive(uint32_t id) const { return id < slotState.size() && slotState[id] != SlotFree; }
   bool isDrawn(uint32_t id) const { return id < slotState.size() && slotState[id] == SlotLive; }
+  // Queues the GPU record of `id` for the next frame: objectRecord(id), or `record` where the caller packed it (a
+  // later change of the same object in the same frame replaces it).
   void markDirty(uint32_t id);
+  void markDirty(uint32_t id, const gpu::ObjectData& record);
   // Writes the dirty records into the slot's staging buffer and records their copies (setup command buffer).
   void recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, FrameStats& st);
   gpu::ObjectData objectRecord(uint32_t id) const;

@@ -451,7 +451,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->slotState.assign(sceneObjects + config.spareObjects, Impl::SlotFree);
   std::fill_n(impl->slotState.begin(), sceneObjects, Impl::SlotLive);
   for (uint32_t i = sceneObjects + config.spareObjects; i-- > sceneObjects;) impl->freeSlots.push_back(i);
-  impl->dirtyMark.assign(impl->slotState.size(), 0);
+  impl->dirtyIndex.assign(impl->slotState.size(), 0);
   impl->skinnedObject.assign(impl->slotState.size(), 0);
   impl->rigidObject.assign(impl->slotState.size(), 0);
   for (const RigidObject& ro : impl->scene.rigidObjects) impl->rigidObject[ro.object] = 1;

@@ -11,15 +11,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <fmt/format.h>
 
 namespace visbuf {
 
-void Renderer::Impl::markDirty(uint32_t id) {
-  if (dirtyMark[id]) return;
-  dirtyMark[id] = 1;
+void Renderer::Impl::markDirty(uint32_t id) { markDirty(id, objectRecord(id)); }
+
+void Renderer::Impl::markDirty(uint32_t id, const gpu::ObjectData& record) {
+  if (dirtyIndex[id]) {
+    dirtyRecords[dirtyIndex[id] - 1] = record;
+    return;
+  }
   dirty.push_back(id);
+  dirtyRecords.push_back(record);
+  dirtyIndex[id] = uint32_t(dirty.size());
 }
 
 // The GPU record of an object ID: its packed object (a skinned instance: its placement and mesh slot), with
@@ -67,28 +74,30 @@ Status Renderer::setTransforms(std::span<const ObjectTransform> moves) {
   Impl& r = *impl_;
   // All or nothing: every move is checked (draw-list room included) before any is applied.
   std::array<uint32_t, DRAW_LISTS> live = r.listLive;
-  std::vector<uint32_t> lists(moves.size());
+  std::vector<gpu::ObjectData> records(moves.size());  // packed now, while the objects are in cache
   for (size_t i = 0; i < moves.size(); ++i) {
     const ObjectTransform& m = moves[i];
     if (Status s = r.checkTransform(m.object, m.transform, "setTransforms"); !s.ok()) return s;
     Object moved = r.objects[m.object];
     moved.transform = m.transform;
-    lists[i] = gpu::objectDrawList(packObject(moved, r.scene).flags);
+    records[i] = packObject(moved, r.scene);
+    if (r.slotState[m.object] == Impl::SlotHidden) records[i].flags |= OBJECT_FLAG_HIDDEN;
+    const uint32_t list = gpu::objectDrawList(records[i].flags);
     const uint32_t from = r.gpuScene.objectList[m.object];
-    if (lists[i] == from) continue;
+    if (list == from) continue;
     // The winding flipped: the object changes draw list; a list the micro-raster fills from its end must have room.
-    if (lists[i] != DRAW_LIST_NONE && (r.swListMask >> lists[i] & 1u) && live[lists[i]] >= r.listCapacity[lists[i]])
+    if (list != DRAW_LIST_NONE && (r.swListMask >> list & 1u) && live[list] >= r.listCapacity[list])
       return makeError(ErrorCode::CapacityExceeded,
                        fmt::format("setTransforms: object {} flips its winding into draw list {}, which is full "
                                    "(capacity {}); reserve RendererConfig::spareObjects",
-                                   m.object, lists[i], r.listCapacity[lists[i]]));
+                                   m.object, list, r.listCapacity[list]));
     if (from != DRAW_LIST_NONE) --live[from];
-    if (lists[i] != DRAW_LIST_NONE) ++live[lists[i]];
+    if (list != DRAW_LIST_NONE) ++live[list];
   }
   for (size_t i = 0; i < moves.size(); ++i) {
     r.objects[moves[i].object].transform = moves[i].transform;
-    r.gpuScene.objectList[moves[i].object] = lists[i];
-    r.markDirty(moves[i].object);
+    r.gpuScene.objectList[moves[i].object] = gpu::objectDrawList(records[i].flags);
+    r.markDirty(moves[i].object, records[i]);
   }
   r.listLive = live;
   return {};
@@ -213,11 +222,9 @@ void Renderer::Impl::recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, F
   auto* base = static_cast<uint8_t*>(slot.staging.mapped());
   auto* records = reinterpret_cast<gpu::ObjectData*>(base);
   auto* ids = reinterpret_cast<uint32_t*>(base + idsOffset);
-  for (uint32_t i = 0; i < count; ++i) {
-    records[i] = objectRecord(dirty[i]);
-    ids[i] = dirty[i];
-    dirtyMark[dirty[i]] = 0;
-  }
+  std::memcpy(records, dirtyRecords.data(), size_t(count) * sizeof(gpu::ObjectData));
+  std::memcpy(ids, dirty.data(), size_t(count) * sizeof(uint32_t));
+  for (uint32_t id : dirty) dirtyIndex[id] = 0;
   // Earlier frames' passes read the records being replaced; every later pass reads the new ones.
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
@@ -227,6 +234,7 @@ void Renderer::Impl::recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, F
   st.objectsUpdated = count;
   st.uploadedBytes = bytes;
   dirty.clear();
+  dirtyRecords.clear();
 }
 
 }  // namespace visbuf
