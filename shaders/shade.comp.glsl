@@ -5,6 +5,8 @@
 // colour image was cleared to the background before). MSAA variant: msaa_samples.glsl.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_samplerless_texture_functions : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "material.glsl"
 #include "shared/barycentrics.h"
 #include "visibility_id.glsl"
@@ -14,6 +16,7 @@ layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
 #include "msaa_samples.glsl"  // multisampled IDs: shadeMultisampledPixel() per pixel, shadeVisible() per ID
 #else
 layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+layout(std430, set = 0, binding = BINDING_STATS) buffer ShadeStatsBlock { uint stats[]; };  // STAT_COVERED_PIXELS
 #endif
 #if CLASSIFIED
 // Classified shading (classify_pass): one indirect dispatch per material, one workgroup per tile of its list; the
@@ -143,5 +146,7 @@ void main() {
   if (objectAt(drawObject(slot)).materialIndex != pc.material) return;
 #endif
   imageStore(colorOut, p, vec4(shadeVisible(raw, p, vec2(0.5)), 1.0));
+  uint shaded = subgroupAdd(1u);  // (over the lanes still here: the pixels shaded)
+  if (subgroupElect()) atomicAdd(stats[STAT_COVERED_PIXELS], shaded);
 #endif
 }

@@ -19,7 +19,11 @@ std::string formatStats(const FrameStats& s) {
   if (s.refineTested)
     out += fmt::format("refinement    {} objects tested again at a finer pyramid level, {} of them occluded there\n",
                        s.refineTested, s.refineOccluded);
-  out += fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
+  out += s.coveredPixels > 0
+             ? fmt::format("triangles     {} drawn; {} covered pixels ({:.1f} %): {:.2f} triangles per covered pixel\n",
+                           s.trianglesDrawn, s.coveredPixels, 100.0 * s.coveredPixels / (double(s.width) * s.height),
+                           double(s.trianglesDrawn) / s.coveredPixels)
+             : fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
   if (s.swRaster)
     out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.swDraws,
                        s.swTriangles, s.swOversize);
@@ -103,6 +107,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["drawCapacity"] = s.drawCapacity;
   j["drawOverflow"] = s.drawOverflow;
   j["trianglesDrawn"] = s.trianglesDrawn;
+  j["coveredPixels"] = s.coveredPixels;
+  if (s.coveredPixels > 0) j["trianglesPerCoveredPixel"] = double(s.trianglesDrawn) / s.coveredPixels;
   j["swRaster"] = {{"on", s.swRaster}, {"draws", s.swDraws}, {"triangles", s.swTriangles}, {"oversize", s.swOversize}};
   j["transparentDraws"] = s.transparentDraws;
   j["transparentTriangles"] = s.transparentTriangles;
@@ -161,6 +167,7 @@ nlohmann::json motionFrameJson(const SceneMotionFrame& m, const FrameStats& s) {
           {"drawsLate", s.drawsLate},
           {"drawsRendered", s.drawsRendered},
           {"trianglesDrawn", s.trianglesDrawn},
+          {"coveredPixels", s.coveredPixels},
           {"gpuMs", s.gpuMs},
           {"cpuRecordMs", s.cpuRecordMs}};
 }

@@ -392,12 +392,13 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, const FramePlan& 
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   }
-  if (msaa) {  // its own counter (a frozen frame keeps the cull counts, not this one); reads the cleared colour
-    vkCmdFillBuffer(cmd, stats.handle(), STAT_PER_SAMPLE_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  }
+  // The shading's own counters (a frozen frame keeps the cull counts, not these): per-sample pixels (MSAA) and
+  // covered pixels.
+  if (msaa) vkCmdFillBuffer(cmd, stats.handle(), STAT_PER_SAMPLE_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
+  vkCmdFillBuffer(cmd, stats.handle(), STAT_COVERED_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   if (classified)
     classify.recordShade(cmd, pipelineLayout, set);
   else if (plan.coveredTiles)

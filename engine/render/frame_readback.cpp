@@ -121,6 +121,7 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
   if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(slot.statsReadback.mapped());
     st.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
+    st.coveredPixels = slot.options.path == RenderPath::Visbuf && !msaa ? s[STAT_COVERED_PIXELS] : 0;
     st.objectsTested = gpuScene.objectCount;
     st.frustumCulled = s[STAT_FRUSTUM_CULLED];
     st.occlusionCulled = s[STAT_OCCLUSION_CULLED];

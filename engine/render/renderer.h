@@ -151,6 +151,9 @@ struct FrameStats {
   uint64_t transparentTriangles = 0;  // their triangles (not in trianglesDrawn)
   uint32_t drawOverflow = 0;    // visible objects dropped for lack of capacity (reported, never silent)
   uint64_t trianglesDrawn = 0;  // hardware and micro-raster together
+  // Visbuf path, single-sampled: the pixels whose ID shows something (the shading pass counts what it shades);
+  // trianglesDrawn / coveredPixels is the triangles per covered pixel (a visibility buffer's ideal is about 1).
+  uint32_t coveredPixels = 0;
   bool swRaster = false;        // this frame routed small objects to the micro-raster
   uint32_t swDraws = 0;         // of drawsRendered: the micro-raster's
   uint64_t swTriangles = 0;     // of trianglesDrawn: the micro-raster's

@@ -62,7 +62,9 @@
 // occluded there (also counted in STAT_OCCLUSION_CULLED).
 #define STAT_REFINE_TESTED (STAT_SW_OVERSIZE + 1)
 #define STAT_REFINE_OCCLUDED (STAT_REFINE_TESTED + 1)
-#define STAT_COUNT (STAT_REFINE_OCCLUDED + 1)
+// Visbuf shading, single-sampled: the pixels it shaded (pixels whose ID shows something), reset by the shading pass.
+#define STAT_COVERED_PIXELS (STAT_REFINE_OCCLUDED + 1)
+#define STAT_COUNT (STAT_COVERED_PIXELS + 1)
 // After the counters (same buffer, not read back): per cull phase, the micro-raster's indirect dispatch (x, 1, 1)
 // and its merge's indirect draw (vertexCount, 1, 0, 0), written by the cull pass where it routes a draw there and
 // left at 0 otherwise: a phase without micro-raster draws runs neither (SW_ARGS_UINTS per phase).

@@ -79,6 +79,7 @@ TEST(Classification, ClassifiedShadingEqualsUbershader) {
     const FrameStats& st = cls->stats;
     ASSERT_EQ(st.shading, ShadingMode::Classified);
     EXPECT_EQ(cls->ids, uber->ids);
+    EXPECT_EQ(st.coveredPixels, uber->stats.coveredPixels) << "each pixel shaded by exactly one material dispatch";
 
     // The reference counts, from the IDs on the CPU: pixels per material and the distinct (tile, material) pairs.
     std::vector<uint32_t> pixels(kMaterials, 0), tiles(kMaterials, 0);
@@ -184,6 +185,10 @@ TEST(Classification, CoveredTilesEqualUbershader) {
     ASSERT_TRUE(uber.ok() && covered.ok());
     EXPECT_EQ(covered->stats.shading, ShadingMode::Covered);
     EXPECT_EQ(covered->ids, uber->ids);
+    size_t idPixels = 0;
+    for (size_t i = 0; i < uber->ids.size(); i += 2) idPixels += uber->ids[i] != 0;
+    EXPECT_EQ(uber->stats.coveredPixels, idPixels) << "the shading pass counts the pixels it shades";
+    EXPECT_EQ(covered->stats.coveredPixels, idPixels);
     EXPECT_EQ(compareColor(covered->color, uber->color).maxAbs, 0.0);
     size_t pixels = 0;
     std::set<uint32_t> tiles;
