@@ -333,15 +333,8 @@ int main(int argc, char** argv) {
           region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
           region.imageExtent = {w, h, 1};
           vkCmdCopyImageToBuffer(cmd, target.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target.readback, 1, &region);
-          VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-          mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-          mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-          mb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-          mb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-          VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-          dep.memoryBarrierCount = 1;
-          dep.pMemoryBarriers = &mb;
-          vkCmdPipelineBarrier2(cmd, &dep);
+          visbuf::gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                     VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
         }
         HOST_CHECK(vkEndCommandBuffer(cmd));
         std::vector<VkCommandBufferSubmitInfo> infos;

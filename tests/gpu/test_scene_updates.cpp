@@ -16,6 +16,7 @@
 #include "gpu_test_util.h"
 #include "visbuf/asset/gltf_import.h"
 #include "visbuf/asset/scene_bake.h"
+#include "visbuf/gpu/resources.h"
 #include "visbuf/render/scene_motion.h"
 #include "visbuf/scene/gpu_scene.h"
 #include "visbuf/scene/generate.h"
@@ -210,15 +211,8 @@ TEST(SceneUpdates, RecordThreeInFlightMatchesRenderFrame) {
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {frame->width, frame->height, 1};
     vkCmdCopyImageToBuffer(s.cmd, frame->color.image, frame->color.layout, s.readback.handle(), 1, &region);
-    VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-    mb.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-    mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    mb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-    mb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dep.memoryBarrierCount = 1;
-    dep.pMemoryBarriers = &mb;
-    vkCmdPipelineBarrier2(s.cmd, &dep);
+    gpu::memoryBarrier(s.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
     ASSERT_EQ(vkEndCommandBuffer(s.cmd), VK_SUCCESS);
     std::vector<VkCommandBufferSubmitInfo> cmds;
     for (VkCommandBuffer c : frame->commandBuffers)
