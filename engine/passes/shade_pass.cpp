@@ -39,9 +39,7 @@ void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescripto
 void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
                               const gpu::Buffer& tiles, uint32_t width, uint32_t height) const {
   const uint32_t tileCount = ((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
-  // The previous frame's shading read the list (indirect and storage) that this frame rewrites.
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0,
-                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  // (The previous frame's reads of the list are behind the frame graph's frame boundary.)
   vkCmdFillBuffer(cmd, tiles.handle(), 0, COVERED_TILES_HEADER * sizeof(uint32_t), 0);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,

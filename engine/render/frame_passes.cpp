@@ -122,134 +122,139 @@ std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camer
   return out;
 }
 
-void Renderer::Impl::recordTransparent(const Camera& camera, const FrameMath& math, const FrameOptions& options,
-                                       FrameStats& st, uint32_t& used) {
-  std::vector<passes::TransparentDraw> draws = transparentCull(camera, math, options, st);
-  VkCommandBuffer cmd = cmds[used++];
-  beginCmd(cmd);
-  const bool visbuf = options.path == RenderPath::Visbuf;
-  // Colour: the shading pass's storage writes (visbuf) or the forward pass's attachment writes; depth: the last
-  // raster's writes, now only tested.
-  if (visbuf)
-    gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                      VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  else
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                       VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  constexpr VkPipelineStageFlags2 kDepthStages =
-      VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
-  gpu::memoryBarrier(cmd, kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kDepthStages,
-                     VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-  uint32_t t = timestamps->begin(cmd, "transparent");
-  transparent.record(cmd, pipelineLayout, set, color, depth, gpuScene.indices.handle(), draws);
-  timestamps->end(cmd, t);
-  if (visbuf)  // back to the layout the visbuf path's readback expects
-    gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
-  VK_CHECK(vkEndCommandBuffer(cmd));
+// Each pass of the frame as the graph sees it: what it reads and writes (stages, accesses, layouts) and what it
+// records. The frame script (renderer.cpp) declares them in order; the graph derives the barriers between them.
+
+FrameResources Renderer::Impl::declareResources(Graph& g, const FrameOptions& options, const FramePlan& plan) const {
+  FrameResources r;
+  const bool msaa = plan.msaa, deferred = options.path == RenderPath::GBuffer;
+  // Buffer-like state (several buffers may share one name: the scene is its records, meshes and vertices).
+  r.scene = g.buffer("scene", /*persistent=*/true);  // uploads and skinning: later frames draw what they wrote
+  r.stats = g.buffer("counters", /*persistent=*/true);  // a frozen frame redraws with the counts it keeps
+  r.draws = g.buffer("draws", /*persistent=*/true);     // ... and the draw lists
+  r.history = g.buffer("visible lists", /*persistent=*/true);  // occlusion history for the next frame
+  r.sw = g.buffer("micro-raster buffer");
+  r.lightTiles = g.buffer("light tiles");
+  r.classification = g.buffer("material tiles");
+  r.coveredTiles = g.buffer("covered tiles");
+  r.attributes = g.buffer("attributes");
+  // Images: the raster targets of this frame (multisampled ones with MSAA), their content not needed at the start.
+  r.ids = g.image("ids", msaa ? idsMs : ids);
+  r.depth = g.image("depth", msaa && !deferred ? depthMs : depth);
+  r.color = g.image("color", color);
+  if (msaa && options.path == RenderPath::Forward) r.colorMs = g.image("color (multisampled)", colorMs);
+  if (forwardIds) r.forwardIds = g.image("forward ids", forwardIds);
+  if (deferred)
+    for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) r.gbuffer[i] = g.image(fmt::format("gbuffer {}", i), gbufferTargets[i]);
+  // Kept from frame to frame in GENERAL: the pyramid (zero-filled at creation: a valid, conservative pyramid for
+  // a frame that reads it before any build) and the overdraw counter image.
+  r.pyramid = g.image("depth pyramid", pyramid.pyramid(), VK_IMAGE_LAYOUT_GENERAL);
+  r.overdraw = g.image("overdraw", overdraw, VK_IMAGE_LAYOUT_GENERAL);
+  return r;
 }
 
-// The GPU-culled frame of the visbuf path, and of the G-buffer baseline (same culling and draw lists; its raster
-// writes the attribute targets and its last pass is the deferred lighting instead of the ID resolve).
-void Renderer::Impl::recordVisbuf(const FrameOptions& options, const FramePlan& plan, uint32_t& used) {
-  const uint32_t w = config.width, h = config.height;
-  const bool deferred = options.path == RenderPath::GBuffer;
-  const bool frozen = plan.frozen;
-  const bool occlusion = plan.cull == CullMode::Occlusion;
-  const bool usePyramid = plan.usePyramid;
-  constexpr VkPipelineStageFlags2 kDepthStages =
-      VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
-  constexpr VkAccessFlags2 kDepthAccess =
-      VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-  // MSAA: the multisampled targets (prepareMsaa) replace the single-sample ones in every pass of the frame.
-  const bool msaa = options.msaa > 1;
-  const gpu::Image& idTarget = msaa ? idsMs : ids;
-  const gpu::Image& depthTarget = msaa ? depthMs : depth;
-
-  auto recordCull = [&](uint32_t phase, const char* name) {
-    VkCommandBuffer cmd = cmds[used++];
-    beginCmd(cmd);
-    if (occlusion && phase == CULL_PHASE_LATE) {  // it lists the visible set anew, after the early phase read it
-      gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT, 0,
-                         VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0);
+// Setup: the counters reset, the history cleared after a cut, the overdraw counter cleared, and the scene's changed
+// object records uploaded (one scatter dispatch).
+void Renderer::Impl::declareSetup(Graph& g, const FrameResources& r, const FrameOptions& options,
+                                  const FramePlan& plan, FrameSlot& slot) {
+  std::vector<Graph::Use> uses;
+  if (!plan.frozen) uses.push_back(Graph::writes(r.stats, access::transferWrite));
+  if (historyDirty) uses.push_back(Graph::overwrites(r.history, access::transferWrite));
+  if (options.countOverdraw)
+    uses.push_back(Graph::overwrites(r.overdraw, access::inLayout(access::transferWrite, VK_IMAGE_LAYOUT_GENERAL)));
+  const bool clearHistory = historyDirty;
+  historyDirty = false;
+  Graph::Pass& p = g.pass("setup").sideEffect();
+  p.step(std::move(uses), [this, frozen = plan.frozen, clearHistory, overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
+    if (!frozen) {  // frozen: keep the counts (and the micro-raster's arguments)
+      vkCmdFillBuffer(cmd, stats.handle(), 0, STAT_COUNT * sizeof(uint32_t), 0);
+      const uint32_t args[2 * SW_ARGS_UINTS] = {0, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1, 0, 0, 0};
+      vkCmdUpdateBuffer(cmd, stats.handle(), SW_ARGS * sizeof(uint32_t), sizeof(args), args);
+    }
+    if (overdrawCount) {
+      VkClearColorValue zero{};
+      VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      vkCmdClearColorImage(cmd, overdraw.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+    }
+    if (clearHistory) {
+      vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
       resetVisibleList(cmd);
     }
-    // Counters reset (setup) and, in the late phase, the pyramid and the early draws' reads.
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
-                                VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
-                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
-    uint32_t t = timestamps->begin(cmd, name);
-    if (occlusion && phase == CULL_PHASE_EARLY) {
+  });
+  if (!dirty.empty())
+    p.step({Graph::writes(r.scene, access::computeReadWrite)},
+           [this, &slot, &st = slot.stats](VkCommandBuffer cmd) { recordObjectUploads(cmd, slot, st); });
+}
+
+void Renderer::Impl::declareSkin(Graph& g, const FrameResources& r) {
+  g.pass("skin", "skin").step({Graph::writes(r.scene, access::computeReadWrite)}, [this](VkCommandBuffer cmd) {
+    skin.record(cmd, animation->instanceCount(), animation->maxVertices());
+  });
+}
+
+// A cull phase: early (all objects; occlusion: last frame's visible list) or late (occlusion: every object against
+// the pyramid, then the ones the coarse test kept at a finer level).
+void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FramePlan& plan, uint32_t phase,
+                                 const char* name) {
+  const bool occlusion = plan.cull == CullMode::Occlusion, late = phase == CULL_PHASE_LATE;
+  const gpu::Access lists = access::computeReadWrite | access::indirect;
+  auto cullUses = [&] {
+    std::vector<Graph::Use> u = {Graph::reads(r.scene, access::computeRead), Graph::writes(r.stats, access::computeReadWrite),
+                                 Graph::writes(r.draws, access::computeReadWrite), Graph::writes(r.history, lists)};
+    if (late && plan.usePyramid)
+      u.push_back(Graph::reads(r.pyramid, access::inLayout(access::computeSampled, VK_IMAGE_LAYOUT_GENERAL)));
+    return u;
+  };
+  Graph::Pass& p = g.pass(name, name);
+  if (occlusion && late)  // it lists the visible set anew, after the early phase read it
+    p.prepare({Graph::writes(r.history, access::transferWrite)}, [this](VkCommandBuffer cmd) { resetVisibleList(cmd); });
+  if (occlusion && !late) {
+    p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, pipelineLayout, set, visibleList, 0, CULL_PHASE_EARLY, 0);
-    } else {
-      cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase);
-      // The objects the coarse pyramid test left, at a finer level (without a pyramid this frame it lists none).
-      if (occlusion && phase == CULL_PHASE_LATE && usePyramid) {
-        gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
-                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                               VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
-        cull.recordListed(cmd, pipelineLayout, set, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
-      }
-    }
-    timestamps->end(cmd, t);
-    VK_CHECK(vkEndCommandBuffer(cmd));
-  };
-  // The draw lists of a phase, in drawing order (draw buffer regions and counts: the cull pass's).
-  auto phaseLists = [&](uint32_t phase) {
-    std::vector<passes::VisibilityList> lists;
-    for (uint32_t l = 0; l < DRAW_LISTS; ++l)
-      if (listCapacity[l] > 0)
-        lists.push_back({l, phase * capacity + listFirst[l], STAT_LIST_DRAWS + phase * DRAW_LISTS + l, listCapacity[l]});
-    return lists;
-  };
-  auto recordRaster = [&](uint32_t phase, bool clear, const char* name) {
-    VkCommandBuffer cmd = cmds[used++];
-    beginCmd(cmd);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
-                       VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-    if (clear) {
-      if (deferred)
-        for (const gpu::Image& t : gbufferTargets)
-          gpu::imageBarrier(cmd, t, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                            VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      else
-        gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                          VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0,
-                          VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                        VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, kDepthStages, kDepthAccess);
-    } else {
-      // Late phase: keep the early phase's IDs and depth (the pyramid pass read the depth).
-      gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                         VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                         VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      if (frozen || !usePyramid)  // the depth stayed an attachment
-        gpu::memoryBarrier(cmd, kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kDepthStages, kDepthAccess);
-      else
-        gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0,
-                          kDepthStages, kDepthAccess);
-    }
-    uint32_t t = timestamps->begin(cmd, name);
-    // The same draw lists for either raster; only the targets differ.
+    });
+    return;
+  }
+  p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase); });
+  if (occlusion && late && plan.usePyramid)  // the objects the coarse pyramid test left, at a finer level
+    p.step(cullUses(), [this](VkCommandBuffer cmd) {
+      cull.recordListed(cmd, pipelineLayout, set, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
+    });
+}
+
+// The draw lists of a phase, in drawing order (draw buffer regions and counts: the cull pass's).
+std::vector<passes::VisibilityList> Renderer::Impl::phaseLists(uint32_t phase) const {
+  std::vector<passes::VisibilityList> lists;
+  for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+    if (listCapacity[l] > 0)
+      lists.push_back({l, phase * capacity + listFirst[l], STAT_LIST_DRAWS + phase * DRAW_LISTS + l, listCapacity[l]});
+  return lists;
+}
+
+// A raster phase of the culled frame: the visibility pass into the IDs (or the G-buffer baseline into its targets)
+// and depth, cleared by the first phase and kept by the late one.
+void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const FrameOptions& options,
+                                   const FramePlan& plan, uint32_t phase, bool clear, const char* name) {
+  const bool deferred = options.path == RenderPath::GBuffer;
+  auto target = [&](Graph::Resource res, gpu::Access a) { return clear ? Graph::overwrites(res, a) : Graph::writes(res, a); };
+  std::vector<Graph::Use> uses = {Graph::reads(r.draws, access::indirect | access::rasterRead),
+                                  Graph::reads(r.stats, access::indirect), Graph::reads(r.scene, access::rasterRead),
+                                  target(r.depth, access::depthAttachment)};
+  if (deferred)
+    for (Graph::Resource t : r.gbuffer) uses.push_back(target(t, access::colorAttachment));
+  else
+    uses.push_back(target(r.ids, access::colorAttachment));
+  if (options.countOverdraw)
+    uses.push_back(Graph::writes(r.overdraw, access::inLayout(access::rasterReadWrite, VK_IMAGE_LAYOUT_GENERAL)));
+  g.pass(name, name).step(std::move(uses), [this, phase, clear, deferred, msaa = plan.msaa,
+                                            overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
     auto common = [&](auto& in) {
-      in.depth = &depthTarget;
+      in.depth = deferred ? &depth : msaa ? &depthMs : &depth;
       in.indexBuffer = gpuScene.indices.handle();
       in.draws = draws.handle();
       in.drawCount = stats.handle();
       in.lists = phaseLists(phase);
       in.clear = clear;
-      in.countOverdraw = options.countOverdraw;
+      in.countOverdraw = overdrawCount;
     };
     if (deferred) {
       passes::GBufferInputs in;
@@ -258,196 +263,130 @@ void Renderer::Impl::recordVisbuf(const FrameOptions& options, const FramePlan& 
       gbuffer.record(cmd, pipelineLayout, set, in);
     } else {
       passes::VisibilityInputs in;
-      in.ids = &idTarget;
+      in.ids = msaa ? &idsMs : &ids;
       common(in);
       (msaa ? visibilityMs : visibility).record(cmd, pipelineLayout, set, in);
     }
-    timestamps->end(cmd, t);
-    VK_CHECK(vkEndCommandBuffer(cmd));
-  };
+  });
+}
 
-  // Software micro-raster after each raster phase: the routed draws into the 64-bit buffer (cleared by the first
-  // phase), then merged into the IDs and depth that the raster left as attachments.
-  const bool sw = !deferred && plan.swOn;
-  auto recordSw = [&](uint32_t phase, bool clear, const char* name, const char* mergeName) {
-    VkCommandBuffer cmd = cmds[used++];
-    beginCmd(cmd);
-    if (clear) {
-      vkCmdFillBuffer(cmd, swRaster.buffer.handle(), 0, VK_WHOLE_SIZE, 0);
-    }
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
-                                VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                           VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
-    uint32_t t = timestamps->begin(cmd, name);
-    swRaster.recordRaster(cmd, pipelineLayout, set, phase, stats);
-    timestamps->end(cmd, t);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | kDepthStages,
-                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | kDepthStages,
-                       VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | kDepthAccess);
-    t = timestamps->begin(cmd, mergeName);
-    swRaster.recordMerge(cmd, pipelineLayout, set, idTarget, depthTarget, stats, phase);
-    timestamps->end(cmd, t);
-    VK_CHECK(vkEndCommandBuffer(cmd));
-  };
-  auto recordRasterPhase = [&](uint32_t phase, bool clear, const char* name) {
-    recordRaster(phase, clear, name);
-    if (sw)
-      recordSw(phase, clear, phase == CULL_PHASE_LATE ? "sw raster late" : "sw raster",
-               phase == CULL_PHASE_LATE ? "sw merge late" : "sw merge");
-  };
+// The software micro-raster of a phase: the routed draws into the 64-bit buffer (cleared by the first phase),
+// then merged into the IDs and depth the raster left as attachments.
+void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear) {
+  const bool late = phase == CULL_PHASE_LATE;
+  Graph::Pass& raster = g.pass(late ? "micro-raster late" : "micro-raster", late ? "sw raster late" : "sw raster");
+  if (clear)
+    raster.prepare({Graph::overwrites(r.sw, access::transferWrite)},
+                [this](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, swRaster.buffer.handle(), 0, VK_WHOLE_SIZE, 0); });
+  raster.step({Graph::writes(r.sw, access::computeReadWrite), Graph::writes(r.stats, access::computeReadWrite | access::indirect),
+               Graph::reads(r.draws, access::computeRead), Graph::reads(r.scene, access::computeRead)},
+              [this, phase](VkCommandBuffer cmd) { swRaster.recordRaster(cmd, pipelineLayout, set, phase, stats); });
+  const gpu::Access swRead{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT};
+  g.pass(late ? "micro-raster merge late" : "micro-raster merge", late ? "sw merge late" : "sw merge")
+      .step({Graph::reads(r.sw, swRead), Graph::reads(r.stats, access::indirect),
+             Graph::writes(r.ids, access::colorAttachment), Graph::writes(r.depth, access::depthAttachment)},
+            [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, pipelineLayout, set, ids, depth, stats, phase); });
+}
 
-  const char* rasterOnly = deferred ? "gbuffer" : "visibility";
-  const char* rasterEarly = deferred ? "gbuffer early" : "raster early";
-  const char* rasterLate = deferred ? "gbuffer late" : "raster late";
-  if (frozen) {  // the draw lists and their counts are the frozen frame's: raster them as they are
-    recordRasterPhase(CULL_PHASE_EARLY, true, occlusion ? rasterEarly : rasterOnly);
-    if (occlusion) recordRasterPhase(CULL_PHASE_LATE, false, rasterLate);
-  } else if (!occlusion) {
-    recordCull(CULL_PHASE_EARLY, "cull");
-    recordRasterPhase(CULL_PHASE_EARLY, true, rasterOnly);
-  } else {
-    recordCull(CULL_PHASE_EARLY, "cull early");
-    recordRasterPhase(CULL_PHASE_EARLY, true, rasterEarly);
-    if (!usePyramid) {  // the late phase runs frustum + sub-pixel tests only
-      recordCull(CULL_PHASE_LATE, "cull late");
-      recordRasterPhase(CULL_PHASE_LATE, false, rasterLate);
-    }
-  }
-  if (!frozen && occlusion && usePyramid) {
-    VkCommandBuffer cmd = cmds[used++];
-    beginCmd(cmd);
-    gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                      kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                      VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    // The previous frame's late cull read the pyramid that this pass overwrites.
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-    uint32_t t = timestamps->begin(cmd, "depth pyramid");
-    pyramid.record(cmd, msaa);
-    timestamps->end(cmd, t);
-    VK_CHECK(vkEndCommandBuffer(cmd));
-    recordCull(CULL_PHASE_LATE, "cull late");
-    recordRasterPhase(CULL_PHASE_LATE, false, rasterLate);
-  }
-  if (deferred) {
-    recordGBufferLighting(used, options.readAttributes);
-    return;
-  }
+void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa) {
+  g.pass("depth pyramid", "depth pyramid")
+      .step({Graph::reads(r.depth, access::computeSampled),
+             Graph::overwrites(r.pyramid, access::inLayout(access::computeStorageImage | access::computeSampled,
+                                                          VK_IMAGE_LAYOUT_GENERAL))},
+            [this, msaa](VkCommandBuffer cmd) { pyramid.record(cmd, msaa); });
+}
 
-  if (plan.lightsCulled) {  // tile light lists from the final depth
-    VkCommandBuffer cmd = cmds[used++];
-    beginCmd(cmd);
-    gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                      kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                      VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    // The previous frame's shading read the lists this pass rewrites.
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
-                       VK_PIPELINE_STAGE_2_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-    uint32_t t = timestamps->begin(cmd, "light cull");
-    lightCull.record(cmd, pipelineLayout, set, msaa);
-    timestamps->end(cmd, t);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_TRANSFER_READ_BIT);
-    VK_CHECK(vkEndCommandBuffer(cmd));
-  }
+// Tile light lists from the final depth.
+void Renderer::Impl::declareLightCull(Graph& g, const FrameResources& r, bool msaa) {
+  g.pass("light cull", "light cull")
+      .step({Graph::reads(r.depth, access::computeSampled),
+             Graph::overwrites(r.lightTiles, access::transferWrite | access::computeReadWrite)},
+            [this, msaa](VkCommandBuffer cmd) { lightCull.record(cmd, pipelineLayout, set, msaa); });
+}
 
-  // The IDs become the sampled input of the classification (if any) and the shading.
-  const bool classified = plan.shading == ShadingMode::Classified;
-  VkCommandBuffer cmd = cmds[used++];
-  beginCmd(cmd);
-  gpu::imageBarrier(cmd, idTarget, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  if (classified) {
-    uint32_t t = timestamps->begin(cmd, "classify");
-    classify.recordClassify(cmd, pipelineLayout, set);
-    timestamps->end(cmd, t);
-    VK_CHECK(vkEndCommandBuffer(cmd));
-    cmd = cmds[used++];
-    beginCmd(cmd);
-  }
-  // shade (it reads the cull pass's draws through a texel view)
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                    VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  uint32_t t = timestamps->begin(cmd, "shade");
-  VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
-  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  if (options.readAttributes) {
-    vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  }
+void Renderer::Impl::declareClassify(Graph& g, const FrameResources& r) {
+  const gpu::Access texels{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+  g.pass("classify", "classify")
+      .step({Graph::reads(r.ids, access::computeSampled), Graph::reads(r.draws, texels),
+             Graph::reads(r.scene, access::computeRead),
+             Graph::overwrites(r.classification, access::transferWrite | access::computeReadWrite | access::transferRead)},
+            [this](VkCommandBuffer cmd) { classify.recordClassify(cmd, pipelineLayout, set); });
+}
+
+// The shading pass: the colour cleared to the background, then every covered pixel (or tile, or classified tile)
+// shaded from the IDs.
+void Renderer::Impl::declareShade(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan) {
+  Graph::Pass& p = g.pass("shade", "shade");
+  p.step({Graph::overwrites(r.color, access::transferWrite)}, [this](VkCommandBuffer cmd) {
+    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
+  });
   // The shading's own counters (a frozen frame keeps the cull counts, not these): per-sample pixels (MSAA) and
-  // covered pixels.
-  if (msaa) vkCmdFillBuffer(cmd, stats.handle(), STAT_PER_SAMPLE_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
-  vkCmdFillBuffer(cmd, stats.handle(), STAT_COVERED_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                     VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  if (classified)
-    classify.recordShade(cmd, pipelineLayout, set);
-  else if (plan.coveredTiles)
-    shade.recordCovered(cmd, pipelineLayout, set, coveredTiles, w, h);
-  else
-    shade.record(cmd, pipelineLayout, set, w, h,
-                 msaa                     ? passes::ShadePass::Msaa
-                 : options.readAttributes ? passes::ShadePass::Attributes
-                                          : passes::ShadePass::Plain);
-  timestamps->end(cmd, t);
-  if (msaa && options.readIds) shade.recordSampleIds(cmd, pipelineLayout, set, w, h);  // (untimed) -> attributes
-  VK_CHECK(vkEndCommandBuffer(cmd));
+  // covered pixels; and the attribute record, zero where nothing is drawn.
+  std::vector<Graph::Use> fills = {Graph::writes(r.stats, access::transferWrite)};
+  if (options.readAttributes) fills.push_back(Graph::overwrites(r.attributes, access::transferWrite));
+  p.step(std::move(fills), [this, msaa = plan.msaa, attributesToo = options.readAttributes](VkCommandBuffer cmd) {
+    if (attributesToo) vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
+    if (msaa) vkCmdFillBuffer(cmd, stats.handle(), STAT_PER_SAMPLE_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
+    vkCmdFillBuffer(cmd, stats.handle(), STAT_COVERED_PIXELS * sizeof(uint32_t), sizeof(uint32_t), 0);
+  });
+  const gpu::Access texels{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+  std::vector<Graph::Use> uses = {Graph::reads(r.ids, access::computeSampled), Graph::reads(r.draws, texels),
+                                  Graph::reads(r.scene, access::computeRead),
+                                  Graph::writes(r.color, access::computeStorageImage),
+                                  Graph::writes(r.stats, access::computeReadWrite)};
+  if (options.readAttributes) uses.push_back(Graph::writes(r.attributes, access::computeReadWrite));
+  if (plan.lightsCulled) uses.push_back(Graph::reads(r.lightTiles, access::computeRead));
+  if (plan.shading == ShadingMode::Classified)
+    uses.push_back(Graph::reads(r.classification, access::computeRead | access::indirect));
+  if (plan.coveredTiles)
+    uses.push_back(Graph::overwrites(r.coveredTiles, access::transferWrite | access::computeReadWrite | access::indirect));
+  p.step(std::move(uses), [this, plan, attributesToo = options.readAttributes](VkCommandBuffer cmd) {
+    const uint32_t w = config.width, h = config.height;
+    if (plan.shading == ShadingMode::Classified)
+      classify.recordShade(cmd, pipelineLayout, set);
+    else if (plan.coveredTiles)
+      shade.recordCovered(cmd, pipelineLayout, set, coveredTiles, w, h);
+    else
+      shade.record(cmd, pipelineLayout, set, w, h,
+                   plan.msaa      ? passes::ShadePass::Msaa
+                   : attributesToo ? passes::ShadePass::Attributes
+                                   : passes::ShadePass::Plain);
+  });
 }
 
-// G-buffer baseline: after the last raster phase the targets and the depth become sampled images of the
-// lighting pass, which writes the covered pixels of the (background-cleared) colour image.
-void Renderer::Impl::recordGBufferLighting(uint32_t& used, bool writeAttributes) {
-  VkCommandBuffer cmd = cmds[used++];
-  beginCmd(cmd);
-  for (const gpu::Image& t : gbufferTargets)
-    gpu::imageBarrier(cmd, t, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  gpu::imageBarrier(cmd, depth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                    VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  uint32_t t = timestamps->begin(cmd, "lighting");
-  VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
-  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  if (writeAttributes) {
-    vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  }
-  gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height, writeAttributes);
-  timestamps->end(cmd, t);
-  VK_CHECK(vkEndCommandBuffer(cmd));
+// MSAA with readIds: every sample's (object + 1, triangle) into the attribute buffer (untimed).
+void Renderer::Impl::declareSampleIds(Graph& g, const FrameResources& r) {
+  g.pass("sample ids")
+      .step({Graph::reads(r.ids, access::computeSampled), Graph::reads(r.draws, access::computeRead),
+             Graph::overwrites(r.attributes, access::computeReadWrite)},
+            [this](VkCommandBuffer cmd) { shade.recordSampleIds(cmd, pipelineLayout, set, config.width, config.height); });
 }
 
-// The forward baseline: CPU culling (one draw per object), then one raster pass into colour and depth.
-void Renderer::Impl::recordForward(const Camera& camera, const FrameMath& math, const FrameOptions& options,
-                                   FrameStats& st, uint32_t& used, FrameResult* result) {
-  const uint32_t w = config.width, h = config.height;
+// G-buffer baseline: the targets and the depth sampled by the lighting pass, which writes the covered pixels of
+// the (background-cleared) colour image.
+void Renderer::Impl::declareGBufferLighting(Graph& g, const FrameResources& r, bool writeAttributes) {
+  Graph::Pass& p = g.pass("lighting", "lighting");
+  p.step({Graph::overwrites(r.color, access::transferWrite)}, [this](VkCommandBuffer cmd) {
+    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, color.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &kBackground, 1, &range);
+  });
+  if (writeAttributes)
+    p.step({Graph::overwrites(r.attributes, access::transferWrite)},
+           [this](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, attributes.handle(), 0, VK_WHOLE_SIZE, 0); });
+  std::vector<Graph::Use> uses = {Graph::reads(r.depth, access::computeSampled), Graph::reads(r.scene, access::computeRead),
+                                  Graph::writes(r.color, access::computeStorageImage)};
+  for (Graph::Resource t : r.gbuffer) uses.push_back(Graph::reads(t, access::computeSampled));
+  if (writeAttributes) uses.push_back(Graph::writes(r.attributes, access::computeReadWrite));
+  p.step(std::move(uses), [this, writeAttributes](VkCommandBuffer cmd) {
+    gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height, writeAttributes);
+  });
+}
+
+// The forward baseline: CPU culling (one draw per object), then one raster pass into colour and depth (MSAA:
+// multisampled colour and depth, the colour resolved into `color` by the hardware).
+void Renderer::Impl::declareForward(Graph& g, const FrameResources& r, const Camera& camera, const FrameMath& math,
+                                    const FrameOptions& options, FrameStats& st, FrameResult* result) {
   const bool msaa = options.msaa > 1;
   std::vector<passes::ForwardDraw> fdraws = forwardCull(camera, math, options, st);
   if (options.readDraws && result)
@@ -458,39 +397,44 @@ void Renderer::Impl::recordForward(const Camera& camera, const FrameMath& math, 
       result->drawnObjects.push_back(d.objectId);
       result->drawnLods.push_back(lod);
     }
-  VkCommandBuffer cmd = cmds[used++];
-  beginCmd(cmd);
-  // MSAA: multisampled colour + depth, the colour averaged into `color` at the end (hardware resolve).
-  const gpu::Image& colorTarget = msaa ? colorMs : color;
-  const gpu::Image& depthTarget = msaa ? depthMs : depth;
-  gpu::imageBarrier(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  if (msaa)
-    gpu::imageBarrier(cmd, colorMs, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, 0,
-                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  gpu::imageBarrier(cmd, depthTarget, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-                    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-  uint32_t t = timestamps->begin(cmd, "forward");
-  if (options.readIds) {
-    if (!forwardIds)
-      forwardIds = gpu::Image(device, VK_FORMAT_R32G32_UINT, w, h,
-                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                              VK_IMAGE_ASPECT_COLOR_BIT);
-    gpu::imageBarrier(cmd, forwardIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  }
-  (msaa ? forwardMs : forward)
-      .record(cmd, pipelineLayout, set, colorTarget, kBackground, depthTarget, gpuScene.indices.handle(), fdraws,
-              options.readIds ? &forwardIds : nullptr, options.countOverdraw, msaa ? &color : nullptr);
-  timestamps->end(cmd, t);
-  VK_CHECK(vkEndCommandBuffer(cmd));
+  std::vector<Graph::Use> uses = {Graph::reads(r.scene, access::rasterRead),
+                                  Graph::overwrites(r.color, access::colorAttachment),
+                                  Graph::overwrites(r.depth, access::depthAttachment)};
+  if (msaa) uses.push_back(Graph::overwrites(r.colorMs, access::colorAttachment));
+  if (options.readIds) uses.push_back(Graph::overwrites(r.forwardIds, access::colorAttachment));
+  if (options.countOverdraw)
+    uses.push_back(Graph::writes(r.overdraw, access::inLayout(access::rasterReadWrite, VK_IMAGE_LAYOUT_GENERAL)));
+  g.pass("forward", "forward")
+      .step(std::move(uses), [this, msaa, fdraws = std::move(fdraws), readIds = options.readIds,
+                              overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
+        (msaa ? forwardMs : forward)
+            .record(cmd, pipelineLayout, set, msaa ? colorMs : color, kBackground, msaa ? depthMs : depth,
+                    gpuScene.indices.handle(), fdraws, readIds ? &forwardIds : nullptr, overdrawCount,
+                    msaa ? &color : nullptr);
+      });
   st.targetBytesPerPixel = (4 /*depth*/ + 8 /*colour*/) * options.msaa + (msaa ? 8 /*resolved colour*/ : 0);
   st.rasterBytesPerFragment = 4 /*depth*/ + 8 /*colour*/;
+}
+
+// BLEND objects over the opaque frame: sorted back to front, depth tested against the opaque depth, not written.
+void Renderer::Impl::declareTransparent(Graph& g, const FrameResources& r, const Camera& camera, const FrameMath& math,
+                                        const FrameOptions& options, FrameStats& st) {
+  const gpu::Access depthTest{access::kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
+                                 VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+  g.pass("transparent", "transparent")
+      .step({Graph::reads(r.scene, access::rasterRead), Graph::writes(r.color, access::colorAttachment),
+             Graph::reads(r.depth, depthTest)},
+            [this, draws = transparentCull(camera, math, options, st)](VkCommandBuffer cmd) {
+              transparent.record(cmd, pipelineLayout, set, color, depth, gpuScene.indices.handle(), draws);
+            });
+}
+
+// The counters into the slot's readback buffer (read when the frame has finished).
+void Renderer::Impl::declareCounters(Graph& g, const FrameResources& r, FrameSlot& slot) {
+  g.pass("counters").sideEffect().step({Graph::reads(r.stats, access::transferRead)}, [this, &slot](VkCommandBuffer cmd) {
+    VkBufferCopy statsCopy{0, 0, STAT_COUNT * sizeof(uint32_t)};
+    vkCmdCopyBuffer(cmd, stats.handle(), slot.statsReadback.handle(), 1, &statsCopy);
+  });
 }
 
 }  // namespace visbuf

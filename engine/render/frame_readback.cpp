@@ -8,89 +8,76 @@
 
 namespace visbuf {
 
-// The copies into host-visible buffers, after every pass of the frame.
-void Renderer::Impl::recordReadback(VkCommandBuffer cmd, const FrameOptions& options, const FramePlan& plan,
-                                    FrameReadback& rb) {
+// The copies into host-visible buffers, after every pass of the frame (renderFrame only).
+void Renderer::Impl::declareReadback(Graph& g, const FrameResources& r, const FrameOptions& options,
+                                     const FramePlan& plan, FrameReadback& rb) {
   const uint32_t w = config.width, h = config.height;
-  const bool gpuCulled = plan.gpuCulled, msaa = plan.msaa;
+  const bool gpuCulled = plan.gpuCulled, msaa = plan.msaa, visbuf = options.path == RenderPath::Visbuf;
   const bool readIds = options.readIds;
-  const gpu::Image* colorSource = &color;
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-  if (plan.lightsCulled) lightCull.recordReadback(cmd);
-  if (options.readColor) {
-    VkImageLayout from = gpuCulled ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    gpu::imageBarrier(cmd, *colorSource, from, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                      VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    copyImageToBuffer(cmd, *colorSource, colorReadback);
-  }
+  std::vector<Graph::Use> uses;
+  if (plan.lightsCulled) uses.push_back(Graph::reads(r.lightTiles, access::transferRead));
+  if (options.readColor) uses.push_back(Graph::reads(r.color, access::transferRead));
   rb.draws = (readIds || options.readDraws) && gpuCulled;
   if (rb.draws) {
+    uses.push_back(Graph::reads(r.draws, access::transferRead));
     if (!drawsReadback)
       drawsReadback = gpu::Buffer(device, draws.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
-    VkBufferCopy dc{0, 0, draws.size()};
-    vkCmdCopyBuffer(cmd, draws.handle(), drawsReadback.handle(), 1, &dc);
   }
   rb.pyramid = plan.usePyramid && options.readPyramid;
-    if (rb.pyramid) {
+  VkDeviceSize pyramidBytes = 0;
+  std::vector<VkBufferImageCopy> pyramidRegions;
+  if (rb.pyramid) {
+    uses.push_back(Graph::reads(r.pyramid, access::transferRead));
     uint32_t lw = w, lh = h;
-    VkDeviceSize offset = 0;
-    std::vector<VkBufferImageCopy> regions;
     for (uint32_t k = 0; k < pyramid.levels(); ++k) {
       VkBufferImageCopy region{};
-      region.bufferOffset = offset;
+      region.bufferOffset = pyramidBytes;
       region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, k, 0, 1};
       region.imageExtent = {lw, lh, 1};
-      regions.push_back(region);
+      pyramidRegions.push_back(region);
       rb.pyramidSizes.emplace_back(lw, lh);
-      offset += VkDeviceSize(lw) * lh * 4;
+      pyramidBytes += VkDeviceSize(lw) * lh * 4;
       lw = (lw + 1) / 2;
       lh = (lh + 1) / 2;
     }
-    if (!pyramidReadback || pyramidReadback.size() < offset)
-      pyramidReadback = gpu::Buffer(device, offset, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
-    gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    vkCmdCopyImageToBuffer(cmd, pyramid.pyramid().handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                           pyramidReadback.handle(), uint32_t(regions.size()), regions.data());
-    gpu::imageBarrier(cmd, pyramid.pyramid(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    if (!pyramidReadback || pyramidReadback.size() < pyramidBytes)
+      pyramidReadback = gpu::Buffer(device, pyramidBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
   }
   if (options.countOverdraw) {
+    uses.push_back(Graph::reads(r.overdraw, access::transferRead));
     if (!overdrawReadback)
       overdrawReadback = gpu::Buffer(device, VkDeviceSize(w) * h * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                      gpu::MemoryUse::HostVisible);
-    gpu::imageBarrier(cmd, overdraw, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    copyImageToBuffer(cmd, overdraw, overdrawReadback);
-    gpu::imageBarrier(cmd, overdraw, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
-                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
   }
-  if (rb.attributes) {
-    if (!attributesReadback)
-      attributesReadback = gpu::Buffer(device, attributes.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                       gpu::MemoryUse::HostVisible);
-    VkBufferCopy ac{0, 0, rb.attributeBytes};
-    vkCmdCopyBuffer(cmd, attributes.handle(), attributesReadback.handle(), 1, &ac);
-  }
-  if (readIds && options.path == RenderPath::Visbuf && msaa) {  // the sample-ID copy (shading command buffer)
-    VkBufferCopy c{0, 0, rb.sampleIdBytes};
-    vkCmdCopyBuffer(cmd, attributes.handle(), idsReadback.handle(), 1, &c);
-  } else if (readIds && options.path == RenderPath::Visbuf) {
-    gpu::imageBarrier(cmd, ids, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                      VK_ACCESS_2_TRANSFER_READ_BIT);
-    copyImageToBuffer(cmd, ids, idsReadback);
-  } else if (readIds) {
-    gpu::imageBarrier(cmd, forwardIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                      VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    copyImageToBuffer(cmd, forwardIds, idsReadback);
-  }
+  // MSAA IDs: the sample-ID pass wrote them into the attribute buffer.
+  const bool sampleIds = readIds && visbuf && msaa;
+  if (rb.attributes || sampleIds) uses.push_back(Graph::reads(r.attributes, access::transferRead));
+  if (rb.attributes && !attributesReadback)
+    attributesReadback = gpu::Buffer(device, attributes.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                     gpu::MemoryUse::HostVisible);
+  if (readIds && !sampleIds) uses.push_back(Graph::reads(visbuf ? r.ids : r.forwardIds, access::transferRead));
+  g.pass("readback").sideEffect().step(std::move(uses), [=, this, &rb](VkCommandBuffer cmd) {
+    if (plan.lightsCulled) lightCull.recordReadback(cmd);
+    if (options.readColor) copyImageToBuffer(cmd, color, colorReadback);
+    if (rb.draws) {
+      VkBufferCopy dc{0, 0, draws.size()};
+      vkCmdCopyBuffer(cmd, draws.handle(), drawsReadback.handle(), 1, &dc);
+    }
+    if (rb.pyramid)
+      vkCmdCopyImageToBuffer(cmd, pyramid.pyramid().handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                             pyramidReadback.handle(), uint32_t(pyramidRegions.size()), pyramidRegions.data());
+    if (options.countOverdraw) copyImageToBuffer(cmd, overdraw, overdrawReadback);
+    if (rb.attributes) {
+      VkBufferCopy ac{0, 0, rb.attributeBytes};
+      vkCmdCopyBuffer(cmd, attributes.handle(), attributesReadback.handle(), 1, &ac);
+    }
+    if (sampleIds) {
+      VkBufferCopy c{0, 0, rb.sampleIdBytes};
+      vkCmdCopyBuffer(cmd, attributes.handle(), idsReadback.handle(), 1, &c);
+    } else if (readIds) {
+      copyImageToBuffer(cmd, visbuf ? ids : forwardIds, idsReadback);
+    }
+  });
 }
 
 // The counters and GPU times of a finished frame (slot.stats already holds what recording knew), and the

@@ -1,11 +1,11 @@
-// The frame script: the only place that knows the pass order and inserts the barriers between them.
+// The frame script: the only place that knows the pass order. Each pass declares what it reads and writes
+// (frame_passes.cpp); the frame graph (gpu/frame_graph.h) drops what nothing reads and derives the barriers.
 //
-//   setup ─► cull.comp ─► visibility.{vert,frag} ─► [light_cull.comp] ─► shade.comp ─► readback   (visbuf path;
-//                                                      light culling only with point lights)
-//                         classified shading: ... ─► classify.comp ─► shade.comp per material ─► readback
-//   setup ─► forward.{vert,frag} ─► readback                                      (forward path)
-//   both: ─► transparent_pass before the readback, only for scenes with BLEND materials
-//   setup ─► cull.comp ─► gbuffer.{vert,frag} ─► gbuffer_lighting.comp ─► readback (G-buffer baseline)
+//   visbuf:   setup ─► [skin] ─► cull ─► raster ─► [micro-raster ─► merge] ─► shade ─► counters ─► [readback]
+//             occlusion: cull early ─► raster early ─► [depth pyramid] ─► cull late ─► raster late (each raster
+//             with its micro-raster); [light cull] and [classify] before shade; [transparent] after it
+//   G-buffer: the same culling and raster into the G-buffer targets, then lighting
+//   forward:  setup ─► [skin] ─► forward (CPU culled) ─► [transparent] ─► counters ─► [readback]
 //
 // Each pass is recorded into its own command buffer, all submitted at once (Mesa 22.3 lavapipe
 // crashed on a dispatch + barrier + timestamps in one command buffer).
@@ -141,6 +141,9 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
     resizeAttributes(std::max(attributeBytes, sampleIdBytes));
     writeDescriptors();
   }
+  if (options.readIds && options.path == RenderPath::Forward && !forwardIds)
+    forwardIds = gpu::Image(device, VK_FORMAT_R32G32_UINT, w, h,
+                            VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
   if (idsReadback.size() < sampleIdBytes)
     idsReadback = gpu::Buffer(device, sampleIdBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
   return {};
@@ -180,12 +183,12 @@ FrameSlot& Renderer::Impl::beginFrame() {
   return f;
 }
 
-// The frame script: the pass order of every path, one command buffer per pass. The last command buffer is left
-// open for the caller (readback or output barrier).
+// The frame script: the pass order of every path, declared into the frame graph, which drops the passes whose
+// writes nothing reads, derives the barriers and records one command buffer per pass.
 uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& options, const FramePlan& plan,
-                                     FrameSlot& slot, FrameResult* result) {
+                                     FrameSlot& slot, FrameResult* result, FrameReadback* readback,
+                                     const FrameInputs* inputs) {
   const uint32_t w = config.width, h = config.height;
-  const bool frozen = plan.frozen;
   FrameMath math = computeFrameMath(camera, w, h);
   gpu::FrameData fd = frameData(camera, math, options, plan);
   std::memcpy(slot.frameBuffer.mapped(), &fd, sizeof(fd));
@@ -211,34 +214,14 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
   st.lightsCulled = plan.lightsCulled;
   st.msaaSamples = options.msaa;
   st.shading = plan.shading;
+  st.pyramidSkipped = plan.occlusionFrame && !plan.usePyramid;
+  st.cullingFrozen = plan.frozen;
+  st.pyramidLevels = plan.usePyramid ? pyramid.levels() : 0;
 
-  uint32_t used = 0;
-  // setup: queries, counters, the scene's changed object records
-  VkCommandBuffer cmd = cmds[used++];
-  beginCmd(cmd);
-  timestamps->reset(cmd);
+  Graph g;
+  const FrameResources r = declareResources(g, options, plan);
   poseRigidObjects(options.animationTime);
-  recordObjectUploads(cmd, slot, st);
-  if (!frozen) {  // frozen: keep the counts (and the micro-raster's arguments)
-    vkCmdFillBuffer(cmd, stats.handle(), 0, STAT_COUNT * sizeof(uint32_t), 0);
-    const uint32_t args[2 * SW_ARGS_UINTS] = {0, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1, 0, 0, 0};
-    vkCmdUpdateBuffer(cmd, stats.handle(), SW_ARGS * sizeof(uint32_t), sizeof(args), args);
-  }
-  if (options.countOverdraw) {
-    VkClearColorValue zero{};
-    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    vkCmdClearColorImage(cmd, overdraw.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
-    gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  }
-  if (historyDirty) {
-    vkCmdFillBuffer(cmd, history.handle(), 0, VK_WHOLE_SIZE, 0);
-    resetVisibleList(cmd);
-    historyDirty = false;
-  }
-  VK_CHECK(vkEndCommandBuffer(cmd));
-
+  declareSetup(g, r, options, plan, slot);
   if (animation) {  // skinning: only when the pose changed (a static scene has no AnimationState at all)
     st.skinnedInstances = animation->instanceCount();
     st.skinnedVertices = animation->vertexCount();
@@ -246,45 +229,70 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
     if (animation->update(options.animationTime)) {
       st.skinned = true;
       st.animationCpuMs = animation->lastUpdateMs();
-      cmd = cmds[used++];
-      beginCmd(cmd);
-      uint32_t t = timestamps->begin(cmd, "skin");
-      skin.record(cmd, animation->instanceCount(), animation->maxVertices());
-      timestamps->end(cmd, t);
-      // Regions and mesh slots are read by every later pass (cull, raster, shading, forward).
-      gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                         VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
-      VK_CHECK(vkEndCommandBuffer(cmd));
+      declareSkin(g, r);
     }
   }
-  st.pyramidSkipped = plan.occlusionFrame && !plan.usePyramid;
-  st.cullingFrozen = frozen;
-  st.pyramidLevels = plan.usePyramid ? pyramid.levels() : 0;
   if (plan.gpuCulled) {
-    FrameOptions visbufOptions = options;
-    visbufOptions.readAttributes = plan.readAttributes;
-    recordVisbuf(visbufOptions, plan, used);
+    // Culling and raster: each raster phase followed by the micro-raster's, when it takes draws this frame.
+    const bool deferred = options.path == RenderPath::GBuffer, occlusion = plan.cull == CullMode::Occlusion;
+    auto rasterPhase = [&](uint32_t phase, bool clear, const char* name) {
+      declareRaster(g, r, options, plan, phase, clear, name);
+      if (plan.swOn && !deferred) declareMicroRaster(g, r, phase, clear);
+    };
+    const char* rasterOnly = deferred ? "gbuffer" : "visibility";
+    const char* rasterEarly = deferred ? "gbuffer early" : "raster early";
+    const char* rasterLate = deferred ? "gbuffer late" : "raster late";
+    if (plan.frozen) {  // the draw lists and their counts are the frozen frame's: raster them as they are
+      rasterPhase(CULL_PHASE_EARLY, true, occlusion ? rasterEarly : rasterOnly);
+      if (occlusion) rasterPhase(CULL_PHASE_LATE, false, rasterLate);
+    } else if (!occlusion) {
+      declareCull(g, r, plan, CULL_PHASE_EARLY, "cull");
+      rasterPhase(CULL_PHASE_EARLY, true, rasterOnly);
+    } else {
+      declareCull(g, r, plan, CULL_PHASE_EARLY, "cull early");
+      rasterPhase(CULL_PHASE_EARLY, true, rasterEarly);
+      declarePyramid(g, r, plan.msaa);  // dropped when the late cull does not test against it (plan.usePyramid)
+      declareCull(g, r, plan, CULL_PHASE_LATE, "cull late");
+      rasterPhase(CULL_PHASE_LATE, false, rasterLate);
+    }
+    if (deferred) {
+      declareGBufferLighting(g, r, options.readAttributes);
+    } else {
+      if (hasPointLights()) declareLightCull(g, r, plan.msaa);  // dropped unless the shading reads its tiles
+      if (plan.shading == ShadingMode::Classified) declareClassify(g, r);
+      declareShade(g, r, options, plan);
+      if (plan.msaa && options.readIds) declareSampleIds(g, r);
+    }
     haveDraws = true;
     lastCull = plan.cull;
-    if (!frozen) lastSwOn = plan.swOn;
+    if (!plan.frozen) lastSwOn = plan.swOn;
     st.rasterBytesPerFragment =
-        (options.path == RenderPath::GBuffer ? gbuffer.formats.bytesPerPixel() : gpu::formatBytes(ids.format())) +
-        4 /*depth*/;
+        (deferred ? gbuffer.formats.bytesPerPixel() : gpu::formatBytes(ids.format())) + 4 /*depth*/;
     st.targetBytesPerPixel = st.rasterBytesPerFragment * options.msaa + 8 /*colour*/;  // raster targets per sample
   } else {
-    recordForward(camera, math, options, st, used, result);
+    declareForward(g, r, camera, math, options, st, result);
   }
-  if (!blendObjects.empty()) recordTransparent(camera, math, options, st, used);
+  if (!blendObjects.empty()) declareTransparent(g, r, camera, math, options, st);
+  declareCounters(g, r, slot);
+  if (readback) declareReadback(g, r, options, plan, *readback);
 
-  // end: the counters into the slot's readback buffer (read when the frame has finished)
-  cmd = cmds[used++];
-  beginCmd(cmd);
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-  VkBufferCopy statsCopy{0, 0, STAT_COUNT * sizeof(uint32_t)};
-  vkCmdCopyBuffer(cmd, stats.handle(), slot.statsReadback.handle(), 1, &statsCopy);
+  // What the frame hands on: the colour, depth and (visbuf) IDs, in the layouts record() states.
+  constexpr VkPipelineStageFlags2 all = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+  const VkImageLayout colorLayout = inputs ? inputs->colorLayout : VK_IMAGE_LAYOUT_UNDEFINED;  // (kept as it is)
+  const VkImageLayout sampled = inputs ? VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL : VK_IMAGE_LAYOUT_UNDEFINED;
+  g.output(r.color, {all, VK_ACCESS_2_MEMORY_READ_BIT, colorLayout});
+  g.output(r.depth, {all, VK_ACCESS_2_MEMORY_READ_BIT, sampled});
+  if (options.path == RenderPath::Visbuf) g.output(r.ids, {all, VK_ACCESS_2_MEMORY_READ_BIT, sampled});
+
+  const Graph::Report report =
+      g.record(std::span<const VkCommandBuffer>(cmds, kCommandBuffers), [this](VkCommandBuffer c) { beginCmd(c); },
+               timestamps);
+  st.passesRecorded = report.recorded;
+  st.passesDropped = report.dropped;
+  st.barriers = report.barriers;
+  st.layoutTransitions = report.layoutTransitions;
   ++frameCounter;
-  return used;
+  return uint32_t(report.recorded.size());
 }
 
 Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOptions& options) {
@@ -294,14 +302,11 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   FrameSlot& slot = beginFrame();
   const FramePlan plan = planFrame(options);
   FrameResult result;
-  const uint32_t used = recordFrame(camera, options, plan, slot, &result);
   FrameReadback rb;
   rb.attributes = plan.readAttributes;
   rb.attributeBytes = VkDeviceSize(config.width) * config.height * ATTRIBUTE_FLOATS * sizeof(float);
   rb.sampleIdBytes = plan.msaa && options.readIds ? VkDeviceSize(config.width) * config.height * options.msaa * 8 : 0;
-  VkCommandBuffer last = cmds[used - 1];
-  recordReadback(last, options, plan, rb);
-  VK_CHECK(vkEndCommandBuffer(last));
+  const uint32_t used = recordFrame(camera, options, plan, slot, &result, &rb, nullptr);
 
   const auto t1 = Clock::now();
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -339,40 +344,24 @@ Result<RecordedFrame> Renderer::Impl::record(const FrameInputs& inputs) {
   const FramePlan plan = planFrame(options);
   RecordedFrame out;
   out.index = frameCounter;
-  const uint32_t used = recordFrame(inputs.camera, options, plan, slot, nullptr);
-  VkCommandBuffer last = cmds[used - 1];
-  recordOutputs(last, plan, inputs, out);
-  VK_CHECK(vkEndCommandBuffer(last));
+  const uint32_t used = recordFrame(inputs.camera, options, plan, slot, nullptr, nullptr, &inputs);
+  describeOutputs(plan, inputs, out);
   slot.pending = true;
   out.commandBuffers.assign(cmds, cmds + used);
   return out;
 }
 
-// The outputs' final layouts: colour as asked, IDs and depth sampled (SHADER_READ_ONLY_OPTIMAL); every write
-// available and visible to any later command. (The next frame's first use of each discards its content.)
-void Renderer::Impl::recordOutputs(VkCommandBuffer cmd, const FramePlan& plan, const FrameInputs& inputs,
-                                   RecordedFrame& out) {
+// The outputs and their final layouts: colour as asked, IDs and depth sampled (SHADER_READ_ONLY_OPTIMAL); the frame
+// graph leaves every write to them available and visible to any later command.
+void Renderer::Impl::describeOutputs(const FramePlan& plan, const FrameInputs& inputs, RecordedFrame& out) const {
   const FrameOptions& options = inputs.options;
-  const bool visbuf = options.path == RenderPath::Visbuf;
   const gpu::Image& idTarget = plan.msaa ? idsMs : ids;
   const gpu::Image& depthTarget = options.path == RenderPath::GBuffer ? depth : plan.msaa ? depthMs : depth;
-  const VkImageLayout colorFrom = plan.gpuCulled ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  const VkImageLayout depthFrom = options.path == RenderPath::GBuffer || (visbuf && plan.lightsCulled)
-                                      ? VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-                                      : VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-  constexpr VkPipelineStageFlags2 all = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-  if (colorFrom != inputs.colorLayout)
-    gpu::imageBarrier(cmd, color, colorFrom, inputs.colorLayout, all, VK_ACCESS_2_MEMORY_WRITE_BIT, all,
-                      VK_ACCESS_2_MEMORY_READ_BIT);
-  if (depthFrom != VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
-    gpu::imageBarrier(cmd, depthTarget, depthFrom, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, all,
-                      VK_ACCESS_2_MEMORY_WRITE_BIT, all, VK_ACCESS_2_MEMORY_READ_BIT);
-  gpu::memoryBarrier(cmd, all, VK_ACCESS_2_MEMORY_WRITE_BIT, all, VK_ACCESS_2_MEMORY_READ_BIT);
   out.width = config.width;
   out.height = config.height;
   out.color = {color.handle(), color.view(), color.format(), inputs.colorLayout};
   out.depth = {depthTarget.handle(), depthTarget.view(), depthTarget.format(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  if (visbuf)
+  if (options.path == RenderPath::Visbuf)
     out.ids = {idTarget.handle(), idTarget.view(), idTarget.format(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
 }
 

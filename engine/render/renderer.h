@@ -165,6 +165,11 @@ struct FrameStats {
   uint32_t pyramidLevels = 0;   // depth pyramid levels built this frame (0: no pyramid pass)
   bool pyramidSkipped = false;  // occlusion mode, but the last pyramid hid nothing: skipped this frame
   std::vector<std::pair<std::string, double>> passMs;  // GPU time per pass, recording order
+  // The frame graph: the passes recorded (one command buffer each, in order), the passes dropped because nothing
+  // read what they write (a skipped pyramid, untiled lights), and the barriers it derived between passes (image
+  // layout transitions among them).
+  std::vector<std::string> passesRecorded, passesDropped;
+  uint32_t barriers = 0, layoutTransitions = 0;
   double gpuMs = 0.0;           // sum of pass times
   double cpuRecordMs = 0.0;     // CPU time to cull (forward) and record
   double wallMs = 0.0;          // submit to fence, plus readback conversion

@@ -18,6 +18,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include "visbuf/gpu/check.h"
+#include "visbuf/gpu/frame_graph.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 #include "visbuf/passes/classify_pass.h"
@@ -42,8 +43,9 @@ namespace visbuf {
 namespace {
 
 constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
-constexpr uint32_t kCommandBuffers = 14;  // at most 14: setup, skin, 2 x (cull, raster, micro-raster), pyramid,
-                                          // light cull, classify, shade (or G-buffer lighting), transparent, end
+constexpr uint32_t kCommandBuffers = 20;  // one per recorded pass, at most 18: setup, skin, 2 x (cull, raster,
+                                          // micro-raster, merge), pyramid, light cull, classify, shade (or G-buffer
+                                          // lighting), sample IDs, transparent, counters, readback
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
 constexpr uint32_t kPyramidProbeInterval = 16;
 // Likewise the micro-raster, after a frame in which it took no draw.
@@ -66,6 +68,24 @@ struct FramePlan {
   // The ubershader over the covered tiles only (covered_tiles.comp lists them): single-sampled visbuf frames
   // without the attribute record.
   bool coveredTiles = false;
+};
+
+using Graph = gpu::FrameGraph;
+namespace access = gpu::access;
+
+// The resources of one frame's graph (declared by Renderer::Impl::declareResources): the buffers by what they hold,
+// the images this frame renders into (the multisampled ones with MSAA).
+struct FrameResources {
+  static constexpr Graph::Resource kNone = Graph::kNoResource;  // (not declared this frame)
+  Graph::Resource scene = kNone, stats = kNone, draws = kNone, history = kNone, sw = kNone, lightTiles = kNone,
+                  classification = kNone, coveredTiles = kNone, attributes = kNone;
+  Graph::Resource ids = kNone, depth = kNone, color = kNone, colorMs = kNone, forwardIds = kNone, pyramid = kNone,
+                  overdraw = kNone;
+  std::array<Graph::Resource, GBUFFER_TARGETS> gbuffer = [] {
+    std::array<Graph::Resource, GBUFFER_TARGETS> a;
+    a.fill(kNone);
+    return a;
+  }();
 };
 
 // What renderFrame reads back (frame_readback.cpp).
@@ -277,17 +297,16 @@ struct Renderer::Impl {
   FramePlan planFrame(const FrameOptions& options) const;
   // Checks the camera and the options against the scene and device; creates what the frame needs lazily.
   Status prepareFrame(const Camera& camera, const FrameOptions& options);
-  // Records the frame into the slot's command buffers (all but renderFrame's readback); returns how many.
-  // The last one is left open (vkEndCommandBuffer is the caller's) for the readback or the output barrier.
+  // The frame script: declares the frame's passes in order into a graph and records it into the slot's command
+  // buffers (returns how many). readback (renderFrame) or inputs (record()): what the frame hands on.
   uint32_t recordFrame(const Camera& camera, const FrameOptions& options, const FramePlan& plan, FrameSlot& slot,
-                       FrameResult* result);
+                       FrameResult* result, FrameReadback* readback, const FrameInputs* inputs);
   // Fills the counters and GPU times of a finished frame into slot.stats and updates the history decisions.
   void collectStats(FrameSlot& slot, bool synchronous);
-  void recordReadback(VkCommandBuffer cmd, const FrameOptions& options, const FramePlan& plan, FrameReadback& rb);
   void decodeReadback(const FrameOptions& options, const FramePlan& plan, const FrameReadback& rb,
                       const FrameSlot& frame, FrameResult& result);
-  // record(): the outputs' final layouts and the barrier that publishes them (end of the last command buffer).
-  void recordOutputs(VkCommandBuffer cmd, const FramePlan& plan, const FrameInputs& inputs, RecordedFrame& out);
+  // record(): the output images and the layouts the frame leaves them in.
+  void describeOutputs(const FramePlan& plan, const FrameInputs& inputs, RecordedFrame& out) const;
   Result<RecordedFrame> record(const FrameInputs& inputs);
   FrameSlot& beginFrame();
   void writeDescriptorSet(const FrameSlot& slot);
@@ -310,18 +329,36 @@ struct Renderer::Impl {
     return options.path == RenderPath::Visbuf && options.tiledLights && hasPointLights();
   }
   Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
-  void recordVisbuf(const FrameOptions& options, const FramePlan& plan, uint32_t& used);
-  void recordGBufferLighting(uint32_t& used, bool writeAttributes);
-  void recordForward(const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
-                     uint32_t& used, FrameResult* result);
+  // The passes as the frame graph sees them (frame_passes.cpp, frame_readback.cpp): what each reads and writes,
+  // and what it records.
+  FrameResources declareResources(Graph& g, const FrameOptions& options, const FramePlan& plan) const;
+  void declareSetup(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan,
+                    FrameSlot& slot);
+  void declareSkin(Graph& g, const FrameResources& r);
+  void declareCull(Graph& g, const FrameResources& r, const FramePlan& plan, uint32_t phase, const char* name);
+  void declareRaster(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan,
+                     uint32_t phase, bool clear, const char* name);
+  void declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear);
+  void declarePyramid(Graph& g, const FrameResources& r, bool msaa);
+  void declareLightCull(Graph& g, const FrameResources& r, bool msaa);
+  void declareClassify(Graph& g, const FrameResources& r);
+  void declareShade(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan);
+  void declareSampleIds(Graph& g, const FrameResources& r);
+  void declareGBufferLighting(Graph& g, const FrameResources& r, bool writeAttributes);
+  void declareForward(Graph& g, const FrameResources& r, const Camera& camera, const FrameMath& math,
+                      const FrameOptions& options, FrameStats& st, FrameResult* result);
+  void declareTransparent(Graph& g, const FrameResources& r, const Camera& camera, const FrameMath& math,
+                          const FrameOptions& options, FrameStats& st);
+  void declareCounters(Graph& g, const FrameResources& r, FrameSlot& slot);
+  void declareReadback(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan,
+                       FrameReadback& rb);
+  std::vector<passes::VisibilityList> phaseLists(uint32_t phase) const;
   std::vector<passes::ForwardDraw> forwardCull(const Camera& camera, const FrameMath& math,
                                                const FrameOptions& options, FrameStats& stats) const;
   bool cullObject(uint32_t i, const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
                   passes::ForwardDraw& draw, glm::dvec3& centre) const;
   std::vector<passes::TransparentDraw> transparentCull(const Camera& camera, const FrameMath& math,
                                                        const FrameOptions& options, FrameStats& st) const;
-  void recordTransparent(const Camera& camera, const FrameMath& math, const FrameOptions& options, FrameStats& st,
-                         uint32_t& used);
   // Slots of the draw buffer: [0, capacity) early (or only) phase, [capacity, 2 capacity) late; within a phase
   // the draw lists' regions. Draws a phase actually wrote: min(count, capacity) per list.
   uint32_t listDrawn(const uint32_t* s, uint32_t phase, uint32_t list) const {

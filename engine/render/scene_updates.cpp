@@ -225,12 +225,7 @@ void Renderer::Impl::recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, F
   std::memcpy(records, dirtyRecords.data(), size_t(count) * sizeof(gpu::ObjectData));
   std::memcpy(ids, dirty.data(), size_t(count) * sizeof(uint32_t));
   for (uint32_t id : dirty) dirtyIndex[id] = 0;
-  // Earlier frames' passes read the records being replaced; every later pass reads the new ones.
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                     VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  objectUpload.record(cmd, slot.staging, idsOffset, gpuScene.objects, count);
-  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
+  objectUpload.record(cmd, slot.staging, idsOffset, gpuScene.objects, count);  // (the frame graph orders it)
   st.objectsUpdated = count;
   st.uploadedBytes = bytes;
   dirty.clear();
