@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <unistd.h>
 
 #include "visbuf/core/image_io.h"
@@ -61,6 +62,10 @@ std::string formatStats(const FrameStats& s) {
            : s.shading == ShadingMode::Covered
                ? std::string("shading       covered (the ubershader over the 8x8 tiles that show anything)\n")
                : std::string("shading       uber (one dispatch, every material)\n");
+  out += fmt::format("frame graph   {} passes ({}), {} barriers ({} layout transitions){}\n", s.passesRecorded.size(),
+                     fmt::join(s.passesRecorded, ", "), s.barriers, s.layoutTransitions,
+                     s.passesDropped.empty() ? std::string()
+                                             : fmt::format("; dropped, nothing reads them: {}", fmt::join(s.passesDropped, ", ")));
   for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
   out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
@@ -118,6 +123,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   nlohmann::json passes = nlohmann::json::object();
   for (const auto& [name, ms] : s.passMs) passes[name] = ms;
   j["passMs"] = passes;
+  j["frameGraph"] = {{"passes", s.passesRecorded}, {"dropped", s.passesDropped}, {"barriers", s.barriers},
+                     {"layoutTransitions", s.layoutTransitions}};
   j["gpuMs"] = s.gpuMs;
   j["cpuRecordMs"] = s.cpuRecordMs;
   j["wallMs"] = s.wallMs;
