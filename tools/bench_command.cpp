@@ -17,6 +17,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include "bench_in_flight.h"
 #include "bench_plot.h"
 #include "cli_checks.h"
 #include "commands.h"
@@ -105,14 +106,18 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
                   "--reference auto: full-detail triangles above which the forward reference is too slow")
       ->check(unsignedIn(0, UINT64_MAX))
       ->capture_default_str();
+  sub->add_option("--in-flight", c.inFlight,
+                  "instead of the matrix: steady-state throughput of Renderer::record with K frames in flight against "
+                  "renderFrame (record, submit, wait), 5 % of the objects moving, the ratio per interleaved pair")
+      ->delimiter(',')
+      ->check(unsignedIn(1, 4));
+  sub->add_option("--pairs", c.pairs, "--in-flight: interleaved pairs of runs")->check(unsignedIn(1, 100))->capture_default_str();
   sub->add_flag("--validation", c.validation, "enable Vulkan validation layers (any message fails the run)");
   sub->add_option("-o,--output", c.output, "output folder (bench.json, bench.csv, bench.md, bench.svg)")
       ->capture_default_str();
 }
 
-namespace {
-
-int fail(const Error& e) {
+int benchFail(const Error& e) {
   std::fprintf(stderr, "visbuf bench: error (%s): %s\n", errorCodeName(e.code),
                printable(e.message, e.code == ErrorCode::NoDevice).c_str());
   return 1;
@@ -125,7 +130,7 @@ int fail(const Error& e) {
 // city: a walk down the default camera's avenue, looking left and right. Anything else: a 90-degree arc
 // around the centre of the scene's bounds, starting at the default camera and spiralling in to 55% of its
 // horizontal distance, rising by up to 20% of it mid-path, always looking at the centre.
-std::vector<Camera> cameraPath(const Scene& scene, uint32_t warmup, uint32_t frames) {
+std::vector<Camera> benchCameraPath(const Scene& scene, uint32_t warmup, uint32_t frames) {
   glm::dvec3 lo(INFINITY), hi(-INFINITY);
   for (const Object& o : scene.objects) {
     glm::dvec4 s = objectBoundsWorld(scene, o);
@@ -165,6 +170,8 @@ std::vector<Camera> cameraPath(const Scene& scene, uint32_t warmup, uint32_t fra
   }
   return path;
 }
+
+namespace {
 
 // ---- statistics -----------------------------------------------------------------------------------------
 
@@ -235,6 +242,8 @@ struct SceneInfo {
 
 std::string lodText(float lod) { return lod > 0 ? fmt::format("{:g}", lod) : std::string("off"); }
 
+}  // namespace
+
 std::string utcNow() {
   std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -243,6 +252,8 @@ std::string utcNow() {
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
 }
+
+namespace {
 
 uint64_t countIdMismatches(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
   if (a.size() != b.size()) return std::max(a.size(), b.size()) / 2;
@@ -255,11 +266,11 @@ uint64_t countIdMismatches(const std::vector<uint32_t>& a, const std::vector<uin
 
 int runBench(const BenchCommand& c) {
   auto size = parseSize(c.size);
-  if (!size) return fail(size.error());
+  if (!size) return benchFail(size.error());
   auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
-  if (!devOptions) return fail(devOptions.error());
+  if (!devOptions) return benchFail(devOptions.error());
   if (c.paths.empty() || c.cull.empty() || c.lod.empty() || c.shading.empty())
-    return fail({ErrorCode::InvalidArgument, "--paths, --cull, --lod and --shading need at least one value each"});
+    return benchFail({ErrorCode::InvalidArgument, "--paths, --cull, --lod and --shading need at least one value each"});
 
   // The configuration matrix.
   std::vector<float> lods;
@@ -271,7 +282,7 @@ int runBench(const BenchCommand& c) {
     char* end = nullptr;
     const float v = std::strtof(s.c_str(), &end);
     if (s.empty() || *end != '\0' || !std::isfinite(v) || v < 0.0f)
-      return fail({ErrorCode::InvalidArgument, fmt::format("--lod '{}': expected off or a threshold >= 0 px", s)});
+      return benchFail({ErrorCode::InvalidArgument, fmt::format("--lod '{}': expected off or a threshold >= 0 px", s)});
     lods.push_back(v);
   }
   std::vector<Config> configs;
@@ -300,7 +311,7 @@ int runBench(const BenchCommand& c) {
                                      v == "quantized", m, parseShadingMode(sh), parseSwRasterMode(sw)});
                 }
     }
-  if (configs.empty()) return fail({ErrorCode::InvalidArgument, "no configuration left to run"});
+  if (configs.empty()) return benchFail({ErrorCode::InvalidArgument, "no configuration left to run"});
 
   std::vector<uint32_t> objectCounts = c.objects;
   if (objectCounts.empty()) {
@@ -311,7 +322,7 @@ int runBench(const BenchCommand& c) {
   }
 
   // The output folder and the memory for the largest scene before any work (bad input, exit 1).
-  if (Status s = checkOutputFolder("-o", c.output); !s) return fail(s.error());
+  if (Status s = checkOutputFolder("-o", c.output); !s) return benchFail(s.error());
   RenderBudgetInput budget;
   budget.objects = *std::max_element(objectCounts.begin(), objectCounts.end());
   budget.lights = c.lights;
@@ -323,15 +334,38 @@ int runBench(const BenchCommand& c) {
   budget.ids = true;
   budget.reference = true;
   const std::string asked = fmt::format("--objects {} at {}x{}", budget.objects, size->first, size->second);
-  if (Status s = checkMemory(estimateRender(budget), nullptr, asked); !s) return fail(s.error());
+  if (Status s = checkMemory(estimateRender(budget), nullptr, asked); !s) return benchFail(s.error());
   std::error_code ec;
   std::filesystem::create_directories(c.output, ec);
-  if (ec) return fail({ErrorCode::IoError, fmt::format("{}: cannot create the output folder", c.output)});
+  if (ec) return benchFail({ErrorCode::IoError, fmt::format("{}: cannot create the output folder", c.output)});
 
   auto device = gpu::Device::create(*devOptions);
-  if (!device) return fail(device.error());
-  if (Status s = checkMemory(estimateRender(budget), device->get(), asked); !s) return fail(s.error());
+  if (!device) return benchFail(device.error());
+  if (Status s = checkMemory(estimateRender(budget), device->get(), asked); !s) return benchFail(s.error());
   const std::string deviceName = (*device)->name();
+  if (!c.inFlight.empty()) {
+    std::vector<Scene> inFlightScenes;
+    for (uint32_t objects : objectCounts) {
+      SceneOptions so;
+      so.scene = c.scene;
+      so.objects = objects;
+      so.seed = c.seed;
+      so.mesh = c.mesh;
+      so.lights = c.lights;
+      so.materials = c.materials;
+      auto scene = loadScene(so);
+      if (!scene) return benchFail(scene.error());
+      inFlightScenes.push_back(std::move(*scene));
+    }
+    std::printf("visbuf bench --in-flight: %zu scene sizes, %u+%u frames, %u pairs, device %s\n", objectCounts.size(),
+                c.warmup, c.frames, c.pairs, deviceName.c_str());
+    const int rc = runInFlightBench(c, **device, inFlightScenes, size->first, size->second, c.output);
+    if (rc == 0 && (*device)->validationEnabled() && (*device)->validationMessages() > 0) {
+      std::fprintf(stderr, "visbuf bench: %u validation message(s)\n", (*device)->validationMessages());
+      return 3;
+    }
+    return rc;
+  }
   std::printf("visbuf bench: %s, %zu configurations x %zu scene sizes, %u+%u frames each, device %s\n",
               printable(c.scene).c_str(), configs.size(), objectCounts.size(), c.warmup, c.frames, deviceName.c_str());
   for (const auto& s : skipped)
@@ -350,12 +384,12 @@ int runBench(const BenchCommand& c) {
     so.lights = c.lights;
     so.materials = c.materials;
     auto scene = loadScene(so);
-    if (!scene) return fail(scene.error());
+    if (!scene) return benchFail(scene.error());
     RendererConfig rc;
     rc.width = size->first;
     rc.height = size->second;
     auto renderer = Renderer::create(**device, *scene, rc);
-    if (!renderer) return fail(renderer.error());
+    if (!renderer) return benchFail(renderer.error());
     Renderer& r = **renderer;
     // The other precision variants of the same scene: 64-bit IDs forced (--ids wide), quantised vertices
     // (--vertices quantized: the scene through an in-memory pack written with quantisation and read back).
@@ -364,9 +398,9 @@ int runBench(const BenchCommand& c) {
       PackWriteOptions po;
       po.quantize = true;
       auto bytes = serializePack(*scene, po);
-      if (!bytes) return fail(bytes.error());
+      if (!bytes) return benchFail(bytes.error());
       auto q = parsePack(bytes->data(), bytes->size(), "quantised scene");
-      if (!q) return fail(q.error());
+      if (!q) return benchFail(q.error());
       quantizedScene = std::make_unique<Scene>(std::move(*q));
     }
     std::map<std::pair<bool, bool>, std::unique_ptr<Renderer>> variants;  // (wide IDs, quantised) -> renderer
@@ -375,10 +409,10 @@ int runBench(const BenchCommand& c) {
       RendererConfig vc = rc;
       vc.forceWideIds = k.wideIds;
       auto vr = Renderer::create(**device, k.quantized ? *quantizedScene : *scene, vc);
-      if (!vr) return fail(vr.error());
+      if (!vr) return benchFail(vr.error());
       variants[{k.wideIds, k.quantized}] = std::move(*vr);
     }
-    const std::vector<Camera> path = cameraPath(*scene, c.warmup, c.frames);
+    const std::vector<Camera> path = benchCameraPath(*scene, c.warmup, c.frames);
 
     SceneInfo info;
     info.objects = objects;
@@ -417,7 +451,7 @@ int runBench(const BenchCommand& c) {
         ro.swRaster = SwRasterMode::Off;  // the exact reference: hardware raster only
         ro.msaa = m;
         auto frame = r.renderFrame(path[c.warmup + f], ro);
-        if (!frame) return fail(frame.error());
+        if (!frame) return benchFail(frame.error());
         refColors[m][f] = std::move(frame->color);
       }
     }
@@ -434,7 +468,7 @@ int runBench(const BenchCommand& c) {
       ro.readColor = true;
       ro.readIds = !forwardRef && needFullIds;
       auto frame = r.renderFrame(cam, ro);
-      if (!frame) return fail(frame.error());
+      if (!frame) return benchFail(frame.error());
       refColor[f] = std::move(frame->color);
       if (ro.readIds) fullIds[f] = std::move(frame->ids);
       refMs.push_back(frame->stats.gpuMs + frame->stats.cpuRecordMs);
@@ -444,7 +478,7 @@ int runBench(const BenchCommand& c) {
         io.readColor = false;
         io.readIds = true;
         auto idFrame = r.renderFrame(cam, io);
-        if (!idFrame) return fail(idFrame.error());
+        if (!idFrame) return benchFail(idFrame.error());
         fullIds[f] = std::move(idFrame->ids);
       }
     }
@@ -469,7 +503,7 @@ int runBench(const BenchCommand& c) {
         fo.shading = k.shading;
         fo.swRaster = k.swRaster;
         auto frame = rk.renderFrame(path[i], fo);
-        if (!frame) return fail(frame.error());
+        if (!frame) return benchFail(frame.error());
         if (!measure) continue;
         const size_t f = i - c.warmup;
         measured.push_back(frame->stats);
@@ -487,7 +521,7 @@ int runBench(const BenchCommand& c) {
         bo.countOverdraw = true;
         bo.shading = k.shading;
         auto frame = rk.renderFrame(path.back(), bo);
-        if (!frame) return fail(frame.error());
+        if (!frame) return benchFail(frame.error());
         row.rasterWritesPerPixel = frame->stats.rasterWritesPerPixel;
         row.bytesWrittenPerPixel = frame->stats.bytesWrittenPerPixel;
       }
@@ -755,10 +789,10 @@ int runBench(const BenchCommand& c) {
   for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
            {"bench.csv", csv}, {"bench.md", md}, {"bench.svg", svg}}) {
     Status s = writeTextFile((out / name).string(), text);
-    if (!s) return fail(s.error());
+    if (!s) return benchFail(s.error());
   }
   Status s = writeJsonFile((out / "bench.json").string(), j);
-  if (!s) return fail(s.error());
+  if (!s) return benchFail(s.error());
   std::printf("wrote %s/bench.{json,csv,md,svg}: %zu rows\n", printable(c.output).c_str(), rows.size());
 
   if ((*device)->validationEnabled() && (*device)->validationMessages() > 0) {

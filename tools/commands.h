@@ -99,6 +99,8 @@ struct BenchCommand {
   bool validation = false;
   std::string output = "bench-out";
   std::string commandLine;                             // as typed, recorded in the outputs
+  std::vector<uint32_t> inFlight;                      // non-empty: record() with K in flight vs renderFrame instead
+  uint32_t pairs = 5;                                  // --in-flight: interleaved run pairs
 };
 
 void addBenchCommand(CLI::App& app, BenchCommand& cmd, int argc, char** argv);
