@@ -244,6 +244,18 @@ std::string lodText(float lod) { return lod > 0 ? fmt::format("{:g}", lod) : std
 
 }  // namespace
 
+// The scene of one object count.
+static SceneOptions sceneOptions(const BenchCommand& c, uint32_t objects) {
+  SceneOptions so;
+  so.scene = c.scene;
+  so.objects = objects;
+  so.seed = c.seed;
+  so.mesh = c.mesh;
+  so.lights = c.lights;
+  so.materials = c.materials;
+  return so;
+}
+
 std::string utcNow() {
   std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -346,14 +358,7 @@ int runBench(const BenchCommand& c) {
   if (!c.inFlight.empty()) {
     std::vector<Scene> inFlightScenes;
     for (uint32_t objects : objectCounts) {
-      SceneOptions so;
-      so.scene = c.scene;
-      so.objects = objects;
-      so.seed = c.seed;
-      so.mesh = c.mesh;
-      so.lights = c.lights;
-      so.materials = c.materials;
-      auto scene = loadScene(so);
+      auto scene = loadScene(sceneOptions(c, objects));
       if (!scene) return benchFail(scene.error());
       inFlightScenes.push_back(std::move(*scene));
     }
@@ -376,14 +381,7 @@ int runBench(const BenchCommand& c) {
   std::vector<SceneInfo> scenes;
   const uint32_t pixels = size->first * size->second;
   for (uint32_t objects : objectCounts) {
-    SceneOptions so;
-    so.scene = c.scene;
-    so.objects = objects;
-    so.seed = c.seed;
-    so.mesh = c.mesh;
-    so.lights = c.lights;
-    so.materials = c.materials;
-    auto scene = loadScene(so);
+    auto scene = loadScene(sceneOptions(c, objects));
     if (!scene) return benchFail(scene.error());
     RendererConfig rc;
     rc.width = size->first;

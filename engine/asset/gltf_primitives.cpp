@@ -490,23 +490,19 @@ Result<Importer::NodeMesh> Importer::nodeMesh(int nodeIndex) {
 }
 
 Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* out) {
-  auto resolved = nodeMesh(nodeIndex);
-  if (!resolved) return resolved.error();
-  if (!resolved->mesh) return {};
-  const tinygltf::Node& node = model_.nodes[static_cast<size_t>(nodeIndex)];
-  const std::string& nodeWhere = resolved->where;
-  const tinygltf::Mesh& mesh = *resolved->mesh;
-  const std::vector<DecodedPrimitive>* const* prims = &resolved->prims;
-  const std::vector<double>& weights = *resolved->weights;
-  for (size_t p = 0; p < (*prims)->size(); ++p) {
-    const DecodedPrimitive& prim = (**prims)[p];
+  auto r = nodeMesh(nodeIndex);  // (the node's mesh, its decoded primitives and weights, and where it is)
+  if (!r) return r.error();
+  if (!r->mesh) return {};
+  const std::string meshWhere =
+      r->where + " mesh " + str(model_.nodes[static_cast<size_t>(nodeIndex)].mesh) + named(r->mesh->name);
+  for (size_t p = 0; p < r->prims->size(); ++p) {
+    const DecodedPrimitive& prim = (*r->prims)[p];
     if (prim.skipped) {
       ++primitivesSkipped;
       continue;
     }
-    const std::string where =
-        nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + " primitive " + str(uint64_t{p});
-    if (Status s = emitPrimitive(prim, world, weights, where, out); !s) return s;
+    if (Status s = emitPrimitive(prim, world, *r->weights, meshWhere + " primitive " + str(uint64_t{p}), out); !s)
+      return s;
     ++primitivesImported;
   }
   return {};
