@@ -87,8 +87,8 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
   slot.pending = false;
   FrameStats& st = slot.stats;
   const FrameOptions& options = slot.options;
-  const bool gpuCulled = slot.plan.gpuCulled, msaa = slot.plan.msaa, frozen = slot.plan.frozen;
-  const bool swOn = slot.plan.swOn, usePyramid = slot.plan.usePyramid;
+  const bool gpuCulled = slot.plan.gpuCulled, msaa = slot.plan.msaa;
+  const bool swOn = slot.plan.swOn;
   st.passMs = slot.timestamps->read();
   if (st.lightsCulled && synchronous) {
     const passes::LightCullStats ls = lightCull.stats();
@@ -124,27 +124,12 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
     st.swRaster = swOn;
     st.swTriangles = s[STAT_SW_TRIANGLES];
     st.swOversize = s[STAT_SW_OVERSIZE];
-    // "Skip what the scene does not need": a frame whose micro-raster took nothing (Auto on a GPU: less than pays
-    // for its merges) routes everything to the hardware raster for a while, then probes again.
-    if (!frozen) {
-      const uint64_t worth = options.swRaster == SwRasterMode::Auto && !device.isCpu() ? kGpuSwMinTriangles : 1;
-      if (swOn)
-        swSkipFrames = st.swTriangles < worth ? kSwProbeInterval : 0;
-      else if (swSkipFrames > 0)
-        --swSkipFrames;
-    }
     st.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
     st.drawsRendered = st.drawsEarly + st.drawsLate;
     st.drawOverflow = s[STAT_DRAW_OVERFLOW];
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
     st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
-    // "Skip what the scene does not need": a pyramid that hid nothing is not built again for a while.
-    // Only a pyramid built from a non-empty early phase is evidence (a first frame or a cut has none).
-    if (usePyramid)
-      pyramidSkipFrames =
-          options.skipUselessPyramid && st.drawsEarly > 0 && st.occlusionCulled == 0 ? kPyramidProbeInterval : 0;
-    else if (pyramidSkipFrames > 0)
-      --pyramidSkipFrames;
+    frameHistory.finished(slot.plan, options, device.isCpu(), st.swTriangles, st.drawsEarly, st.occlusionCulled);
   }
   while (!st.lodHistogram.empty() && st.lodHistogram.back() == 0) st.lodHistogram.pop_back();
 

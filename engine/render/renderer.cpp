@@ -48,9 +48,8 @@ ShadingMode parseShadingMode(const std::string& name) {
 // shade slower than one divergent dispatch). Covered tiles win on lavapipe, where each workgroup has a fixed cost
 // (an empty 1024x768 frame shaded in 30.4 ms, with covered tiles 1.2 ms), and lose a little on the H200, where a
 // background pixel's early exit is free and the listing adds ~15 us (0.127 -> 0.144 ms at 10k kittens).
-ShadingMode defaultShading(const gpu::Device& device) {
-  return device.isCpu() ? ShadingMode::Covered : ShadingMode::Uber;
-}
+ShadingMode defaultShadingFor(bool cpuDevice) { return cpuDevice ? ShadingMode::Covered : ShadingMode::Uber; }
+ShadingMode defaultShading(const gpu::Device& device) { return defaultShadingFor(device.isCpu()); }
 
 const char* swRasterModeName(SwRasterMode mode) {
   return mode == SwRasterMode::Auto ? "auto" : mode == SwRasterMode::On ? "on" : "off";
@@ -58,13 +57,6 @@ const char* swRasterModeName(SwRasterMode mode) {
 SwRasterMode parseSwRasterMode(const std::string& name) {
   return name == "on" ? SwRasterMode::On : name == "off" ? SwRasterMode::Off : SwRasterMode::Auto;
 }
-
-// The micro-raster per device type, as measured (docs/benchmarks.md, "Software micro-raster"): on both. On lavapipe,
-// whose hardware-raster geometry path is serial, compute on every core wins wherever it takes anything. On the
-// H100 it wins by far on many small objects (1M kittens: 21.4 -> 1.6 ms) but its two full-screen merges cost
-// ~0.3 ms a frame, more than the hardware raster of a few thousand small triangles (city 100k: 1.20 -> 1.58 ms):
-// there Auto keeps it only while it takes at least kGpuSwMinTriangles (~0.3 ms of hardware raster at ~0.9 Gtri/s).
-bool defaultSwRaster(const gpu::Device&) { return true; }
 
 const char* skinBoundsName(SkinBounds bounds) { return bounds == SkinBounds::Gpu ? "gpu" : "joints"; }
 
@@ -130,8 +122,9 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
     return makeError(ErrorCode::InvalidArgument, fmt::format("micro-raster size bound {} px outside (0, {}]",
                                                              options.swRasterPixels, SW_RASTER_MAX_EXTENT - 2));
   prepareMsaa(options);  // once per sample count (and size)
-  if (shadingFor(options) == ShadingMode::Classified) ensureClassify();
-  if (swActive(options) && swRaster.ensureBuffer(device, config.width, config.height)) writeDescriptors();
+  if (resolveShading(options, facts()) == ShadingMode::Classified) ensureClassify();
+  if (microRasterAllowed(options, facts()) && swRaster.ensureBuffer(device, config.width, config.height))
+    writeDescriptors();
   const uint32_t w = config.width, h = config.height;
   const bool readAttributes = options.readAttributes && options.path != RenderPath::Forward;
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
@@ -147,26 +140,6 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
   if (idsReadback.size() < sampleIdBytes)
     idsReadback = gpu::Buffer(device, sampleIdBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
   return {};
-}
-
-// Every decision of the frame, from its options and what earlier frames left (draw lists to freeze, a pyramid or
-// a micro-raster that did nothing lately).
-FramePlan Renderer::Impl::planFrame(const FrameOptions& options) const {
-  FramePlan p;
-  p.gpuCulled = options.path != RenderPath::Forward;  // visbuf and G-buffer: cull pass + draw lists
-  p.frozen = p.gpuCulled && options.freezeCulling && haveDraws;
-  p.cull = p.frozen ? lastCull : options.cull;
-  p.occlusionFrame = p.gpuCulled && !p.frozen && options.cull == CullMode::Occlusion;
-  // The micro-raster this frame (a frozen frame redraws what its frame routed).
-  p.swOn = p.frozen ? lastSwOn : swActive(options) && swSkipFrames == 0;
-  p.usePyramid =
-      p.occlusionFrame && (options.readPyramid || !(options.skipUselessPyramid && pyramidSkipFrames > 0));
-  p.lightsCulled = cullLights(options);
-  p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
-  p.msaa = options.msaa > 1;
-  p.shading = shadingFor(options);
-  p.coveredTiles = p.shading == ShadingMode::Covered;  // (shadingFor: visbuf, single-sampled, no attributes)
-  return p;
 }
 
 // The slot of the next frame: a frame recorded into it earlier has finished (record()'s contract, or renderFrame's
@@ -263,9 +236,6 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
       declareShade(g, r, options, plan);
       if (plan.msaa && options.readIds) declareSampleIds(g, r);
     }
-    haveDraws = true;
-    lastCull = plan.cull;
-    if (!plan.frozen) lastSwOn = plan.swOn;
     st.rasterBytesPerFragment =
         (deferred ? gbuffer.formats.bytesPerPixel() : gpu::formatBytes(ids.format())) + 4 /*depth*/;
     st.targetBytesPerPixel = st.rasterBytesPerFragment * options.msaa + 8 /*colour*/;  // raster targets per sample
@@ -273,6 +243,7 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
     declareForward(g, r, camera, math, options, st, result);
   }
   if (!blendObjects.empty()) declareTransparent(g, r, camera, math, options, st);
+  frameHistory.recorded(plan);
   declareCounters(g, r, slot);
   if (readback) declareReadback(g, r, options, plan, *readback);
 
@@ -300,7 +271,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   if (Status s = prepareFrame(camera, options); !s.ok()) return s.error();
   const auto t0 = Clock::now();
   FrameSlot& slot = beginFrame();
-  const FramePlan plan = planFrame(options);
+  const FramePlan plan = planFrame(options, facts(), frameHistory);
   FrameResult result;
   FrameReadback rb;
   rb.attributes = plan.readAttributes;
@@ -341,7 +312,7 @@ Result<RecordedFrame> Renderer::Impl::record(const FrameInputs& inputs) {
   FrameSlot& slot = beginFrame();
   // Skinned scenes: the joint and instance buffers are single, so a new pose waits for the frames still queued.
   if (animation && animation->wouldUpdate(options.animationTime) && slots.size() > 1) vkDeviceWaitIdle(device.device());
-  const FramePlan plan = planFrame(options);
+  const FramePlan plan = planFrame(options, facts(), frameHistory);
   RecordedFrame out;
   out.index = frameCounter;
   const uint32_t used = recordFrame(inputs.camera, options, plan, slot, nullptr, nullptr, &inputs);
@@ -402,7 +373,7 @@ Result<SkinnedInstanceReadback> Renderer::readSkinnedInstance(uint32_t instance)
 
 void Renderer::clearHistory() {
   impl_->historyDirty = true;
-  impl_->pyramidSkipFrames = 0;  // a cut: probe the pyramid again at once
+  impl_->frameHistory.cut();  // a cut: probe the pyramid again at once
 }
 
 }  // namespace visbuf

@@ -46,6 +46,7 @@ const char* shadingModeName(ShadingMode mode);
 ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified", "covered", anything else: Auto
 // What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs).
 ShadingMode defaultShading(const gpu::Device& device);
+ShadingMode defaultShadingFor(bool cpuDevice);  // the same, by device type
 
 // Culling bounds of skinned instances: Joints = a sphere from the joints' reach (CPU, double precision,
 // provably containing every skinned vertex: animation.h); Gpu = from the skinned vertices themselves, reduced

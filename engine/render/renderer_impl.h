@@ -36,6 +36,7 @@
 #include "visbuf/render/animation_state.h"
 #include "visbuf/passes/visibility_pass.h"
 #include "visbuf/render/frame_math.h"
+#include "visbuf/render/frame_plan.h"
 #include "visbuf/scene/gpu_scene.h"
 
 namespace visbuf {
@@ -46,29 +47,8 @@ constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
 constexpr uint32_t kCommandBuffers = 20;  // one per recorded pass, at most 18: setup, skin, 2 x (cull, raster,
                                           // micro-raster, merge), pyramid, light cull, classify, shade (or G-buffer
                                           // lighting), sample IDs, transparent, counters, readback
-// A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
-constexpr uint32_t kPyramidProbeInterval = 16;
-// Likewise the micro-raster, after a frame in which it took no draw.
-constexpr uint32_t kSwProbeInterval = 16;
 
 }  // namespace
-
-// Every decision of one frame, taken once by Renderer::Impl::planFrame before anything is recorded.
-struct FramePlan {
-  bool gpuCulled = false;       // visbuf and G-buffer: cull pass and draw lists; forward: CPU culling
-  bool frozen = false;          // redraw the last culled frame's draw lists (freezeCulling)
-  CullMode cull = CullMode::None;  // in effect (a frozen frame: the frozen frame's)
-  bool occlusionFrame = false;  // occlusion culling runs this frame (not frozen)
-  bool usePyramid = false;      // build the depth pyramid (and run the late occlusion test against it)
-  bool swOn = false;            // route small objects to the micro-raster
-  bool lightsCulled = false;    // tile light lists
-  bool readAttributes = false;  // the shading pass writes the attribute record
-  bool msaa = false;
-  ShadingMode shading = ShadingMode::Uber;
-  // The ubershader over the covered tiles only (covered_tiles.comp lists them): single-sampled visbuf frames
-  // without the attribute record.
-  bool coveredTiles = false;
-};
 
 using Graph = gpu::FrameGraph;
 namespace access = gpu::access;
@@ -110,8 +90,6 @@ struct FrameSlot {
 };
 
 std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift);
-bool defaultSwRaster(const gpu::Device& device);
-inline constexpr uint64_t kGpuSwMinTriangles = 262144;
 
 struct Renderer::Impl {
   gpu::Device& device;
@@ -190,8 +168,6 @@ struct Renderer::Impl {
   // Software micro-raster (FrameOptions::swRaster): its pipelines (created with the renderer when some list can
   // use it) and its 64-bit per-pixel buffer (created by the first frame that uses it, dropped by a resize).
   passes::SwRasterPass swRaster;
-  bool lastSwOn = false;       // the last unfrozen frame did (a frozen frame redraws that frame's draw lists)
-  uint32_t swSkipFrames = 0;   // frames left before it is probed again after a frame in which it took nothing
   // Point lights (scenes with any): anchor-relative records and the tile lists. Empty otherwise.
   gpu::Buffer pointLights;
   passes::LightCullPass lightCull;
@@ -199,13 +175,10 @@ struct Renderer::Impl {
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
   gpu::Buffer visibleList;  // the same set listed (config.h BINDING_VISIBLE_LIST): the early cull's threads
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
-  bool haveDraws = false;   // a visbuf frame has filled the draw lists (freezeCulling can reuse them)
-  CullMode lastCull = CullMode::Frustum;
   gpu::Buffer pyramidReadback;
   gpu::Buffer overdrawReadback;
   gpu::Buffer attributes;           // float[ATTRIBUTE_FLOATS] per pixel; a 64-byte placeholder until asked for
   gpu::Buffer attributesReadback;
-  uint32_t pyramidSkipFrames = 0;  // frames left before the pyramid is probed again
 
   gpu::Buffer draws;        // DrawCommand[capacity]
   gpu::BufferView drawTexels;  // the same as R32UI (BINDING_DRAW_TEXELS): the shading's per-pixel fetch
@@ -271,11 +244,13 @@ struct Renderer::Impl {
 
   // The classification pipelines and buffers (only renderers that shade classified frames pay for them).
   void ensureClassify();
-  // The shading mode of a visbuf frame (Auto resolved; the attribute record and MSAA exist in the ubershader only).
-  ShadingMode shadingFor(const FrameOptions& options) const {
-    if (options.path != RenderPath::Visbuf || options.readAttributes || options.msaa > 1) return ShadingMode::Uber;
-    return options.shading == ShadingMode::Auto ? defaultShading(device) : options.shading;
+  // What the frame plans depend on, from the scene, the device and the size (frame_plan.h).
+  SceneFacts facts() const {
+    return {device.isCpu(), swListMask != 0,
+            VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange,
+            hasPointLights()};
   }
+  FrameHistory frameHistory;  // what earlier frames left that later plans depend on
 
   void beginCmd(VkCommandBuffer cmd) {
     VK_CHECK(vkResetCommandBuffer(cmd, 0));
@@ -293,8 +268,6 @@ struct Renderer::Impl {
 
   gpu::FrameData frameData(const Camera& camera, const FrameMath& math, const FrameOptions& options,
                            const FramePlan& plan) const;
-  // The frame's decisions (FramePlan) from its options, the scene and the history of earlier frames.
-  FramePlan planFrame(const FrameOptions& options) const;
   // Checks the camera and the options against the scene and device; creates what the frame needs lazily.
   Status prepareFrame(const Camera& camera, const FrameOptions& options);
   // The frame script: declares the frame's passes in order into a graph and records it into the slot's command
@@ -311,23 +284,11 @@ struct Renderer::Impl {
   FrameSlot& beginFrame();
   void writeDescriptorSet(const FrameSlot& slot);
 
-  // This frame routes small objects to the software micro-raster: asked for, the visbuf path, single-sampled, no
-  // overdraw count (it counts hardware raster writes), a list it may take, and its buffer within one range.
-  bool swActive(const FrameOptions& options) const {
-    const bool asked = options.swRaster == SwRasterMode::Auto ? defaultSwRaster(device) : options.swRaster == SwRasterMode::On;
-    return asked && options.path == RenderPath::Visbuf && options.msaa == 1 && !options.countOverdraw &&
-           swListMask != 0 &&
-           VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange;
-  }
   // Draws of list l in a phase that went to the micro-raster: the end of the list's region.
   uint32_t listSwDrawn(const uint32_t* s, uint32_t phase, uint32_t list) const {
     return (swListMask >> list & 1u) ? std::min(s[STAT_SW_DRAWS + phase * DRAW_LISTS + list], listCapacity[list]) : 0u;
   }
 
-  // This frame builds tile light lists: visbuf path, tiled shading asked for, and point lights to cull.
-  bool cullLights(const FrameOptions& options) const {
-    return options.path == RenderPath::Visbuf && options.tiledLights && hasPointLights();
-  }
   Result<FrameResult> render(const Camera& camera, const FrameOptions& options);
   // The passes as the frame graph sees them (frame_passes.cpp, frame_readback.cpp): what each reads and writes,
   // and what it records.

@@ -553,7 +553,7 @@ Status Renderer::resize(uint32_t width, uint32_t height) {
   if (width == 0 || height == 0 || width > 16384 || height > 16384)
     return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
   impl_->createTargets(width, height);
-  impl_->pyramidSkipFrames = 0;  // a new size: probe the pyramid again
+  impl_->frameHistory.cut();  // a new size: probe the pyramid again
   return {};  // the draw lists stay valid (they do not depend on the size): freezeCulling still works
 }
 

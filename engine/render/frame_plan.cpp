@@ -1,0 +1,67 @@
+#include "visbuf/render/frame_plan.h"
+
+namespace visbuf {
+
+ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts) {
+  if (options.path != RenderPath::Visbuf || options.readAttributes || options.msaa > 1) return ShadingMode::Uber;
+  return options.shading == ShadingMode::Auto ? defaultShadingFor(facts.cpuDevice) : options.shading;
+}
+
+bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts) {
+  // Auto: on for both device types (docs/benchmarks.md, "Software micro-raster"); on a GPU a frame in which it
+  // took too little to pay for its merges skips it for a while (FrameHistory::finished).
+  const bool asked = options.swRaster != SwRasterMode::Off;
+  return asked && options.path == RenderPath::Visbuf && options.msaa == 1 && !options.countOverdraw &&
+         facts.microRasterLists && facts.microRasterFits;
+}
+
+bool lightsCulled(const FrameOptions& options, const SceneFacts& facts) {
+  return options.path == RenderPath::Visbuf && options.tiledLights && facts.pointLights;
+}
+
+FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const FrameHistory& history) {
+  FramePlan p;
+  p.gpuCulled = options.path != RenderPath::Forward;  // visbuf and G-buffer: cull pass + draw lists
+  p.frozen = p.gpuCulled && options.freezeCulling && history.haveDraws;
+  p.cull = p.frozen ? history.lastCull : options.cull;
+  p.occlusionFrame = p.gpuCulled && !p.frozen && options.cull == CullMode::Occlusion;
+  // The micro-raster this frame (a frozen frame redraws what its frame routed).
+  p.swOn = p.frozen ? history.lastSwOn : microRasterAllowed(options, facts) && history.swSkipFrames == 0;
+  p.usePyramid = p.occlusionFrame &&
+                 (options.readPyramid || !(options.skipUselessPyramid && history.pyramidSkipFrames > 0));
+  p.lightsCulled = lightsCulled(options, facts);
+  p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
+  p.msaa = options.msaa > 1;
+  p.shading = resolveShading(options, facts);
+  p.coveredTiles = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
+  return p;
+}
+
+void FrameHistory::recorded(const FramePlan& plan) {
+  if (!plan.gpuCulled) return;
+  haveDraws = true;
+  lastCull = plan.cull;
+  if (!plan.frozen) lastSwOn = plan.swOn;
+}
+
+void FrameHistory::finished(const FramePlan& plan, const FrameOptions& options, bool cpuDevice, uint64_t swTriangles,
+                            uint32_t drawsEarly, uint32_t occlusionCulled) {
+  if (!plan.gpuCulled) return;
+  // "Skip what the scene does not need": a frame whose micro-raster took nothing (Auto on a GPU: less than pays
+  // for its merges) routes everything to the hardware raster for a while, then probes again.
+  if (!plan.frozen) {
+    const uint64_t worth = options.swRaster == SwRasterMode::Auto && !cpuDevice ? kGpuSwMinTriangles : 1;
+    if (plan.swOn)
+      swSkipFrames = swTriangles < worth ? kSwProbeInterval : 0;
+    else if (swSkipFrames > 0)
+      --swSkipFrames;
+  }
+  // A pyramid that hid nothing is not built again for a while. Only a pyramid built from a non-empty early phase
+  // is evidence (a first frame or a cut has none).
+  if (plan.usePyramid)
+    pyramidSkipFrames = options.skipUselessPyramid && drawsEarly > 0 && occlusionCulled == 0 ? kPyramidProbeInterval : 0;
+  else if (pyramidSkipFrames > 0)
+    --pyramidSkipFrames;
+}
+
+}  // namespace visbuf

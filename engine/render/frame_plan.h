@@ -1,0 +1,72 @@
+// Every decision of one frame, taken once before anything is recorded: planFrame(options, scene facts, history).
+// The frame script (renderer.cpp) declares its passes from the plan; nothing it records decides anything else.
+// What later frames decide from (a pyramid that hid nothing, a micro-raster that took nothing, the draw lists a
+// frozen frame redraws) is FrameHistory, updated when a frame is recorded and when its counters come back.
+#pragma once
+
+#include <cstdint>
+
+#include "visbuf/render/renderer.h"
+
+namespace visbuf {
+
+struct FramePlan {
+  bool gpuCulled = false;       // visbuf and G-buffer: cull pass and draw lists; forward: CPU culling
+  bool frozen = false;          // redraw the last culled frame's draw lists (freezeCulling)
+  CullMode cull = CullMode::None;  // in effect (a frozen frame: the frozen frame's)
+  bool occlusionFrame = false;  // occlusion culling runs this frame (not frozen)
+  bool usePyramid = false;      // build the depth pyramid (and run the late occlusion test against it)
+  bool swOn = false;            // route small objects to the micro-raster
+  bool lightsCulled = false;    // tile light lists
+  bool readAttributes = false;  // the shading pass writes the attribute record
+  bool msaa = false;
+  ShadingMode shading = ShadingMode::Uber;
+  // The ubershader over the covered tiles only (covered_tiles.comp lists them): single-sampled visbuf frames
+  // without the attribute record.
+  bool coveredTiles = false;
+};
+
+// What the renderer's scene and device are, as far as a plan depends on them.
+struct SceneFacts {
+  bool cpuDevice = false;         // lavapipe and the like: covered-tile shading by default
+  bool microRasterLists = false;  // some draw list the micro-raster may take (opaque, uncapped)
+  bool microRasterFits = false;   // its 64-bit per-pixel buffer fits one storage-buffer range at this size
+  bool pointLights = false;       // the scene has punctual lights
+};
+
+// A pyramid or micro-raster that did nothing is skipped for this many frames, then probed again.
+inline constexpr uint32_t kPyramidProbeInterval = 16;
+inline constexpr uint32_t kSwProbeInterval = 16;
+// Auto on a GPU: the micro-raster pays for its two full-screen merges from about this many triangles.
+inline constexpr uint64_t kGpuSwMinTriangles = 262144;
+
+// What earlier frames left that a frame's plan depends on.
+struct FrameHistory {
+  bool haveDraws = false;               // a GPU-culled frame has filled the draw lists (freezeCulling reuses them)
+  CullMode lastCull = CullMode::Frustum;  // the culling those draw lists were made with
+  bool lastSwOn = false;                // ... and whether they routed draws to the micro-raster
+  uint32_t swSkipFrames = 0;            // frames before the micro-raster is probed again
+  uint32_t pyramidSkipFrames = 0;       // frames before the pyramid is built again
+
+  // A frame recorded with `plan`.
+  void recorded(const FramePlan& plan);
+  // The counters of a finished GPU-culled frame recorded with `plan` and `options`: whether its micro-raster and
+  // pyramid paid (swTriangles: the micro-raster's triangles; drawsEarly, occlusionCulled: the cull's counts).
+  void finished(const FramePlan& plan, const FrameOptions& options, bool cpuDevice, uint64_t swTriangles,
+                uint32_t drawsEarly, uint32_t occlusionCulled);
+  // A cut or a new size: the pyramid is probed again at once.
+  void cut() { pyramidSkipFrames = 0; }
+};
+
+// The shading mode a visbuf frame uses (Auto resolved by the device type; the attribute record and MSAA exist in
+// the ubershader only); other paths: Uber.
+ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts);
+// Whether a frame with these options may route small objects to the micro-raster: asked for (Auto: on), the visbuf
+// path, single-sampled, no overdraw count (it counts hardware raster writes), a list it may take, a buffer that fits.
+bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts);
+// Whether a frame builds tile light lists: visbuf path, tiled lights asked for, punctual lights to cull.
+bool lightsCulled(const FrameOptions& options, const SceneFacts& facts);
+
+FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const FrameHistory& history);
+
+}  // namespace visbuf

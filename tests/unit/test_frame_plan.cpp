@@ -1,0 +1,141 @@
+// planFrame(options, scene facts, history): every decision of a frame from what it is given, and the history that
+// finished frames leave for later plans (skip a pyramid or micro-raster that did nothing, redraw frozen lists).
+#include <gtest/gtest.h>
+
+#include "visbuf/render/frame_plan.h"
+
+using namespace visbuf;
+
+namespace {
+
+SceneFacts gpuFacts() { return {.cpuDevice = false, .microRasterLists = true, .microRasterFits = true, .pointLights = true}; }
+
+}  // namespace
+
+TEST(FramePlan, PathsDecideCullingShadingAndLights) {
+  FrameOptions fo;
+  const FrameHistory none;
+  FramePlan p = planFrame(fo, gpuFacts(), none);
+  EXPECT_TRUE(p.gpuCulled);
+  EXPECT_TRUE(p.swOn);
+  EXPECT_TRUE(p.lightsCulled);
+  EXPECT_EQ(p.shading, ShadingMode::Uber) << "GPUs shade with the ubershader by default";
+  EXPECT_FALSE(p.coveredTiles);
+  SceneFacts cpu = gpuFacts();
+  cpu.cpuDevice = true;
+  p = planFrame(fo, cpu, none);
+  EXPECT_EQ(p.shading, ShadingMode::Covered) << "CPU devices shade the covered tiles only";
+  EXPECT_TRUE(p.coveredTiles);
+  fo.readAttributes = true;  // the attribute record exists in the ubershader only
+  p = planFrame(fo, cpu, none);
+  EXPECT_EQ(p.shading, ShadingMode::Uber);
+  EXPECT_TRUE(p.readAttributes);
+
+  fo = FrameOptions{};
+  fo.path = RenderPath::Forward;
+  fo.readAttributes = true;
+  p = planFrame(fo, gpuFacts(), none);
+  EXPECT_FALSE(p.gpuCulled);
+  EXPECT_FALSE(p.swOn);
+  EXPECT_FALSE(p.lightsCulled) << "the forward path lights every pixel with every light";
+  EXPECT_FALSE(p.readAttributes);
+  EXPECT_FALSE(p.usePyramid);
+
+  fo = FrameOptions{};
+  fo.tiledLights = false;
+  EXPECT_FALSE(planFrame(fo, gpuFacts(), none).lightsCulled);
+  SceneFacts dark = gpuFacts();
+  dark.pointLights = false;
+  EXPECT_FALSE(planFrame(FrameOptions{}, dark, none).lightsCulled);
+}
+
+TEST(FramePlan, MicroRasterOnlyWhereItCanTakeDraws) {
+  const FrameHistory none;
+  FrameOptions fo;
+  EXPECT_TRUE(planFrame(fo, gpuFacts(), none).swOn);
+  fo.swRaster = SwRasterMode::Off;
+  EXPECT_FALSE(planFrame(fo, gpuFacts(), none).swOn);
+  fo = FrameOptions{};
+  fo.msaa = 4;
+  EXPECT_FALSE(planFrame(fo, gpuFacts(), none).swOn) << "single-sampled only";
+  fo = FrameOptions{};
+  fo.countOverdraw = true;
+  EXPECT_FALSE(planFrame(fo, gpuFacts(), none).swOn) << "the overdraw count counts hardware raster writes";
+  SceneFacts f = gpuFacts();
+  f.microRasterLists = false;
+  EXPECT_FALSE(planFrame(FrameOptions{}, f, none).swOn);
+  f = gpuFacts();
+  f.microRasterFits = false;
+  EXPECT_FALSE(planFrame(FrameOptions{}, f, none).swOn);
+  FrameHistory skipping;
+  skipping.swSkipFrames = 3;
+  EXPECT_FALSE(planFrame(FrameOptions{}, gpuFacts(), skipping).swOn);
+}
+
+TEST(FramePlan, HistorySkipsAUselessPyramidThenProbesAgain) {
+  FrameOptions fo;
+  fo.cull = CullMode::Occlusion;
+  FrameHistory h;
+  FramePlan p = planFrame(fo, gpuFacts(), h);
+  ASSERT_TRUE(p.occlusionFrame);
+  ASSERT_TRUE(p.usePyramid);
+  h.recorded(p);
+  // A first frame (no early draws) is no evidence; a frame with early draws whose pyramid hid nothing is.
+  h.finished(p, fo, false, 0, /*drawsEarly=*/0, /*occlusionCulled=*/0);
+  EXPECT_EQ(h.pyramidSkipFrames, 0u);
+  h.finished(p, fo, false, 0, 100, 0);
+  EXPECT_EQ(h.pyramidSkipFrames, kPyramidProbeInterval);
+  for (uint32_t i = 0; i < kPyramidProbeInterval; ++i) {
+    FramePlan skipped = planFrame(fo, gpuFacts(), h);
+    EXPECT_FALSE(skipped.usePyramid) << i;
+    FrameOptions read = fo;
+    read.readPyramid = true;
+    EXPECT_TRUE(planFrame(read, gpuFacts(), h).usePyramid) << "a frame that reads the pyramid back builds it";
+    h.finished(skipped, fo, false, 0, 100, 0);
+  }
+  EXPECT_TRUE(planFrame(fo, gpuFacts(), h).usePyramid) << "probed again";
+  h.finished(planFrame(fo, gpuFacts(), h), fo, false, 0, 100, /*occlusionCulled=*/5);
+  EXPECT_EQ(h.pyramidSkipFrames, 0u) << "a pyramid that hid something stays";
+  h.finished(planFrame(fo, gpuFacts(), h), fo, false, 0, 100, 0);
+  h.cut();
+  EXPECT_TRUE(planFrame(fo, gpuFacts(), h).usePyramid) << "a cut probes at once";
+}
+
+TEST(FramePlan, HistorySkipsAMicroRasterThatDoesNotPayOnAGpu) {
+  FrameOptions fo;
+  FrameHistory h;
+  FramePlan p = planFrame(fo, gpuFacts(), h);
+  ASSERT_TRUE(p.swOn);
+  h.finished(p, fo, /*cpuDevice=*/false, kGpuSwMinTriangles - 1, 10, 0);
+  EXPECT_EQ(h.swSkipFrames, kSwProbeInterval) << "Auto on a GPU: too few triangles to pay for the merges";
+  FrameHistory cpu;
+  cpu.finished(p, fo, /*cpuDevice=*/true, 1, 10, 0);
+  EXPECT_EQ(cpu.swSkipFrames, 0u) << "on a CPU device one triangle pays";
+  cpu.finished(p, fo, true, 0, 10, 0);
+  EXPECT_EQ(cpu.swSkipFrames, kSwProbeInterval) << "nothing taken: skipped";
+  FrameOptions on = fo;
+  on.swRaster = SwRasterMode::On;
+  FrameHistory asked;
+  asked.finished(planFrame(on, gpuFacts(), asked), on, false, 1, 10, 0);
+  EXPECT_EQ(asked.swSkipFrames, 0u) << "On: whenever it takes anything";
+}
+
+TEST(FramePlan, FrozenFramesRedrawTheListsTheyFroze) {
+  FrameOptions fo;
+  fo.cull = CullMode::Occlusion;
+  fo.freezeCulling = true;
+  FrameHistory h;
+  EXPECT_FALSE(planFrame(fo, gpuFacts(), h).frozen) << "nothing to freeze before a culled frame";
+  FrameOptions culled;
+  culled.cull = CullMode::Frustum;
+  culled.swRaster = SwRasterMode::Off;
+  h.recorded(planFrame(culled, gpuFacts(), h));
+  const FramePlan p = planFrame(fo, gpuFacts(), h);
+  EXPECT_TRUE(p.frozen);
+  EXPECT_EQ(p.cull, CullMode::Frustum) << "the frozen lists' culling";
+  EXPECT_FALSE(p.swOn) << "the frozen frame routed nothing to the micro-raster";
+  EXPECT_FALSE(p.occlusionFrame);
+  EXPECT_FALSE(p.usePyramid);
+  h.recorded(p);
+  EXPECT_EQ(h.lastCull, CullMode::Frustum);
+}
