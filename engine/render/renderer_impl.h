@@ -41,7 +41,7 @@ namespace visbuf {
 
 namespace {
 
-constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
+constexpr VkClearColorValue kBackground{{kBackgroundColor[0], kBackgroundColor[1], kBackgroundColor[2], kBackgroundColor[3]}};
 constexpr uint32_t kCommandBuffers = 14;  // at most 14: setup, skin, 2 x (cull, raster, micro-raster), pyramid,
                                           // light cull, classify, shade (or G-buffer lighting), transparent, end
 // A pyramid that occluded nothing is skipped for this many frames, then built again to re-probe.
