@@ -85,7 +85,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                   "also render the frame with both paths (visbuf and forward, same camera, culling and LOD rule), judge "
                   "every pixel against the exact colour computed in double precision on the CPU, print a summary "
                   "(and put it in the JSON) and write a heat map here (.png, .exr, .tif: red = the visbuf path's error, "
-                  "green = the forward path's, log scale 1e-5..1e-1; blue: not judged). Untextured materials only; "
+                  "green = the forward path's, log scale 1e-5..1e-1; blue: not judged: skinned objects); "
                   "not with --msaa, --path gbuffer, --moving, --churn or --freeze-culling");
   sub->add_flag("--all-lights", c.allLights, "shade every pixel with every point light (no light cull pass)");
   sub->add_option("--msaa", c.msaa,
@@ -182,10 +182,9 @@ Result<nlohmann::json> judgeFrame(Renderer& renderer, const Scene& scene, const 
   for (const auto& [name, a] : {std::pair{"visbuf", &j->visbuf}, std::pair{"forward", &j->forward}})
     std::printf("judge         %-7s vs exact: max %.2e, mean %.2e, PSNR %.1f dB, %zu pixels > 1/255\n", name, a->maxAbs,
                 a->meanAbs, a->psnr, a->over8Bit);
-  std::printf("judge         %zu covered pixels, %zu judged (not judged: %zu textured, %zu skinned, %zu parallel "
-              "rays); %zu show different triangles in the two paths\n",
-              j->covered, j->judged, j->notJudgedTextured, j->notJudgedSkinned, j->notJudgedParallel,
-              j->coverageMismatch);
+  std::printf("judge         %zu covered pixels, %zu judged (not judged: %zu skinned, %zu parallel rays); %zu show "
+              "different triangles in the two paths\n",
+              j->covered, j->judged, j->notJudgedSkinned, j->notJudgedParallel, j->coverageMismatch);
   std::printf("judge         %zu judged pixels differ: visbuf closer at %zu (by %.1e mean, %.1e max), forward "
               "closer at %zu (by %.1e mean, %.1e max), %zu ties\n",
               j->differing, j->visbufCloser, j->visbufMargin, j->visbufMaxMargin, j->forwardCloser, j->forwardMargin,
@@ -193,8 +192,7 @@ Result<nlohmann::json> judgeFrame(Renderer& renderer, const Scene& scene, const 
   std::printf("heat map      %s\n", printable(heatMapPath).c_str());
   return nlohmann::json{{"covered", j->covered},
                         {"judged", j->judged},
-                        {"notJudged", {{"textured", j->notJudgedTextured},
-                                       {"skinned", j->notJudgedSkinned},
+                        {"notJudged", {{"skinned", j->notJudgedSkinned},
                                        {"parallel", j->notJudgedParallel}}},
                         {"coverageMismatch", j->coverageMismatch},
                         {"visbuf", accuracy(j->visbuf)},

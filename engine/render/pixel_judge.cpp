@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "visbuf/render/brdf_reference.h"
+#include "visbuf/render/texture_reference.h"
 
 namespace visbuf {
 
@@ -52,12 +53,6 @@ std::vector<uint32_t> drawnLods(const Scene& scene, const FrameResult& f) {
   return lods;
 }
 
-bool textured(const Scene& scene, const Material& m) {
-  for (const TextureRef* t : textureSlots(m))
-    if (t->baked >= 0 && size_t(t->baked) < scene.textures.size()) return true;
-  return false;
-}
-
 // Normal to world space: the cofactor matrix of the linear part, times sign(det) (the inverse transpose up to a
 // positive scale, which the normalisation removes).
 glm::dvec3 normalToWorld(const glm::dmat3& m, const glm::dvec3& n) {
@@ -69,35 +64,120 @@ glm::dvec4 unpackUnorm4x8(uint32_t c) {
   return glm::dvec4(c & 0xffu, (c >> 8) & 0xffu, (c >> 16) & 0xffu, c >> 24) / 255.0;
 }
 
-// The exact colour of a claimed triangle at the ray's hit: material.glsl's evaluateMaterial for an untextured
-// material (factor x vertex colour, no texture slots: occlusion 1, metallic-roughness factors as they are), then
-// lighting.glsl's shadeSurface through shadeReference.
-glm::dvec3 exactColor(const Scene& scene, const Camera& camera, const glm::dmat4& transform, const Claim& c,
-                      const glm::dvec3& dir) {
+// What the paths interpolate at the hit (material.glsl's SurfaceInputs), in double.
+struct Interpolated {
+  glm::dvec3 normal{0.0};   // world, not normalised
+  glm::dvec4 tangent{0.0};  // world xyz, w: bitangent sign; w == 0: none
+  glm::dvec3 dpdx{0.0}, dpdy{0.0};
+  glm::dvec2 uv[2] = {glm::dvec2(0.0), glm::dvec2(0.0)}, duvdx[2] = {glm::dvec2(0.0), glm::dvec2(0.0)},
+             duvdy[2] = {glm::dvec2(0.0), glm::dvec2(0.0)};
+  glm::dvec4 color{0.0};
+};
+
+// material.glsl's tangentFrame: the mesh's tangent, else dP/du from the position and uv derivatives.
+bool tangentFrame(const Interpolated& in, const glm::dvec3& n, int set, glm::dvec3& t, glm::dvec3& b) {
+  if (in.tangent.w != 0.0) {
+    t = glm::dvec3(in.tangent) - n * glm::dot(n, glm::dvec3(in.tangent));
+    if (glm::dot(t, t) <= 0.0) return false;
+    t = glm::normalize(t);
+    b = glm::cross(n, t) * (in.tangent.w < 0.0 ? -1.0 : 1.0);
+    return true;
+  }
+  const glm::dvec2 dx = in.duvdx[set], dy = in.duvdy[set];
+  const double det = dx.x * dy.y - dx.y * dy.x;
+  if (std::abs(det) <= 1e-20) return false;
+  const glm::dvec3 dpdu = (dy.y * in.dpdx - dx.y * in.dpdy) / det;
+  const glm::dvec3 dpdv = (dx.x * in.dpdy - dy.x * in.dpdx) / det;
+  t = dpdu - n * glm::dot(n, dpdu);
+  if (glm::dot(t, t) <= 0.0) return false;
+  t = glm::normalize(t);
+  b = glm::cross(n, t) * (glm::dot(glm::cross(n, t), dpdv) < 0.0 ? -1.0 : 1.0);
+  return true;
+}
+
+// The exact colour of a claimed triangle at the ray's hit through pixel position (cx, cy): the attributes
+// interpolated with the hit's barycentrics (their screen derivatives from rays 1e-3 pixel apart, for texture
+// filtering and derived tangents), material.glsl's evaluateMaterial, then lighting.glsl's shadeSurface through
+// shadeReference.
+glm::dvec3 exactColor(const Scene& scene, const Camera& camera, const FrameMath& math, TextureReference& textures,
+                      const glm::dmat4& transform, const Claim& c, double cx, double cy) {
   const Object& o = scene.objects[c.object];
   const Mesh& mesh = scene.meshes[o.mesh];
   const Material& m = scene.materials[o.material];
-  glm::dvec3 n(0.0);
-  glm::dvec4 color(0.0);
-  for (int k = 0; k < 3; ++k) {
-    const gpu::Vertex& v = mesh.vertices[c.index[k]];
-    n += c.lambda[k] * glm::dvec3(octDecode(v.normal));
-    color += c.lambda[k] * unpackUnorm4x8(v.color);
+  const auto slots = textureSlots(m);
+  bool textured = false;
+  for (const TextureRef* t : slots) textured |= t->baked >= 0 && size_t(t->baked) < scene.textures.size();
+  glm::dvec3 ddx(0.0), ddy(0.0);
+  if (textured) {
+    const double h = 1e-3;  // pixels; lambda is smooth at this scale, the difference quotient exact to ~1e-9
+    auto lambdaAt = [&](double px, double py) {
+      auto s = intersectTriangle(c.v, pixelRay(math, px, py));
+      return s ? s->second : glm::dvec3(NAN);
+    };
+    ddx = (lambdaAt(cx + h, cy) - lambdaAt(cx - h, cy)) / (2.0 * h);
+    ddy = (lambdaAt(cx, cy + h) - lambdaAt(cx, cy - h)) / (2.0 * h);
   }
   const glm::dmat3 linear(transform);
+  Interpolated in;
+  glm::dvec3 tangent(0.0);
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t i = c.index[k];
+    const gpu::Vertex& v = mesh.vertices[i];
+    in.normal += c.lambda[k] * glm::dvec3(octDecode(v.normal));
+    in.color += c.lambda[k] * unpackUnorm4x8(v.color);
+    in.dpdx += ddx[k] * c.v[k];
+    in.dpdy += ddy[k] * c.v[k];
+    const glm::dvec2 uv[2] = {glm::dvec2(v.u, v.v), mesh.uvs1.empty() ? glm::dvec2(0.0) : glm::dvec2(mesh.uvs1[i])};
+    for (int set = 0; set < 2; ++set) {
+      in.uv[set] += c.lambda[k] * uv[set];
+      in.duvdx[set] += ddx[k] * uv[set];
+      in.duvdy[set] += ddy[k] * uv[set];
+    }
+    // The GPU's tangents are octahedral-encoded (gpu_scene.cpp): the same quantisation here.
+    if (!mesh.tangents.empty() && mesh.tangents[i].w != 0.0f)
+      tangent += c.lambda[k] * glm::dvec3(octDecode(octEncode(glm::normalize(glm::vec3(mesh.tangents[i])))));
+    else
+      tangent += c.lambda[k] * glm::dvec3(octDecode(0u));
+  }
+  if (!mesh.tangents.empty() && mesh.tangents[c.index[0]].w != 0.0f)  // (the first vertex's sign, as the shader)
+    in.tangent = glm::dvec4(linear * tangent, mesh.tangents[c.index[0]].w < 0.0f ? -1.0 : 1.0);
+  glm::dvec4 texel[kTextureSlotCount];
+  for (size_t k = 0; k < kTextureSlotCount; ++k) {
+    const int set = slots[k]->texCoord == 1 ? 1 : 0;
+    texel[k] = textures.sample(*slots[k], in.uv[set], in.duvdx[set], in.duvdy[set]);
+  }
   SurfaceReference s;
-  s.position = c.t * dir;
-  s.normal = glm::normalize(normalToWorld(linear, n));
+  s.position = c.t * pixelRay(math, cx, cy);
+  glm::dvec3 n = glm::normalize(normalToWorld(linear, in.normal));
   // Front faces are counter-clockwise on screen: the triangle's geometric normal faces the camera (at the
-  // origin), the winding reversed for a mirroring transform (shade.comp.glsl's frontFacing).
+  // origin), the winding reversed for a mirroring transform (shade.comp.glsl's frontFacing). Back faces of
+  // double-sided materials flip the whole tangent frame.
   const bool facing = glm::dot(glm::cross(c.v[1] - c.v[0], c.v[2] - c.v[0]), c.v[0]) < 0.0;
   const bool frontFacing = facing != (glm::determinant(linear) < 0.0);
-  if (m.doubleSided && !frontFacing) s.normal = -s.normal;
-  s.baseColor = glm::dvec3(m.baseColor) * glm::dvec3(color);
-  s.metallic = std::clamp(double(m.metallic), 0.0, 1.0);
-  s.roughness = std::clamp(double(m.roughness), 0.0, 1.0);
-  s.occlusion = 1.0;
-  s.emissive = glm::dvec3(m.emissive) * double(m.emissiveStrength);
+  const double side = m.doubleSided && !frontFacing ? -1.0 : 1.0;
+  glm::dvec3 t, b;
+  const TextureRef& normalMap = m.normalTexture;
+  if (normalMap.baked >= 0 && size_t(normalMap.baked) < scene.textures.size() &&
+      tangentFrame(in, n, normalMap.texCoord == 1 ? 1 : 0, t, b)) {
+    glm::dvec3 tn = glm::dvec3(texel[2]) * 2.0 - 1.0;
+    const Texture& tex = scene.textures[size_t(normalMap.baked)];
+    if (scene.textureClasses[tex.sizeClass].format == TextureFormat::Bc5)  // x, y of a unit vector: z rebuilt
+      tn.z = std::sqrt(std::max(0.0, 1.0 - tn.x * tn.x - tn.y * tn.y));
+    tn.x *= double(m.normalScale);
+    tn.y *= double(m.normalScale);
+    const glm::dvec3 mapped = side * (t * tn.x + b * tn.y + n * tn.z);
+    n = glm::dot(mapped, mapped) > 0.0 ? glm::normalize(mapped) : side * n;
+  } else {
+    n *= side;
+  }
+  s.normal = n;
+  s.baseColor = glm::dvec3(glm::dvec4(m.baseColor) * in.color * texel[0]);
+  s.metallic = std::clamp(double(m.metallic) * texel[1].b, 0.0, 1.0);
+  s.roughness = std::clamp(double(m.roughness) * texel[1].g, 0.0, 1.0);
+  const TextureRef& occlusion = m.occlusionTexture;
+  if (occlusion.baked >= 0 && size_t(occlusion.baked) < scene.textures.size())
+    s.occlusion = 1.0 + double(m.occlusionStrength) * (texel[3].r - 1.0);
+  s.emissive = glm::dvec3(m.emissive) * double(m.emissiveStrength) * glm::dvec3(texel[4]);
   return shadeReference(s, scene, camera.position);
 }
 
@@ -144,6 +224,7 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
   for (const SkinnedObject& so : scene.skinnedObjects) skinned[so.object] = 1;
   const std::vector<uint32_t> lodsV = drawnLods(scene, visbuf), lodsF = drawnLods(scene, forward);
   const FrameMath math = computeFrameMath(camera, w, h);
+  TextureReference textures(scene);
 
   PixelJudgement j;
   j.width = w;
@@ -207,15 +288,12 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
     }
     glm::dvec3 exact = background;
     if (truth) {
-      const Object& o = scene.objects[truth->object];
       if (skinned[truth->object]) {
         ++j.notJudgedSkinned;
-      } else if (textured(scene, scene.materials[o.material])) {
-        ++j.notJudgedTextured;
       } else if (!truth->hit) {
         ++j.notJudgedParallel;
       } else {
-        exact = exactColor(scene, camera, transforms[truth->object], *truth, dir);
+        exact = exactColor(scene, camera, math, textures, transforms[truth->object], *truth, x + 0.5, y + 0.5);
         truth = nullptr;  // judged
       }
       if (truth) {

@@ -4,11 +4,11 @@
 // shadeReference of brdf_reference.h), and each path's distance from it. Where the paths differ, it says which
 // one is closer and by how much. Independent of the GPU code: it shares no arithmetic with the shaders.
 //
-// What it judges exactly: untextured materials (factors and vertex colours), opaque or masked, static and
-// node-animated objects, single-sampled frames. Pixels it cannot judge are counted by reason, never guessed:
-// textured materials (the texture filtering of material.glsl is not reproduced), skinned or morphed objects (their
-// vertices come from the skinning pass), rays parallel to the triangle. Scenes with BLEND materials are refused:
-// the transparency pass draws over the IDs, so the IDs do not say what a pixel shows.
+// What it judges: opaque and masked materials with their textures (texture_reference.h: the shader's filtering and
+// mip selection, from the exact uv derivatives), normal maps and vertex colours; static and node-animated objects;
+// single-sampled frames. Pixels it cannot judge are counted by reason, never guessed: skinned or morphed objects
+// (their vertices come from the skinning pass), rays parallel to the triangle. Scenes with BLEND materials are
+// refused: the transparency pass draws over the IDs, so the IDs do not say what a pixel shows.
 #pragma once
 
 #include <cstddef>
@@ -54,7 +54,6 @@ struct PixelJudgement {
   uint32_t width = 0, height = 0;
   size_t covered = 0;            // pixels where either path shows a triangle
   size_t judged = 0;             // of those: an exact colour was computed and both paths compared with it
-  size_t notJudgedTextured = 0;  // the claimed triangle's material samples a texture
   size_t notJudgedSkinned = 0;   // the claimed object is skinned or morphed
   size_t notJudgedParallel = 0;  // the pixel's ray is parallel to the claimed triangle
   size_t coverageMismatch = 0;   // covered pixels where the paths show different triangles (judged: the exact

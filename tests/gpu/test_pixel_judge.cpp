@@ -1,6 +1,6 @@
 // The per-pixel judge (engine/render/pixel_judge.h) on frames of a known scene: the visbuf path's colour is the
-// double-precision exact colour up to float arithmetic and rgba16f rounding, every covered pixel of an untextured
-// static scene is judged, a pixel a path gets wrong is found and blamed on that path, and what the judge cannot
+// double-precision exact colour up to float arithmetic and rgba16f rounding, every covered pixel of a static scene
+// is judged (textured ones too), a pixel a path gets wrong is found and blamed on that path, and what the judge cannot
 // judge is refused with a reason.
 #include "gpu_test_util.h"
 #include "visbuf/render/pixel_judge.h"
@@ -100,4 +100,39 @@ TEST(PixelJudge, RefusesWhatItCannotJudge) {
   auto blend = judgePixels(scene, cam, f.visbuf, f.forward);
   ASSERT_FALSE(blend.ok());
   EXPECT_NE(blend.error().message.find("BLEND"), std::string::npos) << blend.error().message;
+}
+
+namespace {
+
+void printJudgement(const char* name, const PixelJudgement& j) {
+  std::printf("judge %s: %zu of %zu covered pixels judged; visbuf max %.2e mean %.2e PSNR %.1f dB, %zu > 1/255; forward "
+              "max %.2e mean %.2e PSNR %.1f dB, %zu > 1/255; %zu differ: visbuf closer %zu, forward closer %zu, ties "
+              "%zu\n",
+              name, j.judged, j.covered, j.visbuf.maxAbs, j.visbuf.meanAbs, j.visbuf.psnr, j.visbuf.over8Bit,
+              j.forward.maxAbs, j.forward.meanAbs, j.forward.psnr, j.forward.over8Bit, j.differing, j.visbufCloser,
+              j.forwardCloser, j.ties);
+}
+
+}  // namespace
+
+// Textured materials (generated: sRGB checkers and stripes, linear noise, trilinear with full mip chains) on the
+// city at street level, where the ground's mip level changes along every row: the exact colour samples the same
+// textures with the exact uv derivatives. The visbuf path's analytic derivatives agree with them. Measured on
+// lavapipe (2026-11): visbuf max 1.25e-3, 70.0 dB; forward (quad derivatives) max 5.2e-2, 54.6 dB. Bounds: about
+// twice the visbuf path's largest error, 5 dB under its PSNR; the forward path is not bounded here (Materials.*).
+TEST(PixelJudge, JudgesTexturedMaterials) {
+  const uint32_t before = test::testDevice().validationMessages();
+  Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
+  ASSERT_TRUE(applyGeneratedMaterials(scene, 8, 3).ok());
+  Camera cam = scene.defaultCamera;
+  cam.position.y = 1.5;
+  cam.target = cam.position + glm::dvec3(0.2, -0.15, -1.0);
+  const Frames f = renderBoth(scene, cam, 320, 180);
+  auto j = judgePixels(scene, cam, f.visbuf, f.forward);
+  ASSERT_TRUE(j.ok()) << j.error().message;
+  printJudgement("textured city", *j);
+  EXPECT_EQ(j->judged, j->covered);
+  EXPECT_LE(j->visbuf.maxAbs, 3e-3);
+  EXPECT_GE(j->visbuf.psnr, 65.0);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
