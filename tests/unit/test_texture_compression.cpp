@@ -283,11 +283,14 @@ TEST(TextureCompression, SameBytesWithOneThreadAndWithSeveral) {
     TextureBakeOptions options;
     options.maxTextureSize = 256;
     Status s = bakeTextures(*imported, options, &scene.value());
-    EXPECT_TRUE(s) << s.error().message;
+    // Unsupported: a build without an image decoder (VISBUF_WITH_OIIO=OFF), skipped below.
+    EXPECT_TRUE(s || s.error().code == ErrorCode::Unsupported) << s.error().message;
     return std::move(scene.value());
   };
   const Scene serial = bake(1), parallel = bake(4);
-  if (serial.textureClasses.empty()) GTEST_SKIP() << "built without OpenImageIO";
+  if (serial.textureClasses.empty())
+    GTEST_SKIP() << "built without OpenImageIO (VISBUF_WITH_OIIO=OFF): the whole bake decodes PNG images (the block "
+                    "compressor's half of this test ran)";
   EXPECT_EQ(serial.textures, parallel.textures);
   EXPECT_EQ(serial.textureClasses, parallel.textureClasses);
 }
