@@ -6,8 +6,11 @@
 //
 // What it judges: opaque and masked materials with their textures (texture_reference.h: the shader's filtering and
 // mip selection, from the exact uv derivatives), normal maps and vertex colours; static and node-animated objects;
-// single-sampled frames. Pixels it cannot judge are counted by reason, never guessed: skinned or morphed objects
-// (their vertices come from the skinning pass), rays parallel to the triangle. Scenes with BLEND materials are
+// single-sampled frames. Block-compressed texels are the spec's unrounded palette; devices decode BC at their own
+// precision (lavapipe nearer 8 bits), which both paths share: on BC-textured smooth surfaces both are off by the
+// same texel error, and the verdict of which is closer still holds. Pixels it cannot judge are counted by reason,
+// never guessed: skinned or morphed objects (their vertices come from the skinning pass), rays parallel to the
+// triangle. Scenes with BLEND materials are
 // refused: the transparency pass draws over the IDs, so the IDs do not say what a pixel shows.
 #pragma once
 

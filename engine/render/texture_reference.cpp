@@ -23,19 +23,19 @@ double srgbToLinear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 
 
 glm::dvec4 TextureReference::texel(const TextureClass& c, uint32_t cls, uint32_t layer, uint32_t mip, int x, int y) {
   const uint32_t side = c.mipSize(mip);
-  const uint8_t* rgba = nullptr;
+  glm::dvec4 t;
   if (c.format == TextureFormat::Rgba8) {
-    rgba = c.texels.data() + c.offset(mip, layer) + (uint64_t(y) * side + uint64_t(x)) * 4;
+    const uint8_t* rgba = c.texels.data() + c.offset(mip, layer) + (uint64_t(y) * side + uint64_t(x)) * 4;
+    t = glm::dvec4(rgba[0], rgba[1], rgba[2], rgba[3]) / 255.0;
   } else {
     const uint64_t key = uint64_t(cls) << 40 | uint64_t(layer) << 8 | mip;
     auto it = decoded_.find(key);
     if (it == decoded_.end())
-      it = decoded_.emplace(key, decodeTextureImage(c.texels.data() + c.offset(mip, layer), side, side, c.format))
+      it = decoded_.emplace(key, decodeTextureImageExact(c.texels.data() + c.offset(mip, layer), side, side, c.format))
                .first;
-    rgba = it->second.data() + (uint64_t(y) * side + uint64_t(x)) * 4;
+    const double* rgba = it->second.data() + (uint64_t(y) * side + uint64_t(x)) * 4;
+    t = glm::dvec4(rgba[0], rgba[1], rgba[2], rgba[3]);
   }
-  glm::dvec4 t(rgba[0], rgba[1], rgba[2], rgba[3]);
-  t /= 255.0;
   if (c.colorSpace == ColorSpace::Srgb)
     for (int k = 0; k < 3; ++k) t[k] = srgbToLinear(t[k]);
   return t;

@@ -4,8 +4,8 @@
 // lambda = log2(max(|duv/dx|, |duv/dy|) x size), magnification below lambda 0, then the sampler's mip mode (none:
 // level 0, nearest: level ceil(lambda + 1/2) - 1, linear: between floor(lambda) and the next), nearest or bilinear
 // texels with the wrap modes. Texels are decoded as the GPU's formats do: sRGB classes to linear per texel before
-// filtering (the _SRGB image formats), BC blocks through decodeTextureImage (8-bit interpolation: a GPU's float
-// decode may differ by one step of 1/255).
+// filtering (the _SRGB image formats), BC blocks through decodeTextureImageExact (the spec's palette, unrounded:
+// BC5 normal maps carry more than 8 bits, and a highlight on a smooth surface resolves them).
 #pragma once
 
 #include <cstdint>
@@ -33,8 +33,8 @@ class TextureReference {
                          bool linear, WrapMode wrapS, WrapMode wrapT);
 
   const Scene& scene_;
-  // Block-compressed levels decoded to RGBA8 on first use, by (class, layer, mip).
-  std::unordered_map<uint64_t, std::vector<uint8_t>> decoded_;
+  // Block-compressed levels decoded on first use (RGBA in [0, 1]), by (class, layer, mip).
+  std::unordered_map<uint64_t, std::vector<double>> decoded_;
 };
 
 }  // namespace visbuf
