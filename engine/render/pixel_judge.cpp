@@ -209,6 +209,13 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
     if (f->ids.size() != 2 * pixels || f->color.size() != 4 * pixels)
       return makeError(ErrorCode::InvalidArgument,
                        "judge: each frame needs single-sampled IDs and colour (readIds, readColor, msaa 1)");
+  for (const FrameResult* f : {&visbuf, &forward}) {
+    const std::vector<uint32_t>& lods = f->stats.lodHistogram;
+    if (f->drawnObjects.empty() && std::any_of(lods.begin() + std::min<size_t>(lods.size(), 1), lods.end(),
+                                               [](uint32_t draws) { return draws > 0; }))
+      return makeError(ErrorCode::InvalidArgument, "judge: a frame drew coarser LODs but has no drawn LODs to say "
+                                                   "which (render it with readDraws, or lodErrorPixels 0)");
+  }
   for (const Material& m : scene.materials)
     if (m.alphaMode == AlphaMode::Blend)
       return makeError(ErrorCode::InvalidArgument,

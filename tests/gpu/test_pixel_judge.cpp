@@ -100,6 +100,10 @@ TEST(PixelJudge, RefusesWhatItCannotJudge) {
   FrameResult badId = f.forward;
   badId.ids[0] = 7;  // object 6 of a one-object scene
   EXPECT_EQ(judgePixels(scene, cam, f.visbuf, badId).error().code, ErrorCode::InvalidArgument);
+  FrameResult coarse = f.forward;  // drew LOD 1 without saying which objects
+  coarse.stats.lodHistogram = {0u, 1u};
+  coarse.drawnObjects.clear();
+  EXPECT_EQ(judgePixels(scene, cam, f.visbuf, coarse).error().code, ErrorCode::InvalidArgument);
   scene.materials[0].alphaMode = AlphaMode::Blend;
   auto blend = judgePixels(scene, cam, f.visbuf, f.forward);
   ASSERT_FALSE(blend.ok());
