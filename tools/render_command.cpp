@@ -175,13 +175,15 @@ Result<nlohmann::json> judgeFrame(Renderer& renderer, const Scene& scene, const 
   if (Status s = writeColorImage(heatMapPath, j->width, j->height, j->heatMap); !s) return s.error();
   auto accuracy = [](const PathAccuracy& a) {
     return nlohmann::json{{"maxAbs", a.maxAbs},
+                          {"maxBeyondRounding", a.maxBeyondRounding},
                           {"meanAbs", a.meanAbs},
                           {"psnr", std::isfinite(a.psnr) ? a.psnr : 999.0},
                           {"pixelsOver8Bit", a.over8Bit}};
   };
   for (const auto& [name, a] : {std::pair{"visbuf", &j->visbuf}, std::pair{"forward", &j->forward}})
-    std::printf("judge         %-7s vs exact: max %.2e, mean %.2e, PSNR %.1f dB, %zu pixels > 1/255\n", name, a->maxAbs,
-                a->meanAbs, a->psnr, a->over8Bit);
+    std::printf("judge         %-7s vs exact: max %.2e (%.2e beyond rgba16f rounding), mean %.2e, PSNR %.1f dB, %zu "
+                "pixels > 1/255\n",
+                name, a->maxAbs, a->maxBeyondRounding, a->meanAbs, a->psnr, a->over8Bit);
   std::printf("judge         %zu covered pixels, %zu judged (not judged: %zu skinned, %zu parallel rays); %zu show "
               "different triangles in the two paths\n",
               j->covered, j->judged, j->notJudgedSkinned, j->notJudgedParallel, j->coverageMismatch);

@@ -181,12 +181,21 @@ glm::dvec3 exactColor(const Scene& scene, const Camera& camera, const FrameMath&
   return shadeReference(s, scene, camera.position);
 }
 
+// The spacing of rgba16f values at v (11 significant bits; the subnormal spacing below 2^-14): how far a correctly
+// converted output may lie from v. Vulkan lets a device convert to 16-bit floats by rounding to nearest or towards
+// zero (lavapipe rounds towards zero: 99.8% of its channels lie below the exact colour), so a whole spacing.
+double halfFloatSpacing(double v) {
+  const int e = std::max(int(std::floor(std::log2(std::max(std::abs(v), 1e-300)))), -14);
+  return std::ldexp(1.0, e - 10);
+}
+
 void addError(PathAccuracy& a, double& sumAbs, double& sumSq, const float* path, const glm::dvec3& exact,
               double& pixelError) {
   pixelError = 0.0;
   for (int k = 0; k < 3; ++k) {
     const double d = std::abs(double(path[k]) - exact[k]);
     pixelError = std::isnan(d) ? INFINITY : std::max(pixelError, d);
+    a.maxBeyondRounding = std::isnan(d) ? INFINITY : std::max(a.maxBeyondRounding, d - halfFloatSpacing(exact[k]));
     sumAbs += d;
     sumSq += d * d;
   }

@@ -44,6 +44,11 @@ struct PathAccuracy {
   double meanAbs = 0.0;     // mean over judged pixels and RGB channels
   double psnr = INFINITY;   // dB, peak 1.0, over judged pixels and RGB channels
   size_t over8Bit = 0;      // judged pixels whose largest channel error exceeds 1/255
+  // Largest channel error beyond rgba16f rounding: |path - exact| less the half-float spacing at the exact value
+  // (Vulkan allows rounding to nearest or towards zero; 0: every channel is what converting the exact colour could
+  // give). The output format's share of maxAbs grows with the value (up to 9.8e-4 in [1, 2)); this is the
+  // shading's own.
+  double maxBeyondRounding = 0.0;
 };
 
 struct JudgeOptions {

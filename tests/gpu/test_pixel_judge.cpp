@@ -113,12 +113,12 @@ TEST(PixelJudge, RefusesWhatItCannotJudge) {
 namespace {
 
 void printJudgement(const char* name, const PixelJudgement& j) {
-  std::printf("judge %s: %zu of %zu covered pixels judged; visbuf max %.2e mean %.2e PSNR %.1f dB, %zu > 1/255; forward "
-              "max %.2e mean %.2e PSNR %.1f dB, %zu > 1/255; %zu differ: visbuf closer %zu, forward closer %zu, ties "
-              "%zu\n",
-              name, j.judged, j.covered, j.visbuf.maxAbs, j.visbuf.meanAbs, j.visbuf.psnr, j.visbuf.over8Bit,
-              j.forward.maxAbs, j.forward.meanAbs, j.forward.psnr, j.forward.over8Bit, j.differing, j.visbufCloser,
-              j.forwardCloser, j.ties);
+  std::printf("judge %s: %zu of %zu covered pixels judged; visbuf max %.2e (%.1e beyond rgba16f rounding) mean %.2e "
+              "PSNR %.1f dB, %zu > 1/255; forward max %.2e (%.1e beyond) mean %.2e PSNR %.1f dB, %zu > 1/255; %zu "
+              "differ: visbuf closer %zu, forward closer %zu, ties %zu\n",
+              name, j.judged, j.covered, j.visbuf.maxAbs, j.visbuf.maxBeyondRounding, j.visbuf.meanAbs, j.visbuf.psnr,
+              j.visbuf.over8Bit, j.forward.maxAbs, j.forward.maxBeyondRounding, j.forward.meanAbs, j.forward.psnr,
+              j.forward.over8Bit, j.differing, j.visbufCloser, j.forwardCloser, j.ties);
 }
 
 }  // namespace
