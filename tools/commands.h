@@ -32,6 +32,7 @@ struct RenderCommand {
   bool reference = false;  // also render the forward path and report the error against it
   bool referenceFull = false;  // also render visbuf with no culling and no LOD and report the error against it
   bool referenceLights = false;  // also render the same frame with every point light at every pixel (no tiles)
+  std::string judge;  // heat map of both paths' per-pixel error against the exact colour (pixel_judge.h); empty: none
   bool allLights = false;        // shade every pixel with every point light (no light cull pass)
   std::string shading = "auto";  // visbuf shading: auto | uber | classified
   std::string view = "shaded";  // debug view written to -o instead of the shaded image

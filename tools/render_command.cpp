@@ -16,6 +16,7 @@
 #include "visbuf/core/image_io.h"
 #include "visbuf/gpu/device.h"
 #include "visbuf/passes/depth_pyramid_pass.h"
+#include "visbuf/render/pixel_judge.h"
 #include "visbuf/render/renderer.h"
 #include "visbuf/render/scene_motion.h"
 #include "visbuf/scene/generate.h"
@@ -80,6 +81,12 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_flag("--reference-lights", c.referenceLights,
                 "also render the same frame shading every pixel with every point light (no tile lists) and report "
                 "the error against it");
+  sub->add_option("--judge", c.judge,
+                  "also render the frame with both paths (visbuf and forward, same camera, culling and LOD rule), judge "
+                  "every pixel against the exact colour computed in double precision on the CPU, print a summary "
+                  "(and put it in the JSON) and write a heat map here (.png, .exr, .tif: red = the visbuf path's error, "
+                  "green = the forward path's, log scale 1e-5..1e-1; blue: not judged: skinned objects); "
+                  "not with --msaa, --path gbuffer, --moving, --churn or --freeze-culling");
   sub->add_flag("--all-lights", c.allLights, "shade every pixel with every point light (no light cull pass)");
   sub->add_option("--msaa", c.msaa,
                   "samples per pixel: 1, 2 or 4 (the device's supported counts; visbuf: per-sample shading where a "
@@ -151,6 +158,55 @@ uint64_t expectedObjects(const SceneOptions& o) {
   if (o.scene == "foliage" || o.scene == "foliage-opaque") return FoliageParams{}.cards;
   return 0;
 }
+// --judge: the frame rendered by both paths with IDs and the drawn LODs, judged pixel by pixel against the exact
+// colour (pixel_judge.h); writes the heat map, prints the summary and returns it for the JSON.
+Result<nlohmann::json> judgeFrame(Renderer& renderer, const Scene& scene, const Camera& camera, FrameOptions fo,
+                                  double time, const std::string& heatMapPath) {
+  fo.readColor = fo.readIds = fo.readDraws = true;
+  fo.animationTime = time;
+  fo.path = RenderPath::Visbuf;
+  Result<FrameResult> vis = renderer.renderFrame(camera, fo);
+  if (!vis) return vis.error();
+  fo.path = RenderPath::Forward;
+  Result<FrameResult> fwd = renderer.renderFrame(camera, fo);
+  if (!fwd) return fwd.error();
+  Result<PixelJudgement> j = judgePixels(scene, camera, *vis, *fwd, {.animationTime = time});
+  if (!j) return j.error();
+  if (Status s = writeColorImage(heatMapPath, j->width, j->height, j->heatMap); !s) return s.error();
+  auto accuracy = [](const PathAccuracy& a) {
+    return nlohmann::json{{"maxAbs", a.maxAbs},
+                          {"maxBeyondRounding", a.maxBeyondRounding},
+                          {"meanAbs", a.meanAbs},
+                          {"psnr", std::isfinite(a.psnr) ? a.psnr : 999.0},
+                          {"pixelsOver8Bit", a.over8Bit}};
+  };
+  for (const auto& [name, a] : {std::pair{"visbuf", &j->visbuf}, std::pair{"forward", &j->forward}})
+    std::printf("judge         %-7s vs exact: max %.2e (%.2e beyond rgba16f rounding), mean %.2e, PSNR %.1f dB, %zu "
+                "pixels > 1/255\n",
+                name, a->maxAbs, a->maxBeyondRounding, a->meanAbs, a->psnr, a->over8Bit);
+  std::printf("judge         %zu covered pixels, %zu judged (not judged: %zu skinned, %zu parallel rays); %zu show "
+              "different triangles in the two paths\n",
+              j->covered, j->judged, j->notJudgedSkinned, j->notJudgedParallel, j->coverageMismatch);
+  std::printf("judge         %zu judged pixels differ: visbuf closer at %zu (by %.1e mean, %.1e max), forward "
+              "closer at %zu (by %.1e mean, %.1e max), %zu ties\n",
+              j->differing, j->visbufCloser, j->visbufMargin, j->visbufMaxMargin, j->forwardCloser, j->forwardMargin,
+              j->forwardMaxMargin, j->ties);
+  std::printf("heat map      %s\n", printable(heatMapPath).c_str());
+  return nlohmann::json{{"covered", j->covered},
+                        {"judged", j->judged},
+                        {"notJudged", {{"skinned", j->notJudgedSkinned},
+                                       {"parallel", j->notJudgedParallel}}},
+                        {"coverageMismatch", j->coverageMismatch},
+                        {"visbuf", accuracy(j->visbuf)},
+                        {"forward", accuracy(j->forward)},
+                        {"differing", j->differing},
+                        {"visbufCloser", j->visbufCloser},
+                        {"forwardCloser", j->forwardCloser},
+                        {"ties", j->ties},
+                        {"visbufMargin", {{"mean", j->visbufMargin}, {"max", j->visbufMaxMargin}}},
+                        {"forwardMargin", {{"mean", j->forwardMargin}, {"max", j->forwardMaxMargin}}},
+                        {"heatMap", heatMapPath}};
+}
 }  // namespace
 
 int runRender(const RenderCommand& c) {
@@ -167,6 +223,14 @@ int runRender(const RenderCommand& c) {
     return usage("--reference, --reference-full and --reference-lights are exclusive");
   if (c.freezeCulling && c.path == "forward") return usage("--freeze-culling needs --path visbuf or gbuffer");
   const bool moving = c.moving > 0.0 || c.churn > 0.0;
+  if (!c.judge.empty()) {
+    if (c.msaa > 1) return usage("--judge compares one colour and one triangle per pixel: use it with --msaa 1");
+    if (c.path == "gbuffer")
+      return usage("--judge needs the triangle IDs of the visbuf and forward paths: not --path gbuffer");
+    if (moving || c.freezeCulling)
+      return usage("--judge renders the scene as it is from the camera: not with --moving, --churn or "
+                   "--freeze-culling");
+  }
   if (moving && (c.reference || c.referenceFull || c.referenceLights))
     return usage("--moving and --churn change the scene every frame: the --reference options compare one fixed scene");
   if (moving && c.freezeCulling) return usage("--moving and --churn do not combine with --freeze-culling");
@@ -187,6 +251,13 @@ int runRender(const RenderCommand& c) {
     if (ext != ".tif" && ext != ".tiff")
       return fail({ErrorCode::InvalidArgument, fmt::format("--ids-out '{}': the ID image must be .tif", c.idsOut)});
   }
+  if (!c.judge.empty()) {
+    if (Status s = checkOutputFile("--judge", c.judge); !s) return fail(s.error());
+    const std::string ext = lowerExtension(c.judge);
+    if (ext != ".png" && ext != ".exr" && ext != ".tif" && ext != ".tiff")
+      return fail({ErrorCode::InvalidArgument,
+                   fmt::format("--judge '{}': the heat map must be .png, .exr or .tif", c.judge)});
+  }
   if (!c.json.empty()) {
     if (Status s = checkOutputFile("--json", c.json); !s) return fail(s.error());
   }
@@ -203,7 +274,7 @@ int runRender(const RenderCommand& c) {
   budget.msaa = c.msaa;
   budget.gbuffer = c.path == "gbuffer";
   budget.ids = !c.idsOut.empty();
-  budget.reference = c.reference || c.referenceFull || c.referenceLights;
+  budget.reference = c.reference || c.referenceFull || c.referenceLights || !c.judge.empty();
   budget.debugView = c.view != "shaded";
   const std::string asked = c.scene.objects > 0
                                 ? fmt::format("--objects {} at {}x{}", c.scene.objects, size->first, size->second)
@@ -386,6 +457,13 @@ int runRender(const RenderCommand& c) {
                               {"psnr", std::isfinite(e.psnr) ? e.psnr : 999.0},
                               {"differingFraction", e.differingFraction}};
   }
+  nlohmann::json judgeJson;
+  if (!c.judge.empty()) {
+    const double lastTime = c.time + (c.animate ? double(c.frames - 1) / 30.0 : 0.0);  // run()'s last frame
+    auto judged = judgeFrame(**renderer, *scene, *camera, fo, lastTime, c.judge);
+    if (!judged) return fail(judged.error());
+    judgeJson = std::move(judged.value());
+  }
   nlohmann::json skinJson;
   if (c.skinCheck > 0 && !scene->skinnedObjects.empty()) {
     const double lastTime = c.time + (c.animate ? double(c.frames - 1) / 30.0 : 0.0);  // run()'s last frame
@@ -401,6 +479,7 @@ int runRender(const RenderCommand& c) {
     stampInvocation(j, stats.device);
     if (compare) j["reference"] = referenceJson;
     if (!skinJson.is_null()) j["skinCheck"] = skinJson;
+    if (!judgeJson.is_null()) j["judge"] = judgeJson;
     j["scene"] = c.scene.scene;
     j["frames"] = c.frames;
     j["lodErrorPixels"] = fo.lodErrorPixels;

@@ -3,32 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "visbuf/render/pixel_judge.h"
 #include "visbuf/shared/config.h"
 
 namespace visbuf::tools {
 
 namespace {
-
-// Pixel (x, y) + sub-pixel offset -> ray direction in camera-relative world space (not normalised).
-glm::dvec3 pixelRay(const FrameMath& math, double px, double py) {
-  const double nx = px / math.width * 2.0 - 1.0, ny = py / math.height * 2.0 - 1.0;
-  const glm::dvec3 viewDir(nx / math.proj[0][0], ny / math.proj[1][1], -1.0);
-  return glm::transpose(glm::dmat3(math.view)) * viewDir;  // the view is a pure rotation
-}
-
-// Moller-Trumbore without the inside test (derivative rays may leave the triangle): (t, lambda).
-std::optional<std::pair<double, glm::dvec3>> intersect(const glm::dvec3 v[3], glm::dvec3 dir) {
-  const glm::dvec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
-  const glm::dvec3 pvec = glm::cross(dir, e2);
-  const double det = glm::dot(e1, pvec);
-  if (std::abs(det) < 1e-300) return std::nullopt;
-  const glm::dvec3 tvec = -v[0];  // ray origin: the camera, at 0
-  const double u = glm::dot(tvec, pvec) / det;
-  const glm::dvec3 qvec = glm::cross(tvec, e1);
-  const double w = glm::dot(dir, qvec) / det;
-  const double t = glm::dot(e2, qvec) / det;
-  return std::make_pair(t, glm::dvec3(1.0 - u - w, u, w));
-}
 
 // acc = max(acc, v), where a NaN counts as an unbounded error (std::max would drop it).
 void worst(double& acc, double v) { acc = std::isnan(v) ? INFINITY : std::max(acc, v); }
@@ -47,7 +27,7 @@ std::optional<PixelReference> referenceAtPixel(const Scene& scene, const Camera&
     v[k] = glm::dvec3(world) - camera.position;
   }
   const double cx = x + 0.5, cy = y + 0.5;
-  auto hit = intersect(v, pixelRay(math, cx, cy));
+  auto hit = intersectTriangle(v, pixelRay(math, cx, cy));
   if (!hit) return std::nullopt;
   PixelReference r;
   r.lambda = hit->second;
@@ -63,7 +43,7 @@ std::optional<PixelReference> referenceAtPixel(const Scene& scene, const Camera&
   r.normal = glm::normalize(glm::transpose(glm::inverse(glm::dmat3(o.transform))) * n);
   const double h = 1e-3;  // pixels; lambda is smooth at this scale, the difference quotient exact to ~1e-9
   auto lambdaAt = [&](double px, double py) {
-    auto s = intersect(v, pixelRay(math, px, py));
+    auto s = intersectTriangle(v, pixelRay(math, px, py));
     return s ? s->second : glm::dvec3(NAN);
   };
   r.ddx = (lambdaAt(cx + h, cy) - lambdaAt(cx - h, cy)) / (2.0 * h);

@@ -216,6 +216,9 @@ struct FrameStats {
   uint64_t frameIndex = 0;  // frames recorded before this one (renderFrame and record count alike)
 };
 
+// The colour of pixels that show nothing (linear RGBA; the colour image is cleared to it, then rounded to rgba16f).
+inline constexpr float kBackgroundColor[4] = {0.10f, 0.12f, 0.15f, 1.0f};
+
 struct FrameResult {
   uint32_t width = 0, height = 0;
   std::vector<float> color;     // RGBA, linear, row-major, top row first

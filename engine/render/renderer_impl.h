@@ -43,7 +43,7 @@ namespace visbuf {
 
 namespace {
 
-constexpr VkClearColorValue kBackground{{0.10f, 0.12f, 0.15f, 1.0f}};
+constexpr VkClearColorValue kBackground{{kBackgroundColor[0], kBackgroundColor[1], kBackgroundColor[2], kBackgroundColor[3]}};
 constexpr uint32_t kCommandBuffers = 20;  // one per recorded pass, at most 18: setup, skin, 2 x (cull, raster,
                                           // micro-raster, merge), pyramid, light cull, classify, shade (or G-buffer
                                           // lighting), sample IDs, transparent, counters, readback

@@ -85,6 +85,10 @@ uint64_t textureImageBytes(TextureFormat format, uint32_t width, uint32_t height
 // colour black), BC3, BC4 (R, 0, 0, 255), BC5 (R, G, 0, 255); Rgba8 is copied. Interpolated colours are computed
 // in integers from the 8-bit endpoints, so a GPU's float decode may differ by 1.
 std::vector<uint8_t> decodeTextureImage(const uint8_t* data, uint32_t width, uint32_t height, TextureFormat format);
+// The same decode without rounding, RGBA in [0, 1]: BC endpoints expanded and interpolated exactly as the Vulkan
+// spec defines the formats (what a GPU's float decode approximates); Rgba8 texels / 255. The per-pixel judge's
+// texels (engine/render/texture_reference.h).
+std::vector<double> decodeTextureImageExact(const uint8_t* data, uint32_t width, uint32_t height, TextureFormat format);
 
 // One 2D array texture: `layers` square images of `size` x `size` texels in `format` with `mipCount` levels.
 // texels holds mip 0 of every layer, then mip 1 of every layer, ... (mip-major: one buffer-to-image copy

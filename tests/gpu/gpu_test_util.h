@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -59,6 +60,18 @@ inline gpu::Device& testDevice() {
 
 using ::visbuf::ImageError;
 using ::visbuf::compareColor;
+
+// One camera's visbuf and forward frames (LOD off, with IDs and colour): the inputs of the coverage, colour and
+// per-pixel judge comparisons.
+inline std::pair<Result<FrameResult>, Result<FrameResult>> renderBothPaths(Renderer& renderer, const Camera& cam) {
+  FrameOptions fo;
+  fo.lodErrorPixels = 0.0f;
+  fo.readIds = true;
+  fo.path = RenderPath::Visbuf;
+  auto vis = renderer.renderFrame(cam, fo);
+  fo.path = RenderPath::Forward;
+  return {std::move(vis), renderer.renderFrame(cam, fo)};
+}
 
 // Where a test fails, it leaves the images behind for a person to look at.
 inline void saveOnFailure(const std::string& name, const FrameResult& a, const FrameResult& b) {

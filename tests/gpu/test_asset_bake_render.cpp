@@ -281,7 +281,8 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
 
     const fs::path packPath = dir_ / (file.stem().string() + ".vbp");
     PackWriteReport written;
-    ASSERT_TRUE(writePack(*memory, packPath.string(), &written).ok());
+    const Status packed = writePack(*memory, packPath.string(), &written);
+    ASSERT_TRUE(packed.ok()) << name << ": " << packed.error().message;
     auto pack = readPack(packPath.string());
     ASSERT_TRUE(pack.ok()) << pack.error().message;
     EXPECT_EQ(pack->objects.size(), memory->objects.size());

@@ -1,35 +1,47 @@
-// The shading pass reconstructs what the hardware interpolates: visbuf vs the forward reference on the
-// same frame. Coverage is identical by construction (same vertex math, same depth test), so the only
-// differences allowed are interpolation precision: analytic float barycentrics in compute vs the
-// rasteriser's, and rgba16f rounding (half ulp at 1.0 = 2^-11 ~ 4.9e-4).
+// The shading pass reconstructs what the hardware interpolates. Both paths are judged against the exact colour
+// (pixel_judge.h: the pixel centre's ray, attributes and lighting in double precision), and, as a secondary check,
+// against each other on the same frame. Coverage is identical by construction (same vertex math, same depth
+// test), so the only differences allowed are interpolation precision: analytic float barycentrics in compute vs
+// the rasteriser's, and rgba16f rounding (half ulp at 1.0 = 2^-11 ~ 4.9e-4; a whole ulp where the device rounds
+// towards zero, as lavapipe does).
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gpu_test_util.h"
+#include "visbuf/render/pixel_judge.h"
 #include "visbuf/scene/generate.h"
 
 using namespace visbuf;
 
 namespace {
 
-// Bounds: every channel within 2e-3 of the reference (4 half-float ulps at 1.0, half an 8-bit step),
-// mean below 5e-5, PSNR above 80 dB. Measured on lavapipe (2026-11): max 7.3e-4, PSNR 99.8-119 dB;
+// Visbuf vs forward (the secondary check): every channel within 2e-3 of the reference (4 half-float ulps at 1.0,
+// half an 8-bit step), mean below 5e-5, PSNR above 80 dB. Measured on lavapipe (2026-11): max 7.3e-4, PSNR 99.8-119 dB;
 // anything near the bound means the reconstruction diverged from the raster, not rounding.
 constexpr double kMaxAbs = 2e-3;
 constexpr double kMeanAbs = 5e-5;
 constexpr double kMinPsnr = 80.0;
+
+// Against the exact colour. Its floor is the conversion to rgba16f, which Vulkan lets a device do by rounding to
+// nearest or towards zero: lavapipe rounds towards zero (99.8% of both paths' channels lie below the exact colour),
+// so up to one half-float spacing per channel (4.9e-4 in [0.5, 1), 9.8e-4 in [1, 2)), a mean of about half a
+// spacing, i.e. ~81-86 dB for these scenes' colours. Measured on lavapipe (2026-11), visbuf / forward: field max
+// 5.8e-4 / 1.06e-3 (beyond the spacing: 2.8e-4 / 5.7e-4), mean 4.5e-5 / 4.6e-5, 83.8 / 83.6 dB; city grazing
+// 4.8e-4 / 4.7e-4 (2.7e-5 / 2.5e-5), 7.2e-5 / 7.2e-5, 81.0 / 81.0 dB; close-up 4.8e-4 / 4.9e-4 (0 / 2e-6), 2.7e-5 /
+// 2.7e-5, 85.9 / 85.9 dB. The visbuf bound is one spacing at 1.0 (anything above is reconstruction error, not
+// rounding, for colours below 2); the forward path gets the visbuf-vs-forward bound, since lavapipe's hardware
+// interpolation already spends 1.06e-3 on one field pixel. Mean and PSNR: twice the largest measured mean, 6 dB
+// under the rounding floor.
+constexpr double kExactMaxAbsVisbuf = 1e-3;
+constexpr double kExactMaxAbsForward = 2e-3;
+constexpr double kExactMeanAbs = 1.5e-4;
+constexpr double kExactMinPsnr = 75.0;
 
 void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint32_t h, const std::string& name) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
-  FrameOptions fo;
-  fo.lodErrorPixels = 0.0f;
-  fo.readIds = true;
-  fo.path = RenderPath::Visbuf;
-  auto vis = (*renderer)->renderFrame(cam, fo);
-  fo.path = RenderPath::Forward;
-  auto fwd = (*renderer)->renderFrame(cam, fo);
+  auto [vis, fwd] = test::renderBothPaths(**renderer, cam);
   ASSERT_TRUE(vis.ok() && fwd.ok());
   EXPECT_EQ(vis->stats.trianglesDrawn, fwd->stats.trianglesDrawn) << "both paths draw the same triangles";
   // Coverage: which (object, triangle) each pixel shows, in both paths. The two pipelines share the
@@ -63,7 +75,27 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
   EXPECT_LE(e.maxAbs, kMaxAbs);
   EXPECT_LE(e.meanAbs, kMeanAbs);
   EXPECT_GE(e.psnr, kMinPsnr);
+  // Both paths against the double-precision exact colour (pixel_judge.h).
+  auto j = judgePixels(scene, cam, *vis, *fwd);
+  ASSERT_TRUE(j.ok()) << j.error().message;
+  std::printf("%s vs exact (%zu of %zu covered pixels judged): visbuf max %.2e (%.1e beyond rgba16f rounding) mean "
+              "%.2e PSNR %.1f dB, %zu > 1/255; forward max %.2e (%.1e beyond rounding) mean %.2e PSNR %.1f dB, %zu > "
+              "1/255; of %zu differing pixels visbuf closer at %zu (by %.1e mean, %.1e max), forward at %zu (by %.1e "
+              "mean, %.1e max), ties %zu\n",
+              name.c_str(), j->judged, j->covered, j->visbuf.maxAbs, j->visbuf.maxBeyondRounding, j->visbuf.meanAbs,
+              j->visbuf.psnr, j->visbuf.over8Bit, j->forward.maxAbs, j->forward.maxBeyondRounding, j->forward.meanAbs,
+              j->forward.psnr, j->forward.over8Bit,
+              j->differing, j->visbufCloser, j->visbufMargin, j->visbufMaxMargin, j->forwardCloser, j->forwardMargin,
+              j->forwardMaxMargin, j->ties);
+  EXPECT_EQ(j->judged, j->covered) << "these scenes are untextured and static: every covered pixel is judged";
+  EXPECT_LE(j->visbuf.maxAbs, kExactMaxAbsVisbuf);
+  EXPECT_LE(j->forward.maxAbs, kExactMaxAbsForward);
+  for (const PathAccuracy* a : {&j->visbuf, &j->forward}) {
+    EXPECT_LE(a->meanAbs, kExactMeanAbs);
+    EXPECT_GE(a->psnr, kExactMinPsnr);
+  }
   test::saveOnFailure(name, *vis, *fwd);
+  if (::testing::Test::HasFailure()) (void)writeColorImage(name + ".judge.png", w, h, j->heatMap);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 

@@ -134,6 +134,11 @@ TEST(TextureCompression, BlockDecoderAgreesWithLibsquishAndTheFormulas) {
     for (size_t i = 0; i < ours.size(); ++i)
       if (i % 4 != 3 || format == TextureFormat::Bc3) worst = std::max(worst, std::abs(int(ours[i]) - int(theirs[i])));
     EXPECT_LE(worst, 1) << textureFormatName(format);
+    // The unrounded decode (the judge's texels): the 8-bit one is it rounded at the endpoints and the interpolants.
+    const std::vector<double> exact = decodeTextureImageExact(blocks.data(), 32, 32, format);
+    double off = 0.0;
+    for (size_t i = 0; i < ours.size(); ++i) off = std::max(off, std::abs(exact[i] * 255.0 - double(ours[i])));
+    EXPECT_LE(off, 1.0) << textureFormatName(format);
   }
   // BC4, both modes, against the interpolation formulas of the format (exact values, rounded to 8 bits).
   auto bc4Block = [](uint8_t a, uint8_t b) {
@@ -154,6 +159,10 @@ TEST(TextureCompression, BlockDecoderAgreesWithLibsquishAndTheFormulas) {
                       : ((5 - (index - 1)) * 60.0 + (index - 1) * 200.0) / 5.0;
     EXPECT_LE(std::abs(eight[size_t(i) * 4] - e8), 0.5) << "8-value mode, index " << index;
     EXPECT_LE(std::abs(six[size_t(i) * 4] - e6), 0.5) << "6-value mode, index " << index;
+    EXPECT_NEAR(decodeTextureImageExact(bc4Block(200, 60).data(), 4, 4, TextureFormat::Bc4)[size_t(i) * 4], e8 / 255.0,
+                1e-12);
+    EXPECT_NEAR(decodeTextureImageExact(bc4Block(60, 200).data(), 4, 4, TextureFormat::Bc4)[size_t(i) * 4], e6 / 255.0,
+                1e-12);
   }
 }
 
@@ -283,11 +292,14 @@ TEST(TextureCompression, SameBytesWithOneThreadAndWithSeveral) {
     TextureBakeOptions options;
     options.maxTextureSize = 256;
     Status s = bakeTextures(*imported, options, &scene.value());
-    EXPECT_TRUE(s) << s.error().message;
+    // Unsupported: a build without an image decoder (VISBUF_WITH_OIIO=OFF), skipped below.
+    EXPECT_TRUE(s || s.error().code == ErrorCode::Unsupported) << s.error().message;
     return std::move(scene.value());
   };
   const Scene serial = bake(1), parallel = bake(4);
-  if (serial.textureClasses.empty()) GTEST_SKIP() << "built without OpenImageIO";
+  if (serial.textureClasses.empty())
+    GTEST_SKIP() << "built without OpenImageIO (VISBUF_WITH_OIIO=OFF): the whole bake decodes PNG images (the block "
+                    "compressor's half of this test ran)";
   EXPECT_EQ(serial.textures, parallel.textures);
   EXPECT_EQ(serial.textureClasses, parallel.textureClasses);
 }
