@@ -42,10 +42,13 @@ namespace {
 
 constexpr uint32_t kWidth = 160, kHeight = 120;
 constexpr double kPackMaxAbs = 1e-6;  // pack-loaded vs in-memory colour, per channel
-// visbuf vs forward: the Shading.* bounds (tests/gpu/test_shading.cpp).
-constexpr double kMaxAbs = 2e-3;
+// visbuf vs forward: the Shading.* bounds (tests/gpu/test_shading.cpp: the forward path is the device's
+// interpolation, so the share of visibly differing pixels is bounded, not the largest difference; the H200 differs
+// by up to 6.6e-3 on CesiumMan's skin), and PSNR above 80 dB.
 constexpr double kMeanAbs = 5e-5;
+constexpr double kMaxDifferingShare = 5e-3;  // of the covered pixels, more than 1/255 apart
 constexpr double kMinPsnr = 80.0;
+constexpr double kSameMeshMaxAbs = 2e-3;  // one visbuf frame against another of the same mesh, files apart
 // Textured scenes: the shading pass picks mip levels from analytic derivatives, the forward reference from the
 // rasteriser's 2x2-quad differences (Materials.MipSelectionMatchesExactLevelOfDetail: visbuf within 0.014 levels of
 // the exact level of detail, forward within 0.19); where the two straddle a level the trilinear blend differs, and
@@ -171,7 +174,7 @@ size_t expectVisbufMatchesForward(const Frames& f, const std::string& name, bool
   if (textured) {
     EXPECT_LE(e.differingFraction, kTexturedMaxDiffering) << name;
   } else {
-    EXPECT_LE(e.maxAbs, kMaxAbs) << name;
+    EXPECT_LE(double(e.differing), kMaxDifferingShare * double(covered)) << name;
   }
   EXPECT_LE(e.meanAbs, textured ? kTexturedMeanAbs : kMeanAbs) << name;
   EXPECT_GE(e.psnr, textured ? kTexturedMinPsnr : kMinPsnr) << name;
@@ -330,7 +333,7 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
           maxAbs = std::max(maxAbs, double(std::abs(frame.color[4 * p + c] - ref->second.color[4 * p + c])));
       }
       EXPECT_EQ(coverageDiffers, 0u) << file << " vs Mesh_PrimitiveMode_06.gltf (TRIANGLES)";
-      EXPECT_LE(maxAbs, kMaxAbs) << file << " vs Mesh_PrimitiveMode_06.gltf (TRIANGLES)";
+      EXPECT_LE(maxAbs, kSameMeshMaxAbs) << file << " vs Mesh_PrimitiveMode_06.gltf (TRIANGLES)";
     }
   }
   // Every expected failure was met (a renamed or removed file would otherwise leave a rule untested).

@@ -14,12 +14,17 @@ using namespace visbuf;
 
 namespace {
 
-// Visbuf vs forward (the secondary check): every channel within 2e-3 of the reference (4 half-float ulps at 1.0,
-// half an 8-bit step), mean below 5e-5, PSNR above 80 dB. Measured on lavapipe (2026-11): max 7.3e-4, PSNR 99.8-119 dB;
-// anything near the bound means the reconstruction diverged from the raster, not rounding.
-constexpr double kMaxAbs = 2e-3;
+// Visbuf vs forward (the secondary check). The forward path's attributes are the rasteriser's interpolation, whose
+// precision Vulkan leaves to the device: on the NVIDIA H200 (driver 580) the judge finds the forward path off the
+// exact colour by up to 8.0e-2 at 71 of the field's 42,667 pixels (specular highlights on thin knot-tube triangles),
+// and by 5.9e-3 / 2.8e-3 in the other scenes, while visbuf stays within 5.8e-4 of it everywhere. So this check
+// bounds how much the paths differ on average and how often visibly, not the largest pixel: mean below 5e-5, at
+// most 0.5 % of the covered pixels more than 1/255 apart, PSNR above 65 dB. Measured: lavapipe max 7.3e-4, PSNR
+// 99.8-119 dB, no pixel over 1/255; H200 field mean 3.0e-5, 66 pixels (0.15 %), 70.9 dB. A reconstruction that
+// diverged from the raster fails the mean and the share.
 constexpr double kMeanAbs = 5e-5;
-constexpr double kMinPsnr = 80.0;
+constexpr double kMaxDifferingShare = 5e-3;
+constexpr double kMinPsnr = 65.0;
 
 // Against the exact colour. Its floor is the conversion to rgba16f, which Vulkan lets a device do by rounding to
 // nearest or towards zero: lavapipe rounds towards zero (99.8% of both paths' channels lie below the exact colour),
@@ -28,13 +33,14 @@ constexpr double kMinPsnr = 80.0;
 // 5.8e-4 / 1.06e-3 (beyond the spacing: 2.8e-4 / 5.7e-4), mean 4.5e-5 / 4.6e-5, 83.8 / 83.6 dB; city grazing
 // 4.8e-4 / 4.7e-4 (2.7e-5 / 2.5e-5), 7.2e-5 / 7.2e-5, 81.0 / 81.0 dB; close-up 4.8e-4 / 4.9e-4 (0 / 2e-6), 2.7e-5 /
 // 2.7e-5, 85.9 / 85.9 dB. The visbuf bound is one spacing at 1.0 (anything above is reconstruction error, not
-// rounding, for colours below 2); the forward path gets the visbuf-vs-forward bound, since lavapipe's hardware
-// interpolation already spends 1.06e-3 on one field pixel. Mean and PSNR: twice the largest measured mean, 6 dB
-// under the rounding floor.
+// rounding, for colours below 2), and it holds on the H200 too (5.8e-4 / 4.8e-4 / 4.8e-4). Mean and PSNR: twice the
+// largest measured mean, 6 dB under the rounding floor. The forward path, the device's interpolation (above), gets
+// no bound on its largest error: mean below 1.5e-4, PSNR above 60 dB, at most 0.5 % of the judged pixels over
+// 1/255 (H200 field: 1.21e-4, 66.0 dB, 0.17 %).
 constexpr double kExactMaxAbsVisbuf = 1e-3;
-constexpr double kExactMaxAbsForward = 2e-3;
 constexpr double kExactMeanAbs = 1.5e-4;
 constexpr double kExactMinPsnr = 75.0;
+constexpr double kExactMinPsnrForward = 60.0;
 
 void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint32_t h, const std::string& name) {
   gpu::Device& dev = test::testDevice();
@@ -72,8 +78,8 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
   std::printf("%s %ux%u: visbuf vs forward: max %.5f, mean %.6f, PSNR %.1f dB, %zu pixels > 1/255\n", name.c_str(),
               w, h, e.maxAbs, e.meanAbs, e.psnr, e.differing);
   EXPECT_LT(background, size_t(w) * h) << "the frame must show geometry";
-  EXPECT_LE(e.maxAbs, kMaxAbs);
   EXPECT_LE(e.meanAbs, kMeanAbs);
+  EXPECT_LE(double(e.differing), kMaxDifferingShare * double(covered));
   EXPECT_GE(e.psnr, kMinPsnr);
   // Both paths against the double-precision exact colour (pixel_judge.h).
   auto j = judgePixels(scene, cam, *vis, *fwd);
@@ -89,11 +95,11 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
               j->forwardMaxMargin, j->ties);
   EXPECT_EQ(j->judged, j->covered) << "these scenes are untextured and static: every covered pixel is judged";
   EXPECT_LE(j->visbuf.maxAbs, kExactMaxAbsVisbuf);
-  EXPECT_LE(j->forward.maxAbs, kExactMaxAbsForward);
-  for (const PathAccuracy* a : {&j->visbuf, &j->forward}) {
-    EXPECT_LE(a->meanAbs, kExactMeanAbs);
-    EXPECT_GE(a->psnr, kExactMinPsnr);
-  }
+  EXPECT_LE(j->visbuf.meanAbs, kExactMeanAbs);
+  EXPECT_GE(j->visbuf.psnr, kExactMinPsnr);
+  EXPECT_LE(j->forward.meanAbs, kExactMeanAbs);
+  EXPECT_GE(j->forward.psnr, kExactMinPsnrForward);
+  EXPECT_LE(double(j->forward.over8Bit), kMaxDifferingShare * double(j->judged));
   test::saveOnFailure(name, *vis, *fwd);
   if (::testing::Test::HasFailure()) (void)writeColorImage(name + ".judge.png", w, h, j->heatMap);
   EXPECT_NO_VALIDATION_MESSAGES(before);
