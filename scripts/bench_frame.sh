@@ -7,16 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=cpu frames=3 out=bench-out
-while (($#)); do
-  case "$1" in
-    --device) device=$2; shift 2 ;;
-    --frames) frames=$2; shift 2 ;;
-    *) out=$1; shift ;;
-  esac
-done
-bin=${VISBUF_BIN:-build/tools/visbuf}
+source scripts/bench_args.sh "$@"
 kitten=${VISBUF_KITTEN:-assets/Kitten/kitten.glb}
-mkdir -p "$out"
 run() {
   local name=$1; shift
   echo "== $name: visbuf render --device $device --frames $frames $*" | tee "$out/$name.txt"

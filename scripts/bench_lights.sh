@@ -9,17 +9,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=cpu frames=5 out=bench-lights counts="1000 10000"
-while (($#)); do
-  case "$1" in
-    --device) device=$2; shift 2 ;;
-    --frames) frames=$2; shift 2 ;;
-    --counts) counts=$2; shift 2 ;;
-    *) out=$1; shift ;;
-  esac
-done
-bin=${VISBUF_BIN:-build/tools/visbuf}
+source scripts/bench_args.sh "$@"
 refmax=${VISBUF_REF_FULL_MAX:-10000}
-mkdir -p "$out"
 scene=(--device "$device" -o "" --scene field --objects 10000 --camera-pos 0,0,250)
 "$bin" render "${scene[@]}" --size 1920x1080 --frames "$frames" --no-sun --json "$out/time_none.json" > "$out/time_none.txt"
 "$bin" render "${scene[@]}" --size 1920x1080 --frames "$frames" --json "$out/time_sun.json" > "$out/time_sun.txt"

@@ -7,17 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=cpu frames=5 out=bench-peer counts="10000 100000 1000000"
-while (($#)); do
-  case "$1" in
-    --device) device=$2; shift 2 ;;
-    --frames) frames=$2; shift 2 ;;
-    --counts) counts=$2; shift 2 ;;
-    *) out=$1; shift ;;
-  esac
-done
-bin=${VISBUF_BIN:-build/tools/visbuf}
+source scripts/bench_args.sh "$@"
 kitten=${VISBUF_KITTEN:-assets/Kitten/kitten.glb}
-mkdir -p "$out"
 for n in $counts; do
   reference=()
   if ((n <= 100000)); then reference=(--reference-full); fi

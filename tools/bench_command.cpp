@@ -171,8 +171,6 @@ std::vector<Camera> benchCameraPath(const Scene& scene, uint32_t warmup, uint32_
   return path;
 }
 
-namespace {
-
 // ---- statistics -----------------------------------------------------------------------------------------
 
 double median(std::vector<double> v) {
@@ -181,6 +179,9 @@ double median(std::vector<double> v) {
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
+
+namespace {
+
 double p95(std::vector<double> v) {  // nearest rank
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());

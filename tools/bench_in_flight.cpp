@@ -116,11 +116,6 @@ Result<Run> runFrames(gpu::Device& device, const Scene& scene, const RendererCon
   return run;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
 }  // namespace
 
 int runInFlightBench(const BenchCommand& c, gpu::Device& device, const std::vector<Scene>& scenes,

@@ -18,6 +18,7 @@ int benchFail(const Error& e);
 // The bench's camera path: cameras for frames -warmup .. frames-1, a function of frame / frames only.
 std::vector<Camera> benchCameraPath(const Scene& scene, uint32_t warmup, uint32_t frames);
 std::string utcNow();
+double median(std::vector<double> v);  // 0 for none
 
 // Frames in flight against renderFrame for each scene and each of c.inFlight; writes bench.json and bench.md to
 // `out`. Exit code 0 or 1.
