@@ -19,7 +19,7 @@ void main() {
   uint64_t v = swVisibility[uint(p.y) * uint(frame.viewport.x) + uint(p.x)];
   uint depthBits = uint(v >> 32);
   if (depthBits == 0u) discard;
-  uint payload = uint(v & 0xffffffffUL);
+  uint payload = ~uint(v & 0xffffffffUL);  // (stored complemented: equal depths keep the lowest payload)
   gl_FragDepth = uintBitsToFloat(depthBits);
 #if WIDE_IDS
   outId = uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));

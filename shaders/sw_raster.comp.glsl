@@ -4,8 +4,9 @@
 // geometry path is serial and costs ~130 ns per triangle, while compute runs on every core). Each subgroup takes
 // one draw at a time, each lane a triangle: the same clip positions as the visibility vertex shader
 // (clipPosition), the viewport transform, vertices snapped to 1/256 pixel, the draw list's face culling, pixel
-// centres tested with integer edge functions under the top-left rule, depth interpolated in screen space, and the
-// nearest fragment kept per pixel by a 64-bit atomicMax of (reverse-Z depth bits << 32 | payload). The merge
+// centres tested with integer edge functions under the top-left rule, depth from the plane of the unsnapped
+// positions, and the nearest fragment kept per pixel by a 64-bit atomicMax of (reverse-Z depth bits << 32 |
+// complemented payload). The merge
 // (sw_merge.frag) then depth-tests those against the hardware raster's depth and writes the IDs and depth, so every
 // later pass reads one visibility target.
 #extension GL_GOOGLE_include_directive : require
@@ -45,13 +46,15 @@ bool clearlyBackFacing(DrawCommand d, vec3 eye, float reach, uint t) {
 }
 #endif
 
-// Window position in 1/256 pixel, relative to the pixel-centre grid (pixel (i, j)'s centre is (256 i, 256 j)).
-ivec2 snapToGrid(vec4 clip) {
+// Window position in pixels relative to the pixel-centre grid (pixel (i, j)'s centre is (i, j)), unsnapped.
+vec2 gridPosition(vec4 clip) {
   precise vec2 ndc = clip.xy / clip.w;  // (as the hardware's viewport transform: a division, not 1/w)
   precise vec2 half_ = 0.5 * frame.viewport.xy;
   precise vec2 window = ndc * half_ + half_;
-  return ivec2(roundEven((window - 0.5) * 256.0));
+  return window - 0.5;
 }
+// The same in 1/256 pixel (pixel (i, j)'s centre is (256 i, 256 j)): what coverage is decided on.
+ivec2 snapToGrid(vec2 grid) { return ivec2(roundEven(grid * 256.0)); }
 
 // Edge function of u -> v at p (positive inside a triangle of positive area).
 int edge(ivec2 u, ivec2 v, ivec2 p) { return (v.x - u.x) * (p.y - u.y) - (v.y - u.y) * (p.x - u.x); }
@@ -70,7 +73,8 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 2u) + uint(d.vertexOffset)));
   // The cull pass routes only objects wholly beyond the near plane; a frozen frame's camera may have moved since.
   if (!(c0.w >= frame.nearPlane && c1.w >= frame.nearPlane && c2.w >= frame.nearPlane)) return 1u;
-  ivec2 p0 = snapToGrid(c0), p1 = snapToGrid(c1), p2 = snapToGrid(c2);
+  vec2 g0 = gridPosition(c0), g1 = gridPosition(c1), g2 = gridPosition(c2);
+  ivec2 p0 = snapToGrid(g0), p1 = snapToGrid(g1), p2 = snapToGrid(g2);
   ivec2 lo = min(p0, min(p1, p2)), hi = max(p0, max(p1, p2));
   ivec2 pxLo = max((lo + 255) >> 8, ivec2(0));
   ivec2 pxHi = min(hi >> 8, ivec2(frame.viewport.xy) - 1);
@@ -83,19 +87,32 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   if (area == 0) return 0u;
   bool keep = list == DRAW_LIST_OPAQUE_DOUBLE_SIDED || (list == DRAW_LIST_OPAQUE_FLIPPED ? area > 0 : area < 0);
   if (!keep) return 0u;
+  // Depth: the plane of z/w through the unsnapped window positions, evaluated at the pixel centre -- the exact
+  // depth of the surface there up to float rounding, as the hardware interpolates it. (Interpolating with the
+  // snapped positions' edge functions tilted the plane by up to 1/512 pixel of its gradient: on grazing, nearly
+  // coincident surfaces of animated instances the micro-raster then kept the farther one.) A triangle too thin for
+  // a float plane keeps a constant depth: its nearest vertex's.
   float z0 = c0.z / c0.w, z1 = c1.z / c1.w, z2 = c2.z / c2.w;
+  precise vec2 e1 = g1 - g0, e2 = g2 - g0;
+  precise float det = e1.x * e2.y - e1.y * e2.x;
+  vec2 dz = vec2(0.0);
+  float zAt0 = max(z0, max(z1, z2));  // reverse-Z: nearest
+  if (det != 0.0 && (det > 0.0) == (area > 0)) {
+    dz = vec2(z1 - z0, z2 - z0);
+    dz = vec2(dz.x * e2.y - dz.y * e1.y, dz.y * e1.x - dz.x * e2.x) / det;
+    zAt0 = z0;
+  }
   if (area < 0) {  // same winding for the coverage test
     ivec2 s = b;
     b = c;
     c = s;
-    float zs = z1;
-    z1 = z2;
-    z2 = zs;
     area = -area;
   }
   int bias0 = edgeBias(b, c), bias1 = edgeBias(c, a), bias2 = edgeBias(a, b);
-  float invArea = 1.0 / float(area);
   uint payload = frame.wideIds != 0u ? (slot << frame.swTriangleBits) | t : ((slot << frame.triangleBits) | t) + 1u;
+  // Equal depths keep the lowest payload, the first in draw order (lower slot, then lower triangle), as the
+  // hardware raster's depth test keeps the first fragment: atomicMax over the payload's complement.
+  uint rank = ~payload;
   uint width = uint(frame.viewport.x);
   // The box's pixel centres as one loop (on lavapipe a loop runs as often as its longest lane needs: one loop over
   // w * h candidates instead of rows times columns).
@@ -105,8 +122,8 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
     ivec2 p = px * 256 - p0;
     int w0 = edge(b, c, p), w1 = edge(c, a, p), w2 = edge(a, b, p);
     if (w0 + bias0 >= 0 && w1 + bias1 >= 0 && w2 + bias2 >= 0) {
-      float z = (float(w0) * z0 + float(w1) * z1 + float(w2) * z2) * invArea;
-      uint64_t packed = (uint64_t(floatBitsToUint(max(z, 0.0))) << 32) | uint64_t(payload);
+      float z = zAt0 + dot(dz, vec2(px) - g0);
+      uint64_t packed = (uint64_t(floatBitsToUint(max(z, 0.0))) << 32) | uint64_t(rank);
       uint i = uint(px.y) * width + uint(px.x);
 #if !SW_CPU
       if (packed > swVisibility[i]) atomicMax(swVisibility[i], packed);  // (a GPU's atomics cost more than a load)

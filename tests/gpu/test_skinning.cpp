@@ -9,6 +9,7 @@
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/asset/texture_bake.h"
 #include "../unit/test_assets.h"
+#include "cpu_skinning.h"
 #include "gpu_test_util.h"
 #include "visbuf/scene/animation.h"
 #include "visbuf/scene/generate.h"
@@ -24,51 +25,6 @@ Result<Scene> loadAsset(const std::string& rel) {
   if (!imported) return imported.error();
   return buildImportedScene(*imported);
 }
-
-// The scene at `time` with every skinned object replaced by a static copy of its mesh, morphed (morphVertex) and
-// skinned on the CPU in double precision (animation.h), placed by its placement; no animation data left. Shares
-// no code with the GPU path beyond the pose evaluation (clip sampling, joint matrices and morph weights).
-Scene cpuSkinned(const Scene& animated, double time) {
-  Scene s = animated;
-  s.nodes.clear();
-  s.skins.clear();
-  s.animations.clear();
-  s.skinnedObjects.clear();
-  for (const SkinnedObject& so : animated.skinnedObjects) {
-    const std::vector<glm::dmat4> joints = skinnedObjectJoints(animated, so, time);
-    const std::vector<double> weights =
-        so.morphNode >= 0 ? skinnedObjectMorphWeights(animated, so, time) : std::vector<double>();
-    const Object& o = animated.objects[so.object];
-    Mesh m = animated.meshes[o.mesh];
-    glm::dvec3 lo(INFINITY), hi(-INFINITY);
-    for (size_t v = 0; v < m.vertices.size(); ++v) {
-      gpu::Vertex& vert = m.vertices[v];
-      const MorphedVertex morphed = morphVertex(animated.meshes[o.mesh], uint32_t(v), weights);
-      const glm::dvec3 p = skinPosition(morphed.position, m.skinVertices[v], joints);
-      const glm::dvec3 n = skinNormal(morphed.normal, m.skinVertices[v], joints);
-      vert.px = float(p.x);
-      vert.py = float(p.y);
-      vert.pz = float(p.z);
-      vert.normal = octEncode(glm::vec3(n));
-      if (!m.tangents.empty() && m.tangents[v].w != 0.0f) {
-        const glm::dvec3 t = skinTangent(morphed.tangent, m.skinVertices[v], joints);
-        m.tangents[v] = glm::vec4(glm::vec3(t), m.tangents[v].w);
-      }
-      lo = glm::min(lo, p);
-      hi = glm::max(hi, p);
-    }
-    m.skinVertices.clear();
-    m.morphTargetCount = 0;
-    m.morphDeltas.clear();
-    m.morphWeights.clear();
-    m.boundsSphere = glm::vec4(glm::vec3(0.5 * (lo + hi)), float(0.5 * glm::length(hi - lo)) * 1.0001f);
-    s.objects[so.object].mesh = uint32_t(s.meshes.size());
-    s.objects[so.object].transform = so.placement;
-    s.meshes.push_back(std::move(m));
-  }
-  return s;
-}
-
 
 }  // namespace
 
@@ -104,7 +60,7 @@ void expectMatchesCpuSkinned(const std::string& a, const Scene* scene, std::init
       auto gpuFrame = (*r)->renderFrame(scene->defaultCamera, fo);
       ASSERT_TRUE(gpuFrame.ok()) << gpuFrame.error().message;
       EXPECT_TRUE(gpuFrame->stats.skinned);
-      const Scene reference = cpuSkinned(*scene, t);
+      const Scene reference = test::cpuSkinned(*scene, t);
       auto rr = Renderer::create(dev, reference, {.width = 256, .height = 256});
       ASSERT_TRUE(rr.ok()) << rr.error().message;
       auto refVisbuf = (*rr)->renderFrame(scene->defaultCamera, fo);
@@ -366,7 +322,7 @@ TEST(Skinning, PoolAcrossVertexWindowsMatchesCpuSkinning) {
   fo.animationTime = 0.8;
   auto f = (*r)->renderFrame(field->defaultCamera, fo);
   ASSERT_TRUE(f.ok());
-  const Scene reference = cpuSkinned(*field, 0.8);
+  const Scene reference = test::cpuSkinned(*field, 0.8);
   auto rr = Renderer::create(dev, reference, {.width = 200, .height = 120});
   ASSERT_TRUE(rr.ok());
   fo.path = RenderPath::Forward;
@@ -550,7 +506,7 @@ TEST(Skinning, NormalMappedSkinnedMeshMatchesCpuSkinning) {
   auto rPlain = Renderer::create(dev, plain, rc);
   ASSERT_TRUE(r.ok() && rPlain.ok()) << (r.ok() ? rPlain.error().message : r.error().message);
   for (double t : {0.8}) {  // one pose: every textured renderer costs seconds of shader compilation on lavapipe
-    const Scene reference = cpuSkinned(*man, t);
+    const Scene reference = test::cpuSkinned(*man, t);
     auto rr = Renderer::create(dev, reference, rc);
     ASSERT_TRUE(rr.ok()) << rr.error().message;
     for (RenderPath path : {RenderPath::Visbuf, RenderPath::Forward}) {
