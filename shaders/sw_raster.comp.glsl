@@ -4,10 +4,10 @@
 // geometry path is serial and costs ~130 ns per triangle, while compute runs on every core). Each subgroup takes
 // one draw at a time, each lane a triangle: the same clip positions as the visibility vertex shader
 // (clipPosition), the viewport transform, vertices snapped to 1/256 pixel, the draw list's face culling, pixel
-// centres tested with integer edge functions under the top-left rule, depth from the plane of the unsnapped
-// positions, and the nearest fragment kept per pixel by a 64-bit atomicMax of (reverse-Z depth bits << 32 |
-// complemented payload). The merge
-// (sw_merge.frag) then depth-tests those against the hardware raster's depth and writes the IDs and depth, so every
+// centres tested with integer edge functions under the top-left rule, depth from the plane of the positions the
+// device's hardware raster interpolates (lavapipe: unsnapped; a GPU: snapped), and the nearest fragment kept per
+// pixel by a 64-bit atomicMax of (reverse-Z depth bits << 32 | complemented payload). The merge (sw_merge.frag)
+// then depth-tests those against the hardware raster's depth and writes the IDs and depth, so every
 // later pass reads one visibility target.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_atomic_int64 : require
@@ -87,11 +87,17 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   if (area == 0) return 0u;
   bool keep = list == DRAW_LIST_OPAQUE_DOUBLE_SIDED || (list == DRAW_LIST_OPAQUE_FLIPPED ? area > 0 : area < 0);
   if (!keep) return 0u;
-  // Depth: the plane of z/w through the unsnapped window positions, evaluated at the pixel centre -- the exact
-  // depth of the surface there up to float rounding, as the hardware interpolates it. (Interpolating with the
-  // snapped positions' edge functions tilted the plane by up to 1/512 pixel of its gradient: on grazing, nearly
-  // coincident surfaces of animated instances the micro-raster then kept the farther one.) A triangle too thin for
-  // a float plane keeps a constant depth: its nearest vertex's.
+  // Depth: the plane of z/w through the window positions, evaluated at the pixel centre, as the device's hardware
+  // raster interpolates it, so that the two agree on which of two nearly coincident surfaces is nearer: llvmpipe
+  // takes the plane of the unsnapped positions (the exact depth up to float rounding), NVIDIA's raster that of the
+  // snapped ones. Measured against the hardware raster (SwRaster.MatchesHardwareRaster, 518,400 pixels): H100 1
+  // pixel with the snapped plane, 21 with the unsnapped one; lavapipe 6 with the unsnapped plane. A triangle too
+  // thin for a float plane keeps a constant depth: its nearest vertex's.
+#if !SW_CPU
+  g0 = vec2(p0) / 256.0;
+  g1 = vec2(p1) / 256.0;
+  g2 = vec2(p2) / 256.0;
+#endif
   float z0 = c0.z / c0.w, z1 = c1.z / c1.w, z2 = c2.z / c2.w;
   precise vec2 e1 = g1 - g0, e2 = g2 - g0;
   precise float det = e1.x * e2.y - e1.y * e2.x;

@@ -44,10 +44,11 @@ constexpr uint32_t kWidth = 160, kHeight = 120;
 constexpr double kPackMaxAbs = 1e-6;  // pack-loaded vs in-memory colour, per channel
 // visbuf vs forward: the Shading.* bounds (tests/gpu/test_shading.cpp: the forward path is the device's
 // interpolation, so the share of visibly differing pixels is bounded, not the largest difference; the H200 differs
-// by up to 6.6e-3 on CesiumMan's skin), and PSNR above 80 dB.
+// by up to 6.6e-3 on CesiumMan's skin), and PSNR above 80 dB on lavapipe, whose interpolation is exact to rgba16f
+// rounding, and above the Shading.* 65 dB on a GPU (H100: BrainStem 79.5 dB, max 5.9e-3).
 constexpr double kMeanAbs = 5e-5;
 constexpr double kMaxDifferingShare = 5e-3;  // of the covered pixels, more than 1/255 apart
-constexpr double kMinPsnr = 80.0;
+constexpr double kMinPsnrCpu = 80.0, kMinPsnrGpu = 65.0;
 constexpr double kSameMeshMaxAbs = 2e-3;  // one visbuf frame against another of the same mesh, files apart
 // Textured scenes: the shading pass picks mip levels from analytic derivatives, the forward reference from the
 // rasteriser's 2x2-quad differences (Materials.MipSelectionMatchesExactLevelOfDetail: visbuf within 0.014 levels of
@@ -177,7 +178,7 @@ size_t expectVisbufMatchesForward(const Frames& f, const std::string& name, bool
     EXPECT_LE(double(e.differing), kMaxDifferingShare * double(covered)) << name;
   }
   EXPECT_LE(e.meanAbs, textured ? kTexturedMeanAbs : kMeanAbs) << name;
-  EXPECT_GE(e.psnr, textured ? kTexturedMinPsnr : kMinPsnr) << name;
+  EXPECT_GE(e.psnr, textured ? kTexturedMinPsnr : test::testDevice().isCpu() ? kMinPsnrCpu : kMinPsnrGpu) << name;
   EXPECT_GT(covered, 0u) << name << ": the default camera must see the scene";
   return covered;
 }
