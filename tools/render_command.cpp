@@ -85,8 +85,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                   "also render the frame with both paths (visbuf and forward, same camera, culling and LOD rule), judge "
                   "every pixel against the exact colour computed in double precision on the CPU, print a summary "
                   "(and put it in the JSON) and write a heat map here (.png, .exr, .tif: red = the visbuf path's error, "
-                  "green = the forward path's, log scale 1e-5..1e-1; blue: not judged: skinned objects); "
-                  "not with --msaa, --path gbuffer, --moving, --churn or --freeze-culling");
+                  "green = the forward path's, log scale 1e-5..1e-1; blue: not judged: skinned objects); with --msaa "
+                  "N the exact colour is the mean of the exact colours at the N sample locations; "
+                  "not with --path gbuffer, --moving, --churn or --freeze-culling");
   sub->add_flag("--all-lights", c.allLights, "shade every pixel with every point light (no light cull pass)");
   sub->add_option("--msaa", c.msaa,
                   "samples per pixel: 1, 2 or 4 (the device's supported counts; visbuf: per-sample shading where a "
@@ -168,9 +169,11 @@ Result<nlohmann::json> judgeFrame(Renderer& renderer, const Scene& scene, const 
   Result<FrameResult> vis = renderer.renderFrame(camera, fo);
   if (!vis) return vis.error();
   fo.path = RenderPath::Forward;
+  fo.readIds = fo.msaa == 1;  // (a multisampled forward frame has no ID variant: the MSAA judge reads visbuf's)
   Result<FrameResult> fwd = renderer.renderFrame(camera, fo);
   if (!fwd) return fwd.error();
-  Result<PixelJudgement> j = judgePixels(scene, camera, *vis, *fwd, {.animationTime = time});
+  Result<PixelJudgement> j = fo.msaa > 1 ? judgeMsaaPixels(scene, camera, *vis, *fwd, fo.msaa, {.animationTime = time})
+                                         : judgePixels(scene, camera, *vis, *fwd, {.animationTime = time});
   if (!j) return j.error();
   if (Status s = writeColorImage(heatMapPath, j->width, j->height, j->heatMap); !s) return s.error();
   auto accuracy = [](const PathAccuracy& a) {
@@ -184,9 +187,11 @@ Result<nlohmann::json> judgeFrame(Renderer& renderer, const Scene& scene, const 
     std::printf("judge         %-7s vs exact: max %.2e (%.2e beyond rgba16f rounding), mean %.2e, PSNR %.1f dB, %zu "
                 "pixels > 1/255\n",
                 name, a->maxAbs, a->maxBeyondRounding, a->meanAbs, a->psnr, a->over8Bit);
-  std::printf("judge         %zu covered pixels, %zu judged (not judged: %zu skinned, %zu parallel rays); %zu show "
-              "different triangles in the two paths\n",
-              j->covered, j->judged, j->notJudgedSkinned, j->notJudgedParallel, j->coverageMismatch);
+  std::printf("judge         %zu covered pixels, %zu judged (not judged: %zu skinned, %zu parallel rays); %zu %s\n",
+              j->covered, j->judged, j->notJudgedSkinned, j->notJudgedParallel, j->coverageMismatch,
+              fo.msaa > 1 ? "edge pixels (samples showing different triangles; the exact colour: the mean over the "
+                            "sample locations)"
+                          : "show different triangles in the two paths");
   std::printf("judge         %zu judged pixels differ: visbuf closer at %zu (by %.1e mean, %.1e max), forward "
               "closer at %zu (by %.1e mean, %.1e max), %zu ties\n",
               j->differing, j->visbufCloser, j->visbufMargin, j->visbufMaxMargin, j->forwardCloser, j->forwardMargin,
@@ -224,7 +229,6 @@ int runRender(const RenderCommand& c) {
   if (c.freezeCulling && c.path == "forward") return usage("--freeze-culling needs --path visbuf or gbuffer");
   const bool moving = c.moving > 0.0 || c.churn > 0.0;
   if (!c.judge.empty()) {
-    if (c.msaa > 1) return usage("--judge compares one colour and one triangle per pixel: use it with --msaa 1");
     if (c.path == "gbuffer")
       return usage("--judge needs the triangle IDs of the visbuf and forward paths: not --path gbuffer");
     if (moving || c.freezeCulling)

@@ -205,19 +205,41 @@ void addError(PathAccuracy& a, double& sumAbs, double& sumSq, const float* path,
 
 float heat(double error) { return float(std::clamp((std::log10(std::max(error, 1e-30)) + 5.0) / 4.0, 0.0, 1.0)); }
 
-}  // namespace
+// The claim of a path that shows triangle `triangle` of object ID `id` (object + 1) at LOD `lod` at pixel (x, y),
+// with the hit of the ray `dir` on it.
+Result<Claim> makeClaim(const Scene& scene, const std::vector<glm::dmat4>& transforms, const Camera& camera,
+                        uint32_t id, uint32_t triangle, uint32_t lod, uint32_t x, uint32_t y, const glm::dvec3& dir) {
+  if (id > scene.objects.size())
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("judge: pixel ({}, {}) shows object ID {} of {}", x, y, id - 1, scene.objects.size()));
+  Claim c;
+  c.object = id - 1;
+  c.triangle = triangle;
+  c.lod = lod;
+  const Mesh& mesh = scene.meshes[scene.objects[c.object].mesh];
+  if (c.lod >= mesh.lods.size() || c.triangle >= mesh.triangleCount(c.lod))
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("judge: pixel ({}, {}) shows triangle {} of LOD {} of object {}: it has {}", x, y,
+                                 c.triangle, c.lod, c.object, c.lod < mesh.lods.size() ? mesh.triangleCount(c.lod) : 0u));
+  for (int k = 0; k < 3; ++k) {
+    c.index[k] = mesh.indices[mesh.lods[c.lod].firstIndex + 3 * c.triangle + uint32_t(k)];
+    const gpu::Vertex& v = mesh.vertices[c.index[k]];
+    c.v[k] = glm::dvec3(transforms[c.object] * glm::dvec4(v.px, v.py, v.pz, 1.0)) - camera.position;
+  }
+  if (auto hit = intersectTriangle(c.v, dir)) {
+    c.hit = true;
+    c.t = hit->first;
+    c.lambda = hit->second;
+  }
+  return c;
+}
 
-Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, const FrameResult& visbuf,
-                                   const FrameResult& forward, const JudgeOptions& options) {
-  const uint32_t w = visbuf.width, h = visbuf.height;
-  const size_t pixels = size_t(w) * h;
-  if (forward.width != w || forward.height != h)
-    return makeError(ErrorCode::InvalidArgument, fmt::format("judge: frames of different sizes ({}x{}, {}x{})", w, h,
-                                                             forward.width, forward.height));
-  for (const FrameResult* f : {&visbuf, &forward})
-    if (f->ids.size() != 2 * pixels || f->color.size() != 4 * pixels)
-      return makeError(ErrorCode::InvalidArgument,
-                       "judge: each frame needs single-sampled IDs and colour (readIds, readColor, msaa 1)");
+// What both judges check of their inputs, and the objects' transforms at the frame's animation time.
+Result<std::vector<glm::dmat4>> judgedTransforms(const Scene& scene, const FrameResult& visbuf,
+                                                 const FrameResult& forward, const JudgeOptions& options) {
+  if (forward.width != visbuf.width || forward.height != visbuf.height)
+    return makeError(ErrorCode::InvalidArgument, fmt::format("judge: frames of different sizes ({}x{}, {}x{})",
+                                                             visbuf.width, visbuf.height, forward.width, forward.height));
   for (const FrameResult* f : {&visbuf, &forward}) {
     const std::vector<uint32_t>& lods = f->stats.lodHistogram;
     if (f->drawnObjects.empty() && std::any_of(lods.begin() + std::min<size_t>(lods.size(), 1), lods.end(),
@@ -236,21 +258,84 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
     const std::vector<glm::dmat4> posed = rigidObjectTransforms(scene, options.animationTime);
     for (size_t i = 0; i < posed.size(); ++i) transforms[scene.rigidObjects[i].object] = posed[i];
   }
+  return transforms;
+}
+
+// Both paths' colour of one judged pixel against its exact colour: the accuracy sums, the heat map and the verdict.
+class PixelScorer {
+ public:
+  PixelScorer(PixelJudgement& j, double tieTolerance) : j_(j), tie_(tieTolerance) {}
+  void score(size_t i, const glm::dvec3& exact, const float* visbuf, const float* forward) {
+    float* out = &j_.heatMap[4 * i];
+    ++j_.judged;
+    double errV = 0.0, errF = 0.0;
+    addError(j_.visbuf, sumAbsV_, sumSqV_, visbuf, exact, errV);
+    addError(j_.forward, sumAbsF_, sumSqF_, forward, exact, errF);
+    out[0] = heat(errV);
+    out[1] = heat(errF);
+    if (std::equal(visbuf, visbuf + 3, forward)) return;
+    ++j_.differing;
+    const double margin = std::abs(errV - errF);
+    if (margin <= tie_) {
+      ++j_.ties;
+    } else if (errV < errF) {
+      ++j_.visbufCloser;
+      j_.visbufMargin += margin;
+      j_.visbufMaxMargin = std::max(j_.visbufMaxMargin, margin);
+    } else {
+      ++j_.forwardCloser;
+      j_.forwardMargin += margin;
+      j_.forwardMaxMargin = std::max(j_.forwardMaxMargin, margin);
+    }
+  }
+  void finish() {
+    if (j_.visbufCloser) j_.visbufMargin /= double(j_.visbufCloser);
+    if (j_.forwardCloser) j_.forwardMargin /= double(j_.forwardCloser);
+    const double samples = 3.0 * double(std::max<size_t>(j_.judged, 1));
+    for (auto [a, sumAbs, sumSq] :
+         {std::tuple{&j_.visbuf, sumAbsV_, sumSqV_}, std::tuple{&j_.forward, sumAbsF_, sumSqF_}}) {
+      a->meanAbs = sumAbs / samples;
+      a->psnr = sumSq > 0.0 ? 10.0 * std::log10(samples / sumSq) : INFINITY;
+    }
+  }
+
+ private:
+  PixelJudgement& j_;
+  double tie_;
+  double sumAbsV_ = 0.0, sumSqV_ = 0.0, sumAbsF_ = 0.0, sumSqF_ = 0.0;
+};
+
+PixelJudgement emptyJudgement(uint32_t w, uint32_t h) {
+  PixelJudgement j;
+  j.width = w;
+  j.height = h;
+  j.heatMap.assign(4 * size_t(w) * h, 0.0f);
+  for (size_t i = 3; i < j.heatMap.size(); i += 4) j.heatMap[i] = 1.0f;
+  return j;
+}
+
+}  // namespace
+
+Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, const FrameResult& visbuf,
+                                   const FrameResult& forward, const JudgeOptions& options) {
+  const uint32_t w = visbuf.width, h = visbuf.height;
+  const size_t pixels = size_t(w) * h;
+  for (const FrameResult* f : {&visbuf, &forward})
+    if (f->ids.size() != 2 * pixels || f->color.size() != 4 * pixels)
+      return makeError(ErrorCode::InvalidArgument,
+                       "judge: each frame needs single-sampled IDs and colour (readIds, readColor, msaa 1)");
+  Result<std::vector<glm::dmat4>> transforms = judgedTransforms(scene, visbuf, forward, options);
+  if (!transforms) return transforms.error();
   std::vector<uint8_t> skinned(scene.objects.size(), 0);
   for (const SkinnedObject& so : scene.skinnedObjects) skinned[so.object] = 1;
   const std::vector<uint32_t> lodsV = drawnLods(scene, visbuf), lodsF = drawnLods(scene, forward);
   const FrameMath math = computeFrameMath(camera, w, h);
   TextureReference textures(scene);
 
-  PixelJudgement j;
-  j.width = w;
-  j.height = h;
-  j.heatMap.assign(4 * pixels, 0.0f);
-  double sumAbsV = 0.0, sumSqV = 0.0, sumAbsF = 0.0, sumSqF = 0.0;
+  PixelJudgement j = emptyJudgement(w, h);
+  PixelScorer scorer(j, options.tieTolerance);
   const glm::dvec3 background(kBackgroundColor[0], kBackgroundColor[1], kBackgroundColor[2]);
   for (size_t i = 0; i < pixels; ++i) {
-    float* out = &j.heatMap[4 * i];
-    out[3] = 1.0f;
     const uint32_t idV = visbuf.ids[2 * i], idF = forward.ids[2 * i];
     if (idV == 0 && idF == 0) continue;
     ++j.covered;
@@ -263,32 +348,12 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
       const FrameResult& f = p == 0 ? visbuf : forward;
       const uint32_t id = f.ids[2 * i];
       if (id == 0) continue;
-      if (id > scene.objects.size())
-        return makeError(ErrorCode::InvalidArgument, fmt::format("judge: pixel ({}, {}) shows object ID {} of {}", x,
-                                                                 y, id - 1, scene.objects.size()));
-      Claim c;
-      c.object = id - 1;
-      c.triangle = f.ids[2 * i + 1];
-      c.lod = (p == 0 ? lodsV : lodsF)[c.object];
-      if (count == 1 && claims[0].object == c.object && claims[0].triangle == c.triangle && claims[0].lod == c.lod)
+      const uint32_t lod = id <= scene.objects.size() ? (p == 0 ? lodsV : lodsF)[id - 1] : 0u;
+      if (count == 1 && claims[0].object == id - 1 && claims[0].triangle == f.ids[2 * i + 1] && claims[0].lod == lod)
         continue;  // the same claim
-      const Mesh& mesh = scene.meshes[scene.objects[c.object].mesh];
-      if (c.lod >= mesh.lods.size() || c.triangle >= mesh.triangleCount(c.lod))
-        return makeError(ErrorCode::InvalidArgument,
-                         fmt::format("judge: pixel ({}, {}) shows triangle {} of LOD {} of object {}: it has {}", x, y,
-                                     c.triangle, c.lod, c.object,
-                                     c.lod < mesh.lods.size() ? mesh.triangleCount(c.lod) : 0u));
-      for (int k = 0; k < 3; ++k) {
-        c.index[k] = mesh.indices[mesh.lods[c.lod].firstIndex + 3 * c.triangle + uint32_t(k)];
-        const gpu::Vertex& v = mesh.vertices[c.index[k]];
-        c.v[k] = glm::dvec3(transforms[c.object] * glm::dvec4(v.px, v.py, v.pz, 1.0)) - camera.position;
-      }
-      if (auto hit = intersectTriangle(c.v, dir)) {
-        c.hit = true;
-        c.t = hit->first;
-        c.lambda = hit->second;
-      }
-      claims[count++] = c;
+      Result<Claim> c = makeClaim(scene, *transforms, camera, id, f.ids[2 * i + 1], lod, x, y, dir);
+      if (!c) return c.error();
+      claims[count++] = *c;
     }
     const bool agree = idV == idF && visbuf.ids[2 * i + 1] == forward.ids[2 * i + 1] && count == 1;
     // What the pixel shows: the one claim; where the paths disagree, the claim the ray enters first, else (a ray
@@ -309,42 +374,86 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
       } else if (!truth->hit) {
         ++j.notJudgedParallel;
       } else {
-        exact = exactColor(scene, camera, math, textures, transforms[truth->object], *truth, x + 0.5, y + 0.5);
+        exact = exactColor(scene, camera, math, textures, (*transforms)[truth->object], *truth, x + 0.5, y + 0.5);
         truth = nullptr;  // judged
       }
       if (truth) {
-        out[2] = 0.5f;
+        j.heatMap[4 * i + 2] = 0.5f;
         continue;
       }
     }
-    ++j.judged;
-    double errV = 0.0, errF = 0.0;
-    addError(j.visbuf, sumAbsV, sumSqV, &visbuf.color[4 * i], exact, errV);
-    addError(j.forward, sumAbsF, sumSqF, &forward.color[4 * i], exact, errF);
-    out[0] = heat(errV);
-    out[1] = heat(errF);
-    if (std::equal(&visbuf.color[4 * i], &visbuf.color[4 * i + 3], &forward.color[4 * i])) continue;
-    ++j.differing;
-    const double margin = std::abs(errV - errF);
-    if (margin <= options.tieTolerance) {
-      ++j.ties;
-    } else if (errV < errF) {
-      ++j.visbufCloser;
-      j.visbufMargin += margin;
-      j.visbufMaxMargin = std::max(j.visbufMaxMargin, margin);
-    } else {
-      ++j.forwardCloser;
-      j.forwardMargin += margin;
-      j.forwardMaxMargin = std::max(j.forwardMaxMargin, margin);
+    scorer.score(i, exact, &visbuf.color[4 * i], &forward.color[4 * i]);
+  }
+  scorer.finish();
+  return j;
+}
+
+Result<PixelJudgement> judgeMsaaPixels(const Scene& scene, const Camera& camera, const FrameResult& visbuf,
+                                       const FrameResult& forward, uint32_t samples, const JudgeOptions& options) {
+  const uint32_t w = visbuf.width, h = visbuf.height;
+  const size_t pixels = size_t(w) * h;
+  if (samples != 2 && samples != 4)
+    return makeError(ErrorCode::InvalidArgument, fmt::format("judge: {} samples (2 or 4)", samples));
+  if (visbuf.ids.size() != 2 * pixels * samples || visbuf.color.size() != 4 * pixels ||
+      forward.color.size() != 4 * pixels)
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("judge: the visbuf frame needs {}-sample IDs and colour (readIds, readColor, msaa "
+                                 "{}), the forward frame its resolved colour", samples, samples));
+  Result<std::vector<glm::dmat4>> transforms = judgedTransforms(scene, visbuf, forward, options);
+  if (!transforms) return transforms.error();
+  std::vector<uint8_t> skinned(scene.objects.size(), 0);
+  for (const SkinnedObject& so : scene.skinnedObjects) skinned[so.object] = 1;
+  const std::vector<uint32_t> lods = drawnLods(scene, visbuf);
+  const FrameMath math = computeFrameMath(camera, w, h);
+  TextureReference textures(scene);
+  // Vulkan's standard sample locations (msaa_samples.glsl), pixel units from the top-left corner.
+  static const glm::dvec2 kTwo[2] = {{0.75, 0.75}, {0.25, 0.25}};
+  static const glm::dvec2 kFour[4] = {{0.375, 0.125}, {0.875, 0.375}, {0.125, 0.625}, {0.625, 0.875}};
+  const glm::dvec2* at = samples == 2 ? kTwo : kFour;
+
+  PixelJudgement j = emptyJudgement(w, h);
+  PixelScorer scorer(j, options.tieTolerance);
+  const glm::dvec3 background(kBackgroundColor[0], kBackgroundColor[1], kBackgroundColor[2]);
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint32_t* ids = &visbuf.ids[2 * i * samples];
+    bool any = false, agree = true;
+    for (uint32_t s = 0; s < samples; ++s) {
+      any |= ids[2 * s] != 0;
+      agree &= ids[2 * s] == ids[0] && ids[2 * s + 1] == ids[1];
     }
+    if (!any) continue;
+    ++j.covered;
+    j.coverageMismatch += !agree;  // here: pixels whose samples show different triangles (an edge)
+    const uint32_t x = uint32_t(i % w), y = uint32_t(i / w);
+    glm::dvec3 exact(0.0);
+    bool judged = true;
+    for (uint32_t s = 0; s < samples && judged; ++s) {
+      if (ids[2 * s] == 0) {
+        exact += background;
+        continue;
+      }
+      const glm::dvec2 p = glm::dvec2(x, y) + at[s];
+      const uint32_t lod = ids[2 * s] <= scene.objects.size() ? lods[ids[2 * s] - 1] : 0u;
+      Result<Claim> c = makeClaim(scene, *transforms, camera, ids[2 * s], ids[2 * s + 1], lod, x, y,
+                                  pixelRay(math, p.x, p.y));
+      if (!c) return c.error();
+      if (skinned[c->object]) {
+        ++j.notJudgedSkinned;
+        judged = false;
+      } else if (!c->hit) {
+        ++j.notJudgedParallel;
+        judged = false;
+      } else {
+        exact += exactColor(scene, camera, math, textures, (*transforms)[c->object], *c, p.x, p.y);
+      }
+    }
+    if (!judged) {
+      j.heatMap[4 * i + 2] = 0.5f;
+      continue;
+    }
+    scorer.score(i, exact / double(samples), &visbuf.color[4 * i], &forward.color[4 * i]);
   }
-  if (j.visbufCloser) j.visbufMargin /= double(j.visbufCloser);
-  if (j.forwardCloser) j.forwardMargin /= double(j.forwardCloser);
-  const double samples = 3.0 * double(std::max<size_t>(j.judged, 1));
-  for (auto [a, sumAbs, sumSq] : {std::tuple{&j.visbuf, sumAbsV, sumSqV}, std::tuple{&j.forward, sumAbsF, sumSqF}}) {
-    a->meanAbs = sumAbs / samples;
-    a->psnr = sumSq > 0.0 ? 10.0 * std::log10(samples / sumSq) : INFINITY;
-  }
+  scorer.finish();
   return j;
 }
 

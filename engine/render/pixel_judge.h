@@ -87,4 +87,13 @@ struct PixelJudgement {
 Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, const FrameResult& visbuf,
                                    const FrameResult& forward, const JudgeOptions& options = {});
 
+// Judges a multisampled frame: `visbuf` rendered with `samples` (2 or 4) per pixel, readIds (one ID per sample)
+// and readColor; `forward` the forward path's resolved colour (readColor) of the same scene, camera, size and
+// samples. The exact colour of a pixel is what a resolve of exact samples gives: the mean over its standard sample
+// locations of the exact colour, at that location, of the triangle the visbuf sample shows (the background where it
+// shows nothing). Both resolved colours are measured against it; coverageMismatch counts the pixels whose samples
+// show different triangles (the edges). The checks and errors of judgePixels, for the visbuf frame's IDs.
+Result<PixelJudgement> judgeMsaaPixels(const Scene& scene, const Camera& camera, const FrameResult& visbuf,
+                                       const FrameResult& forward, uint32_t samples, const JudgeOptions& options = {});
+
 }  // namespace visbuf
