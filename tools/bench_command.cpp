@@ -529,8 +529,8 @@ int runBench(const BenchCommand& c) {
       row.reference = info.reference;
       row.idBits = k.path != RenderPath::Visbuf ? "-" : rk.idEncoding().wide ? "64" : "32";
       if (k.path == RenderPath::Visbuf) {
-        row.shading = shadingModeName(measured.back().shading);
-        row.raster = measured.back().swRaster ? "hw+sw" : "hw";
+        row.shading = shadingModeName(measured.back().shade.mode);
+        row.raster = measured.back().sw.on ? "hw+sw" : "hw";
       }
       std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
       std::vector<std::string> passNames;
@@ -540,15 +540,15 @@ int runBench(const BenchCommand& c) {
         cpu.push_back(s.cpuRecordMs);
         wall.push_back(s.wallMs);
         tris.push_back(double(s.trianglesDrawn));
-        drawn.push_back(double(s.drawsRendered));
-        for (const auto& [name, ms] : s.passMs)
+        drawn.push_back(double(s.cull.drawsRendered));
+        for (const auto& [name, ms] : s.graph.passMs)
           if (std::find(passNames.begin(), passNames.end(), name) == passNames.end()) passNames.push_back(name);
       }
       for (const std::string& name : passNames) {  // a pass a frame did not run (a skipped pyramid) took 0 ms
         std::vector<double> v;
         for (const FrameStats& s : measured) {
           double ms = 0.0;
-          for (const auto& [n, t] : s.passMs)
+          for (const auto& [n, t] : s.graph.passMs)
             if (n == name) ms += t;
           v.push_back(ms);
         }
@@ -564,14 +564,15 @@ int runBench(const BenchCommand& c) {
       row.drawnMedian = median(drawn);
       {
         std::vector<double> present, pairs;
-        for (const FrameStats& s : measured) present.push_back(s.materialsPresent), pairs.push_back(s.classifiedTiles);
+        for (const FrameStats& s : measured)
+          present.push_back(s.shade.materialsPresent), pairs.push_back(s.shade.classifiedTiles);
         row.materialsPresent = median(present);
         row.classifiedTiles = median(pairs);
       }
       row.sceneBytes = measured.back().sceneBytes;
       row.targetBytesPerPixel = measured.back().targetBytesPerPixel;
       std::vector<double> perSample;
-      for (const FrameStats& s : measured) perSample.push_back(double(s.perSamplePixels));
+      for (const FrameStats& s : measured) perSample.push_back(double(s.shade.perSamplePixels));
       row.perSamplePixels = median(perSample);
       // PSNR over all measured frames = that of their mean squared error; worst = lowest frame.
       double mseSum = 0.0;

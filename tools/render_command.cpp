@@ -371,10 +371,10 @@ int runRender(const RenderCommand& c) {
         std::sort(v.begin(), v.end());
         return v[v.size() / 2];
       };
-      for (size_t p = 0; p < stats.passMs.size(); ++p) {
+      for (size_t p = 0; p < stats.graph.passMs.size(); ++p) {
         std::vector<double> v;
-        for (size_t r = 1; r < runs.size(); ++r) v.push_back(runs[r].passMs[p].second);
-        stats.passMs[p].second = median(v);
+        for (size_t r = 1; r < runs.size(); ++r) v.push_back(runs[r].graph.passMs[p].second);
+        stats.graph.passMs[p].second = median(v);
       }
       std::vector<double> g, cpu, wall;
       for (size_t r = 1; r < runs.size(); ++r) {
@@ -500,7 +500,7 @@ int runRender(const RenderCommand& c) {
     std::fprintf(stderr, "visbuf: %u validation message(s)\n", (*device)->validationMessages());
     return 3;
   }
-  if (stats.drawOverflow > 0) std::fprintf(stderr, "visbuf: warning: draw capacity overflow (%u dropped)\n", stats.drawOverflow);
+  if (stats.cull.drawOverflow > 0) std::fprintf(stderr, "visbuf: warning: draw capacity overflow (%u dropped)\n", stats.cull.drawOverflow);
   return 0;
 }
 

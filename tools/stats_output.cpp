@@ -15,58 +15,58 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("device        {}\n", s.device);
   out += fmt::format("path          {}  {}x{}\n", renderPathName(s.path), s.width, s.height);
   out += fmt::format("objects       {} tested, {} frustum-culled, {} occluded, {} sub-pixel, {} drawn ({} early + {} late)\n",
-                     s.objectsTested, s.frustumCulled, s.occlusionCulled, s.subpixelCulled, s.drawsRendered,
-                     s.drawsEarly, s.drawsLate);
-  if (s.refineTested)
+                     s.cull.objectsTested, s.cull.frustumCulled, s.cull.occlusionCulled, s.cull.subpixelCulled, s.cull.drawsRendered,
+                     s.cull.drawsEarly, s.cull.drawsLate);
+  if (s.cull.refineTested)
     out += fmt::format("refinement    {} objects tested again at a finer pyramid level, {} of them occluded there\n",
-                       s.refineTested, s.refineOccluded);
+                       s.cull.refineTested, s.cull.refineOccluded);
   out += s.coveredPixels > 0
              ? fmt::format("triangles     {} drawn; {} covered pixels ({:.1f} %): {:.2f} triangles per covered pixel\n",
                            s.trianglesDrawn, s.coveredPixels, 100.0 * s.coveredPixels / (double(s.width) * s.height),
                            double(s.trianglesDrawn) / s.coveredPixels)
              : fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
-  if (s.swRaster)
-    out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.swDraws,
-                       s.swTriangles, s.swOversize);
-  if (s.transparentDraws)
-    out += fmt::format("transparent   {} objects, {} triangles (sorted back to front)\n", s.transparentDraws,
-                       s.transparentTriangles);
+  if (s.sw.on)
+    out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.sw.draws,
+                       s.sw.triangles, s.sw.oversize);
+  if (s.transparent.draws)
+    out += fmt::format("transparent   {} objects, {} triangles (sorted back to front)\n", s.transparent.draws,
+                       s.transparent.triangles);
   std::string lods;
-  for (size_t i = 0; i < s.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.lodHistogram[i]);
+  for (size_t i = 0; i < s.cull.lodHistogram.size(); ++i) lods += fmt::format("{}{}", i ? " " : "", s.cull.lodHistogram[i]);
   out += fmt::format("lod histogram [{}]\n", lods);
   if (s.path != RenderPath::Forward) {
-    if (s.cullingFrozen) out += "culling       FROZEN: draw lists of an earlier frame\n";
-    out += fmt::format("pyramid       {}\n", s.pyramidLevels  ? fmt::format("{} levels", s.pyramidLevels)
-                                            : s.pyramidSkipped ? std::string("skipped (the last one hid nothing)")
+    if (s.cull.cullingFrozen) out += "culling       FROZEN: draw lists of an earlier frame\n";
+    out += fmt::format("pyramid       {}\n", s.pyramid.levels  ? fmt::format("{} levels", s.pyramid.levels)
+                                            : s.pyramid.skipped ? std::string("skipped (the last one hid nothing)")
                                                                : std::string("not built"));
     if (s.path == RenderPath::Visbuf) out += fmt::format("ids           {}\n", s.ids.describe());
-    out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.drawsRendered, s.drawCapacity,
-                       s.drawOverflow, s.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
+    out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.cull.drawsRendered, s.cull.drawCapacity,
+                       s.cull.drawOverflow, s.cull.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");
   }
-  if (s.skinnedInstances)
+  if (s.skin.instances)
     out += fmt::format("skinning      {} instances, {} vertices, {} (poses {:.3f} ms CPU), {} bounds\n",
-                       s.skinnedInstances, s.skinnedVertices, s.skinned ? "re-skinned" : "pose unchanged: skipped",
-                       s.animationCpuMs, s.skinBounds);
-  out += s.pointLights == 0 ? std::string("lights        directional only (no punctual lights: no light cull pass)\n")
-         : s.lightsCulled
+                       s.skin.instances, s.skin.vertices, s.skin.ran ? "re-skinned" : "pose unchanged: skipped",
+                       s.skin.animationCpuMs, s.skin.bounds);
+  out += s.lights.pointLights == 0 ? std::string("lights        directional only (no punctual lights: no light cull pass)\n")
+         : s.lights.culled
              ? fmt::format("lights        {} punctual lights, tiles: {:.1f} mean / {} max per tile, overflow {} tiles{}\n",
-                           s.pointLights, s.meanLightsPerTile, s.maxLightsPerTile, s.lightTileOverflow,
-                           s.lightTileOverflow ? fmt::format("  (WARNING: {} tile lights dropped)", s.lightsDropped) : "")
-             : fmt::format("lights        {} punctual lights, every light at every pixel (no tiles)\n", s.pointLights);
+                           s.lights.pointLights, s.lights.meanPerTile, s.lights.maxPerTile, s.lights.tileOverflow,
+                           s.lights.tileOverflow ? fmt::format("  (WARNING: {} tile lights dropped)", s.lights.dropped) : "")
+             : fmt::format("lights        {} punctual lights, every light at every pixel (no tiles)\n", s.lights.pointLights);
   if (s.path == RenderPath::Visbuf)
-    out += s.shading == ShadingMode::Classified
+    out += s.shade.mode == ShadingMode::Classified
                ? fmt::format("shading       classified: {} of {} materials present, {} (tile, material) pairs for {} "
                              "8x8 tiles\n",
-                             s.materialsPresent, s.materialPixels.size(), s.classifiedTiles,
+                             s.shade.materialsPresent, s.shade.materialPixels.size(), s.shade.classifiedTiles,
                              ((s.width + 7) / 8) * ((s.height + 7) / 8))
-           : s.shading == ShadingMode::Covered
+           : s.shade.mode == ShadingMode::Covered
                ? std::string("shading       covered (the ubershader over the 8x8 tiles that show anything)\n")
                : std::string("shading       uber (one dispatch, every material)\n");
-  out += fmt::format("frame graph   {} passes ({}), {} barriers ({} layout transitions){}\n", s.passesRecorded.size(),
-                     fmt::join(s.passesRecorded, ", "), s.barriers, s.layoutTransitions,
-                     s.passesDropped.empty() ? std::string()
-                                             : fmt::format("; dropped, nothing reads them: {}", fmt::join(s.passesDropped, ", ")));
-  for (const auto& [name, ms] : s.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
+  out += fmt::format("frame graph   {} passes ({}), {} barriers ({} layout transitions){}\n", s.graph.passesRecorded.size(),
+                     fmt::join(s.graph.passesRecorded, ", "), s.graph.barriers, s.graph.layoutTransitions,
+                     s.graph.passesDropped.empty() ? std::string()
+                                             : fmt::format("; dropped, nothing reads them: {}", fmt::join(s.graph.passesDropped, ", ")));
+  for (const auto& [name, ms] : s.graph.passMs) out += fmt::format("gpu {:<14}{:9.3f} ms\n", name, ms);
   out += fmt::format("gpu total         {:9.3f} ms\n", s.gpuMs);
   out += fmt::format("cpu record    {:9.3f} ms   wall {:9.3f} ms\n", s.cpuRecordMs, s.wallMs);
   out += fmt::format("memory        scene {:.1f} MiB, targets {} B/pixel\n", s.sceneBytes / 1048576.0,
@@ -81,7 +81,7 @@ std::string formatStats(const FrameStats& s) {
   if (s.msaaSamples > 1)
     out += s.path == RenderPath::Visbuf
                ? fmt::format("msaa          {}x: {} pixels ({:.2f}%) shaded per distinct sample ID\n", s.msaaSamples,
-                             s.perSamplePixels, 100.0 * s.perSamplePixels / (double(s.width) * s.height))
+                             s.shade.perSamplePixels, 100.0 * s.shade.perSamplePixels / (double(s.width) * s.height))
                : fmt::format("msaa          {}x, hardware resolve\n", s.msaaSamples);
   if (s.rasterWritesPerPixel > 0.0)
     out += fmt::format("bandwidth     {:.2f} raster writes/pixel x {} B + resolve = {:.1f} B written/pixel\n",
@@ -96,59 +96,59 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["width"] = s.width;
   j["height"] = s.height;
   j["objects"] = s.objects;
-  j["objectsTested"] = s.objectsTested;
-  j["frustumCulled"] = s.frustumCulled;
-  j["occlusionCulled"] = s.occlusionCulled;
-  j["subpixelCulled"] = s.subpixelCulled;
-  j["refineTested"] = s.refineTested;
-  j["refineOccluded"] = s.refineOccluded;
-  j["drawsEarly"] = s.drawsEarly;
-  j["drawsLate"] = s.drawsLate;
-  j["cullingFrozen"] = s.cullingFrozen;
-  j["pyramidLevels"] = s.pyramidLevels;
-  j["pyramidSkipped"] = s.pyramidSkipped;
-  j["drawsAppended"] = s.drawsAppended;
-  j["drawsRendered"] = s.drawsRendered;
-  j["drawCapacity"] = s.drawCapacity;
-  j["drawOverflow"] = s.drawOverflow;
+  j["objectsTested"] = s.cull.objectsTested;
+  j["frustumCulled"] = s.cull.frustumCulled;
+  j["occlusionCulled"] = s.cull.occlusionCulled;
+  j["subpixelCulled"] = s.cull.subpixelCulled;
+  j["refineTested"] = s.cull.refineTested;
+  j["refineOccluded"] = s.cull.refineOccluded;
+  j["drawsEarly"] = s.cull.drawsEarly;
+  j["drawsLate"] = s.cull.drawsLate;
+  j["cullingFrozen"] = s.cull.cullingFrozen;
+  j["pyramidLevels"] = s.pyramid.levels;
+  j["pyramidSkipped"] = s.pyramid.skipped;
+  j["drawsAppended"] = s.cull.drawsAppended;
+  j["drawsRendered"] = s.cull.drawsRendered;
+  j["drawCapacity"] = s.cull.drawCapacity;
+  j["drawOverflow"] = s.cull.drawOverflow;
   j["trianglesDrawn"] = s.trianglesDrawn;
   j["coveredPixels"] = s.coveredPixels;
   if (s.coveredPixels > 0) j["trianglesPerCoveredPixel"] = double(s.trianglesDrawn) / s.coveredPixels;
-  j["swRaster"] = {{"on", s.swRaster}, {"draws", s.swDraws}, {"triangles", s.swTriangles}, {"oversize", s.swOversize}};
-  j["transparentDraws"] = s.transparentDraws;
-  j["transparentTriangles"] = s.transparentTriangles;
-  j["lodHistogram"] = s.lodHistogram;
+  j["swRaster"] = {{"on", s.sw.on}, {"draws", s.sw.draws}, {"triangles", s.sw.triangles}, {"oversize", s.sw.oversize}};
+  j["transparentDraws"] = s.transparent.draws;
+  j["transparentTriangles"] = s.transparent.triangles;
+  j["lodHistogram"] = s.cull.lodHistogram;
   j["ids"] = {{"wide", s.ids.wide}, {"triangleBits", s.ids.triangleBits}, {"slotBits", s.ids.slotBits},
               {"description", s.ids.describe()}};
   nlohmann::json passes = nlohmann::json::object();
-  for (const auto& [name, ms] : s.passMs) passes[name] = ms;
+  for (const auto& [name, ms] : s.graph.passMs) passes[name] = ms;
   j["passMs"] = passes;
-  j["frameGraph"] = {{"passes", s.passesRecorded}, {"dropped", s.passesDropped}, {"barriers", s.barriers},
-                     {"layoutTransitions", s.layoutTransitions}};
+  j["frameGraph"] = {{"passes", s.graph.passesRecorded}, {"dropped", s.graph.passesDropped}, {"barriers", s.graph.barriers},
+                     {"layoutTransitions", s.graph.layoutTransitions}};
   j["gpuMs"] = s.gpuMs;
   j["cpuRecordMs"] = s.cpuRecordMs;
   j["wallMs"] = s.wallMs;
-  j["skinnedInstances"] = s.skinnedInstances;
-  j["skinnedVertices"] = s.skinnedVertices;
-  j["skinned"] = s.skinned;
-  j["animationCpuMs"] = s.animationCpuMs;
-  j["skinBounds"] = s.skinBounds;
-  j["lights"] = {{"pointLights", s.pointLights}, {"culled", s.lightsCulled}, {"tileOverflow", s.lightTileOverflow},
-                 {"dropped", s.lightsDropped}, {"maxPerTile", s.maxLightsPerTile},
-                 {"meanPerTile", s.meanLightsPerTile}, {"bytes", s.lightBytes}};
+  j["skinnedInstances"] = s.skin.instances;
+  j["skinnedVertices"] = s.skin.vertices;
+  j["skinned"] = s.skin.ran;
+  j["animationCpuMs"] = s.skin.animationCpuMs;
+  j["skinBounds"] = s.skin.bounds;
+  j["lights"] = {{"pointLights", s.lights.pointLights}, {"culled", s.lights.culled}, {"tileOverflow", s.lights.tileOverflow},
+                 {"dropped", s.lights.dropped}, {"maxPerTile", s.lights.maxPerTile},
+                 {"meanPerTile", s.lights.meanPerTile}, {"bytes", s.lights.bytes}};
   if (s.path == RenderPath::Visbuf) {
-    j["shading"] = shadingModeName(s.shading);
-    if (s.shading == ShadingMode::Classified)
-      j["classification"] = {{"materialsPresent", s.materialsPresent}, {"tileMaterialPairs", s.classifiedTiles},
-                             {"materialTiles", s.materialTiles}, {"materialPixels", s.materialPixels}};
+    j["shading"] = shadingModeName(s.shade.mode);
+    if (s.shade.mode == ShadingMode::Classified)
+      j["classification"] = {{"materialsPresent", s.shade.materialsPresent}, {"tileMaterialPairs", s.shade.classifiedTiles},
+                             {"materialTiles", s.shade.materialTiles}, {"materialPixels", s.shade.materialPixels}};
   }
   j["sceneBytes"] = s.sceneBytes;
-  j["objectsUpdated"] = s.objectsUpdated;
-  j["uploadedBytes"] = s.uploadedBytes;
+  j["objectsUpdated"] = s.upload.objects;
+  j["uploadedBytes"] = s.upload.bytes;
   j["frameIndex"] = s.frameIndex;
   j["textures"] = {{"classes", s.textureClasses}, {"bytes", s.textureBytes}, {"decompressed", s.texturesDecompressed}};
   j["targetBytesPerPixel"] = s.targetBytesPerPixel;
-  j["msaa"] = {{"samples", s.msaaSamples}, {"perSamplePixels", s.perSamplePixels}};
+  j["msaa"] = {{"samples", s.msaaSamples}, {"perSamplePixels", s.shade.perSamplePixels}};
   j["rasterBytesPerFragment"] = s.rasterBytesPerFragment;
   if (s.rasterWritesPerPixel > 0.0) {
     j["rasterWritesPerPixel"] = s.rasterWritesPerPixel;
@@ -164,15 +164,15 @@ nlohmann::json motionFrameJson(const SceneMotionFrame& m, const FrameStats& s) {
           {"removed", m.removed},
           {"hidden", m.hidden},
           {"shown", m.shown},
-          {"objectsUpdated", s.objectsUpdated},
-          {"uploadedBytes", s.uploadedBytes},
-          {"objectsTested", s.objectsTested},
-          {"frustumCulled", s.frustumCulled},
-          {"occlusionCulled", s.occlusionCulled},
-          {"subpixelCulled", s.subpixelCulled},
-          {"drawsEarly", s.drawsEarly},
-          {"drawsLate", s.drawsLate},
-          {"drawsRendered", s.drawsRendered},
+          {"objectsUpdated", s.upload.objects},
+          {"uploadedBytes", s.upload.bytes},
+          {"objectsTested", s.cull.objectsTested},
+          {"frustumCulled", s.cull.frustumCulled},
+          {"occlusionCulled", s.cull.occlusionCulled},
+          {"subpixelCulled", s.cull.subpixelCulled},
+          {"drawsEarly", s.cull.drawsEarly},
+          {"drawsLate", s.cull.drawsLate},
+          {"drawsRendered", s.cull.drawsRendered},
           {"trianglesDrawn", s.trianglesDrawn},
           {"coveredPixels", s.coveredPixels},
           {"gpuMs", s.gpuMs},

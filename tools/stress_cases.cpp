@@ -495,7 +495,7 @@ StressCase capacity(const StressContext& ctx) {
   const uint32_t w = ctx.reduced ? 200 : 640, h = ctx.reduced ? 140 : 400;
   auto ref = renderOnce(ctx.device, *s, s->defaultCamera, w, h, false);
   if (!ref) return c.rows.push_back(errorRow("reference", ref.error())), c;
-  const uint32_t cap = std::max<uint32_t>(1, ref->frame.stats.drawsRendered / 10);
+  const uint32_t cap = std::max<uint32_t>(1, ref->frame.stats.cull.drawsRendered / 10);
   // A capped draw list never uses the micro-raster (FrameOptions::swRaster): the capped frames are compared
   // with a reference from the hardware raster alone, so that a pixel where the two rasterisers break a tie
   // differently (about 1 pixel in 1 of 6 runs, on whichever objects survive the cap) is not counted as wrong.
@@ -528,11 +528,11 @@ StressCase capacity(const StressContext& ctx) {
       if (want != 0 && !drawn[want - 1]) ++vanished;
     }
     const FrameStats& st = f->stats;
-    const bool exact = st.drawOverflow == st.drawsAppended - st.drawsRendered && st.drawOverflow > 0;
+    const bool exact = st.cull.drawOverflow == st.cull.drawsAppended - st.cull.drawsRendered && st.cull.drawOverflow > 0;
     c.rows.push_back({{{"case", label},
-                       {"appended", st.drawsAppended},
-                       {"rendered", st.drawsRendered},
-                       {"overflow", st.drawOverflow},
+                       {"appended", st.cull.drawsAppended},
+                       {"rendered", st.cull.drawsRendered},
+                       {"overflow", st.cull.drawOverflow},
                        {"pixels_of_dropped_objects", vanished},
                        {"wrong_pixels", wrong},
                        {"invalid_ids", invalid},
@@ -599,12 +599,12 @@ StressCase scale(const StressContext& ctx) {
     c.rows.push_back({{{"case", label},
                        {"size", fmt::format("{}x{}", w, h)},
                        {"frame_ms", 0.5 * (ms[0] + ms[1])},
-                       {"drawn", last.drawsRendered},
+                       {"drawn", last.cull.drawsRendered},
                        {"triangles", last.trianglesDrawn},
                        {"scene_MiB", last.sceneBytes / 1048576.0},
                        {"bytes_per_object", perObject},
                        {"renderer_bytes_per_object", 2 * sizeof(gpu::DrawCommand) + sizeof(uint32_t)},
-                       {"pass", last.drawOverflow == 0 && last.trianglesDrawn > 0 && perObject <= kMaxBytesPerObject}}});
+                       {"pass", last.cull.drawOverflow == 0 && last.trianglesDrawn > 0 && perObject <= kMaxBytesPerObject}}});
   }
   return c;
 }

@@ -403,7 +403,7 @@ int runView(const ViewCommand& c) {
     if (sinceTitle >= 0.25) {
       std::string title = fmt::format("visbuf view | {:.1f} fps", double(titleFrames) / sinceTitle);
       if (const auto& st = (*renderer)->completedStats())
-        title += fmt::format(" | GPU {:.2f} ms | {} draws | {} tris", st->gpuMs, count(st->drawsRendered),
+        title += fmt::format(" | GPU {:.2f} ms | {} draws | {} tris", st->gpuMs, count(st->cull.drawsRendered),
                              count(st->trianglesDrawn));
       if (view != "shaded") title += " | view " + view;
       title += fmt::format(" | {} | cull {}{} | LOD {} | micro-raster {}", renderPathName(fo.path),

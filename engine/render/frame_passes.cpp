@@ -60,7 +60,7 @@ bool Renderer::Impl::cullObject(uint32_t i, const Camera& camera, const FrameMat
   }
   centre = glm::dvec3(s);
   if (options.cull != CullMode::None && !sphereInFrustum(math, camera, glm::dvec3(s), s.w)) {
-    ++st.frustumCulled;
+    ++st.cull.frustumCulled;
     return false;
   }
   double dist = glm::length(glm::dvec3(s) - camera.position) - s.w;
@@ -68,7 +68,7 @@ bool Renderer::Impl::cullObject(uint32_t i, const Camera& camera, const FrameMat
   const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[i]];
   draw = {md.lods[lod].indexCount, md.lods[lod].firstIndex, int32_t(md.vertexOffset), i, gpuScene.objectList[i]};
   st.trianglesDrawn += md.lods[lod].indexCount / 3;
-  st.lodHistogram[lod]++;
+  st.cull.lodHistogram[lod]++;
   return true;
 }
 
@@ -77,7 +77,7 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
   // One draw per object, grouped by draw list (opaque first, as the visibility pass draws them); BLEND objects
   // are the transparency pass's.
   std::vector<passes::ForwardDraw> out;
-  st.lodHistogram.assign(MAX_LODS, 0);
+  st.cull.lodHistogram.assign(MAX_LODS, 0);
   for (uint32_t i = 0; i < objects.size(); ++i) {
     if (gpuScene.objectList[i] == DRAW_LIST_NONE || !isDrawn(i)) continue;
     passes::ForwardDraw d;
@@ -87,8 +87,8 @@ std::vector<passes::ForwardDraw> Renderer::Impl::forwardCull(const Camera& camer
   if (listMask & ~1u)
     std::stable_sort(out.begin(), out.end(),
                      [](const passes::ForwardDraw& a, const passes::ForwardDraw& b) { return a.list < b.list; });
-  st.objectsTested = uint32_t(objects.size());
-  st.drawsAppended = st.drawsRendered = uint32_t(out.size());
+  st.cull.objectsTested = uint32_t(objects.size());
+  st.cull.drawsAppended = st.cull.drawsRendered = uint32_t(out.size());
   return out;
 }
 
@@ -98,7 +98,7 @@ std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camer
   // Culled like the forward path's objects (they are not in the GPU's draw lists), then sorted back to front.
   std::vector<passes::TransparentDraw> out;
   FrameStats mine;  // (their triangles and LODs are reported apart from the opaque draws')
-  mine.lodHistogram.assign(MAX_LODS, 0);
+  mine.cull.lodHistogram.assign(MAX_LODS, 0);
   const glm::dvec3 forwardDir = glm::normalize(camera.target - camera.position);
   for (uint32_t i : blendObjects) {
     if (!isDrawn(i)) continue;
@@ -117,8 +117,8 @@ std::vector<passes::TransparentDraw> Renderer::Impl::transparentCull(const Camer
     out.push_back(t);
   }
   passes::sortBackToFront(out);
-  st.transparentDraws = uint32_t(out.size());
-  st.transparentTriangles = mine.trianglesDrawn;
+  st.transparent.draws = uint32_t(out.size());
+  st.transparent.triangles = mine.trianglesDrawn;
   return out;
 }
 

@@ -89,49 +89,49 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
   const FrameOptions& options = slot.options;
   const bool gpuCulled = slot.plan.gpuCulled, msaa = slot.plan.msaa;
   const bool swOn = slot.plan.swOn;
-  st.passMs = slot.timestamps->read();
-  if (st.lightsCulled && synchronous) {
+  st.graph.passMs = slot.timestamps->read();
+  if (st.lights.culled && synchronous) {
     const passes::LightCullStats ls = lightCull.stats();
-    st.lightTileOverflow = ls.overflowTiles;
-    st.lightsDropped = ls.droppedLights;
-    st.maxLightsPerTile = ls.maxPerTile;
-    st.meanLightsPerTile = double(ls.pairs) / (double(lightCull.tilesX()) * lightCull.tilesY());
+    st.lights.tileOverflow = ls.overflowTiles;
+    st.lights.dropped = ls.droppedLights;
+    st.lights.maxPerTile = ls.maxPerTile;
+    st.lights.meanPerTile = double(ls.pairs) / (double(lightCull.tilesX()) * lightCull.tilesY());
   }
-  for (auto& p : st.passMs) st.gpuMs += p.second;
-  if (st.shading == ShadingMode::Classified && synchronous) {
+  for (auto& p : st.graph.passMs) st.gpuMs += p.second;
+  if (st.shade.mode == ShadingMode::Classified && synchronous) {
     passes::ClassifyStats cs = classify.stats();
-    st.materialsPresent = cs.materialsPresent;
-    st.classifiedTiles = cs.pairs;
-    st.materialTiles = std::move(cs.tiles);
-    st.materialPixels = std::move(cs.pixels);
+    st.shade.materialsPresent = cs.materialsPresent;
+    st.shade.classifiedTiles = cs.pairs;
+    st.shade.materialTiles = std::move(cs.tiles);
+    st.shade.materialPixels = std::move(cs.pixels);
   }
   if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(slot.statsReadback.mapped());
-    st.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
+    st.shade.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
     st.coveredPixels = slot.options.path == RenderPath::Visbuf && !msaa ? s[STAT_COVERED_PIXELS] : 0;
-    st.objectsTested = gpuScene.objectCount;
-    st.frustumCulled = s[STAT_FRUSTUM_CULLED];
-    st.occlusionCulled = s[STAT_OCCLUSION_CULLED];
-    st.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
-    st.refineTested = s[STAT_REFINE_TESTED];
-    st.refineOccluded = s[STAT_REFINE_OCCLUDED];
-    st.drawsEarly = st.drawsLate = 0;
+    st.cull.objectsTested = gpuScene.objectCount;
+    st.cull.frustumCulled = s[STAT_FRUSTUM_CULLED];
+    st.cull.occlusionCulled = s[STAT_OCCLUSION_CULLED];
+    st.cull.subpixelCulled = s[STAT_SUBPIXEL_CULLED];
+    st.cull.refineTested = s[STAT_REFINE_TESTED];
+    st.cull.refineOccluded = s[STAT_REFINE_OCCLUDED];
+    st.cull.drawsEarly = st.cull.drawsLate = 0;
     for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
-      st.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_EARLY, l);
-      st.drawsLate += listDrawn(s, CULL_PHASE_LATE, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
-      st.swDraws += listSwDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
+      st.cull.drawsEarly += listDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_EARLY, l);
+      st.cull.drawsLate += listDrawn(s, CULL_PHASE_LATE, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
+      st.sw.draws += listSwDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
     }
-    st.swRaster = swOn;
-    st.swTriangles = s[STAT_SW_TRIANGLES];
-    st.swOversize = s[STAT_SW_OVERSIZE];
-    st.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
-    st.drawsRendered = st.drawsEarly + st.drawsLate;
-    st.drawOverflow = s[STAT_DRAW_OVERFLOW];
+    st.sw.on = swOn;
+    st.sw.triangles = s[STAT_SW_TRIANGLES];
+    st.sw.oversize = s[STAT_SW_OVERSIZE];
+    st.cull.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];
+    st.cull.drawsRendered = st.cull.drawsEarly + st.cull.drawsLate;
+    st.cull.drawOverflow = s[STAT_DRAW_OVERFLOW];
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
-    st.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
-    frameHistory.finished(slot.plan, options, device.isCpu(), st.swTriangles, st.drawsEarly, st.occlusionCulled);
+    st.cull.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
+    frameHistory.finished(slot.plan, options, device.isCpu(), st.sw.triangles, st.cull.drawsEarly, st.cull.occlusionCulled);
   }
-  while (!st.lodHistogram.empty() && st.lodHistogram.back() == 0) st.lodHistogram.pop_back();
+  while (!st.cull.lodHistogram.empty() && st.cull.lodHistogram.back() == 0) st.cull.lodHistogram.pop_back();
 
 }
 
@@ -185,8 +185,8 @@ void Renderer::Impl::decodeReadback(const FrameOptions& options, const FramePlan
     const double resolveBytes = gpuCulled ? 8.0 * double(covered) / double(pixels) : 0.0;  // colour, covered only
     // Classified shading also writes its tile list (4 B per (tile, material) pair) and the per-material records.
     const double classifyBytes =
-        st.shading == ShadingMode::Classified
-            ? (4.0 * st.classifiedTiles + double(sizeof(gpu::MaterialTiles)) * st.materialTiles.size()) / double(pixels)
+        st.shade.mode == ShadingMode::Classified
+            ? (4.0 * st.shade.classifiedTiles + double(sizeof(gpu::MaterialTiles)) * st.shade.materialTiles.size()) / double(pixels)
             : 0.0;
     st.bytesWrittenPerPixel = st.rasterWritesPerPixel * st.rasterBytesPerFragment + resolveBytes + classifyBytes;
   }

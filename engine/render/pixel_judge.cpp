@@ -241,7 +241,7 @@ Result<std::vector<glm::dmat4>> judgedTransforms(const Scene& scene, const Frame
     return makeError(ErrorCode::InvalidArgument, fmt::format("judge: frames of different sizes ({}x{}, {}x{})",
                                                              visbuf.width, visbuf.height, forward.width, forward.height));
   for (const FrameResult* f : {&visbuf, &forward}) {
-    const std::vector<uint32_t>& lods = f->stats.lodHistogram;
+    const std::vector<uint32_t>& lods = f->stats.cull.lodHistogram;
     if (f->drawnObjects.empty() && std::any_of(lods.begin() + std::min<size_t>(lods.size(), 1), lods.end(),
                                                [](uint32_t draws) { return draws > 0; }))
       return makeError(ErrorCode::InvalidArgument, "judge: a frame drew coarser LODs but has no drawn LODs to say "

@@ -82,8 +82,8 @@ struct PixelJudgement {
 // (RenderPath::Forward), each rendered with readIds and readColor. The LOD each object was drawn at comes from the
 // frame's drawnObjects / drawnLods when it was rendered with readDraws, else LOD 0 (render with lodErrorPixels 0).
 // Errors (InvalidArgument): frames of different sizes, without IDs or colour, multisampled IDs, or that drew LODs
-// above 0 (FrameStats::lodHistogram) without drawnLods; a scene with BLEND materials (see the top); an ID naming an
-// object or triangle the scene does not have.
+// above 0 (FrameStats::cull.lodHistogram) without drawnLods; a scene with BLEND materials (see the top); an ID
+// naming an object or triangle the scene does not have.
 Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, const FrameResult& visbuf,
                                    const FrameResult& forward, const JudgeOptions& options = {});
 

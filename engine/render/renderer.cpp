@@ -176,32 +176,32 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
   st.width = w;
   st.height = h;
   st.objects = gpuScene.objectCount;
-  st.drawCapacity = capacity;
+  st.cull.drawCapacity = capacity;
   st.ids = encoding;
   st.sceneBytes = gpuScene.bytes + (animation ? animation->bytes() : 0);
   st.textureClasses = uint32_t(gpuScene.textureClasses.size());
   st.textureBytes = gpuScene.textureBytes;
   st.texturesDecompressed = gpuScene.texturesDecompressed;
-  st.pointLights = uint32_t(scene.pointLights.size());
-  st.lightBytes = hasPointLights() ? pointLights.size() + lightCull.tiles().size() : 0;
-  st.lightsCulled = plan.lightsCulled;
+  st.lights.pointLights = uint32_t(scene.pointLights.size());
+  st.lights.bytes = hasPointLights() ? pointLights.size() + lightCull.tiles().size() : 0;
+  st.lights.culled = plan.lightsCulled;
   st.msaaSamples = options.msaa;
-  st.shading = plan.shading;
-  st.pyramidSkipped = plan.occlusionFrame && !plan.usePyramid;
-  st.cullingFrozen = plan.frozen;
-  st.pyramidLevels = plan.usePyramid ? pyramid.levels() : 0;
+  st.shade.mode = plan.shading;
+  st.pyramid.skipped = plan.occlusionFrame && !plan.usePyramid;
+  st.cull.cullingFrozen = plan.frozen;
+  st.pyramid.levels = plan.usePyramid ? pyramid.levels() : 0;
 
   Graph g;
   const FrameResources r = declareResources(g, options, plan);
   poseRigidObjects(options.animationTime);
   declareSetup(g, r, options, plan, slot);
   if (animation) {  // skinning: only when the pose changed (a static scene has no AnimationState at all)
-    st.skinnedInstances = animation->instanceCount();
-    st.skinnedVertices = animation->vertexCount();
-    st.skinBounds = skinBoundsName(config.skinBounds);
+    st.skin.instances = animation->instanceCount();
+    st.skin.vertices = animation->vertexCount();
+    st.skin.bounds = skinBoundsName(config.skinBounds);
     if (animation->update(options.animationTime)) {
-      st.skinned = true;
-      st.animationCpuMs = animation->lastUpdateMs();
+      st.skin.ran = true;
+      st.skin.animationCpuMs = animation->lastUpdateMs();
       declareSkin(g, r);
     }
   }
@@ -258,10 +258,10 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
   const Graph::Report report =
       g.record(std::span<const VkCommandBuffer>(cmds, kCommandBuffers), [this](VkCommandBuffer c) { beginCmd(c); },
                timestamps);
-  st.passesRecorded = report.recorded;
-  st.passesDropped = report.dropped;
-  st.barriers = report.barriers;
-  st.layoutTransitions = report.layoutTransitions;
+  st.graph.passesRecorded = report.recorded;
+  st.graph.passesDropped = report.dropped;
+  st.graph.barriers = report.barriers;
+  st.graph.layoutTransitions = report.layoutTransitions;
   ++frameCounter;
   return uint32_t(report.recorded.size());
 }

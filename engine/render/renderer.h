@@ -132,11 +132,11 @@ struct IdEncoding {
   std::string describe() const;
 };
 
-struct FrameStats {
-  std::string device;
-  RenderPath path = RenderPath::Visbuf;
-  uint32_t width = 0, height = 0;
-  uint32_t objects = 0;
+// A frame's statistics, grouped by the pass that produces them (the structs are named after the pass files of
+// engine/passes); what belongs to no one pass (the frame, the visibility target, memory) stays at the top.
+
+// cull_pass: both phases of the compute cull, with the LOD choice.
+struct CullStats {
   uint32_t objectsTested = 0;
   uint32_t frustumCulled = 0;
   uint32_t occlusionCulled = 0;  // late phase: behind the depth pyramid
@@ -145,47 +145,109 @@ struct FrameStats {
   uint32_t refineOccluded = 0;   // ... and occluded there (part of occlusionCulled)
   uint32_t drawsEarly = 0;       // occlusion mode: draws of the early phase (last frame's visible set)
   uint32_t drawsLate = 0;        // occlusion mode: draws of the late phase (newly visible)
-  uint32_t drawsAppended = 0;   // draws the cull pass produced (visible objects)
-  uint32_t drawsRendered = 0;   // min(appended, capacity)
-  uint32_t drawCapacity = 0;    // per phase, all draw lists together
-  uint32_t transparentDraws = 0;      // BLEND objects drawn by the transparency pass (CPU-culled, sorted)
-  uint64_t transparentTriangles = 0;  // their triangles (not in trianglesDrawn)
-  uint32_t drawOverflow = 0;    // visible objects dropped for lack of capacity (reported, never silent)
-  uint64_t trianglesDrawn = 0;  // hardware and micro-raster together
-  // Visbuf path, single-sampled: the pixels whose ID shows something (the shading pass counts what it shades);
-  // trianglesDrawn / coveredPixels is the triangles per covered pixel (a visibility buffer's ideal is about 1).
-  uint32_t coveredPixels = 0;
-  bool swRaster = false;        // this frame routed small objects to the micro-raster
-  uint32_t swDraws = 0;         // of drawsRendered: the micro-raster's
-  uint64_t swTriangles = 0;     // of trianglesDrawn: the micro-raster's
-  uint32_t swOversize = 0;      // triangles it could not take (box over SW_RASTER_MAX_EXTENT or behind the near
-                                // plane: only a frozen frame's moved camera can cause it); reported, never silent
+  uint32_t drawsAppended = 0;    // draws the cull pass produced (visible objects)
+  uint32_t drawsRendered = 0;    // min(appended, capacity)
+  uint32_t drawCapacity = 0;     // per phase, all draw lists together
+  uint32_t drawOverflow = 0;     // visible objects dropped for lack of capacity (reported, never silent)
   std::vector<uint32_t> lodHistogram;  // draws per LOD level
-  IdEncoding ids;
-  bool cullingFrozen = false;   // this frame reused an earlier frame's draw lists
-  uint32_t pyramidLevels = 0;   // depth pyramid levels built this frame (0: no pyramid pass)
-  bool pyramidSkipped = false;  // occlusion mode, but the last pyramid hid nothing: skipped this frame
-  std::vector<std::pair<std::string, double>> passMs;  // GPU time per pass, recording order
-  // The frame graph: the passes recorded (one command buffer each, in order), the passes dropped because nothing
-  // read what they write (a skipped pyramid, untiled lights), and the barriers it derived between passes (image
-  // layout transitions among them).
+  bool cullingFrozen = false;    // this frame reused an earlier frame's draw lists
+};
+
+// sw_raster_pass: the software micro-raster and its merges.
+struct SwRasterStats {
+  bool on = false;          // this frame routed small objects to the micro-raster
+  uint32_t draws = 0;       // of CullStats::drawsRendered: the micro-raster's
+  uint64_t triangles = 0;   // of FrameStats::trianglesDrawn: the micro-raster's
+  uint32_t oversize = 0;    // triangles it could not take (box over SW_RASTER_MAX_EXTENT or behind the near plane:
+                            // only a frozen frame's moved camera can cause it); reported, never silent
+};
+
+// depth_pyramid_pass.
+struct PyramidStats {
+  uint32_t levels = 0;   // levels built this frame (0: no pyramid pass)
+  bool skipped = false;  // occlusion mode, but the last pyramid hid nothing: skipped this frame
+};
+
+// skin_pass (and the CPU pose evaluation that feeds it).
+struct SkinStats {
+  uint32_t instances = 0;        // animated instances in the scene
+  uint64_t vertices = 0;         // their vertices (all rewritten when the pose changes)
+  bool ran = false;              // this frame ran the skinning pass (false: static scene, or a paused pose)
+  double animationCpuMs = 0.0;   // CPU time to evaluate the poses (included in FrameStats::cpuRecordMs)
+  std::string bounds;            // skinned scenes: the culling bounds used (skinBoundsName), else empty
+};
+
+// light_cull_pass (and the point lights it reads).
+struct LightCullStats {
+  uint32_t pointLights = 0;      // in the scene (0: no light cull pass, no light buffers)
+  bool culled = false;           // this frame ran the light cull pass (visbuf path, tiledLights, point lights)
+  uint32_t tileOverflow = 0;     // tiles whose light list overflowed LIGHTS_PER_TILE (reported, never silent)
+  uint32_t dropped = 0;          // (tile, light) pairs dropped by that overflow
+  uint32_t maxPerTile = 0;       // longest tile list before clamping
+  double meanPerTile = 0.0;      // kept (tile, light) pairs / tiles
+  uint64_t bytes = 0;            // GPU memory of the point lights and the tile lists
+};
+
+// shade_pass and classify_pass: the visbuf path's shading.
+struct ShadeStats {
+  // The mode used. Classified only: the materials with pixels, the (tile, material) pairs (= workgroups of all
+  // shading dispatches) and, per scene material, its 8x8 tiles and pixels on screen.
+  ShadingMode mode = ShadingMode::Uber;
+  uint32_t materialsPresent = 0;
+  uint32_t classifiedTiles = 0;
+  std::vector<uint32_t> materialTiles;
+  std::vector<uint32_t> materialPixels;
+  uint32_t perSamplePixels = 0;  // MSAA: pixels whose samples differ, shaded once per distinct ID
+};
+
+// transparent_pass: BLEND objects, CPU-culled and sorted.
+struct TransparentStats {
+  uint32_t draws = 0;
+  uint64_t triangles = 0;  // (not in FrameStats::trianglesDrawn)
+};
+
+// object_upload_pass: scene changes applied by this frame (setTransforms, setVisible, addObject, removeObject, rigid
+// animation).
+struct UploadStats {
+  uint32_t objects = 0;  // object records rewritten
+  uint64_t bytes = 0;    // bytes uploaded for them (each record and its object ID: 68 bytes)
+};
+
+// The frame graph (engine/gpu/frame_graph.h): per pass its GPU time, and what the graph derived.
+struct GraphStats {
+  std::vector<std::pair<std::string, double>> passMs;  // GPU time per pass (timer steps), recording order
+  // The passes recorded (one command buffer each, in order), the passes dropped because nothing read what they
+  // write (a skipped pyramid, untiled lights), and the barriers it derived between passes (image layout
+  // transitions among them).
   std::vector<std::string> passesRecorded, passesDropped;
   uint32_t barriers = 0, layoutTransitions = 0;
+};
+
+struct FrameStats {
+  std::string device;
+  RenderPath path = RenderPath::Visbuf;
+  uint32_t width = 0, height = 0;
+  uint32_t objects = 0;
+  uint64_t frameIndex = 0;      // frames recorded before this one (renderFrame and record count alike)
+  CullStats cull;
+  SwRasterStats sw;
+  PyramidStats pyramid;
+  SkinStats skin;
+  LightCullStats lights;
+  ShadeStats shade;
+  TransparentStats transparent;
+  UploadStats upload;
+  GraphStats graph;
+  // The visibility target: triangles of the hardware raster and the micro-raster together, and (visbuf path,
+  // single-sampled) the pixels whose ID shows something; trianglesDrawn / coveredPixels is the triangles per
+  // covered pixel (a visibility buffer's ideal is about 1).
+  uint64_t trianglesDrawn = 0;
+  uint32_t coveredPixels = 0;
+  IdEncoding ids;
+  uint32_t msaaSamples = 1;     // samples per pixel of this frame's raster targets
   double gpuMs = 0.0;           // sum of pass times
   double cpuRecordMs = 0.0;     // CPU time to cull (forward) and record
   double wallMs = 0.0;          // submit to fence, plus readback conversion
-  uint32_t skinnedInstances = 0;  // animated instances in the scene
-  uint64_t skinnedVertices = 0;   // their vertices (all rewritten when the pose changes)
-  bool skinned = false;           // this frame ran the skinning pass (false: static scene, or a paused pose)
-  double animationCpuMs = 0.0;    // CPU time to evaluate the poses (included in cpuRecordMs)
-  std::string skinBounds;         // skinned scenes: the culling bounds used (skinBoundsName), else empty
-  uint32_t pointLights = 0;       // in the scene (0: no light cull pass, no light buffers)
-  bool lightsCulled = false;      // this frame ran the light cull pass (visbuf path, tiledLights, point lights)
-  uint32_t lightTileOverflow = 0; // tiles whose light list overflowed LIGHTS_PER_TILE (reported, never silent)
-  uint32_t lightsDropped = 0;     // (tile, light) pairs dropped by that overflow
-  uint32_t maxLightsPerTile = 0;  // longest tile list before clamping
-  double meanLightsPerTile = 0.0; // kept (tile, light) pairs / tiles
-  uint64_t lightBytes = 0;        // GPU memory of the point lights and the tile lists
   uint64_t sceneBytes = 0;      // GPU memory of the scene mirror
   uint32_t textureClasses = 0;        // baked texture classes (2D array images) of the scene
   uint64_t textureBytes = 0;          // their texel bytes on the GPU (part of sceneBytes)
@@ -200,20 +262,6 @@ struct FrameStats {
   // Clears are not counted. 0 without countOverdraw.
   double rasterWritesPerPixel = 0.0;
   double bytesWrittenPerPixel = 0.0;
-  uint32_t msaaSamples = 1;      // samples per pixel of this frame's raster targets
-  uint32_t perSamplePixels = 0;  // visbuf MSAA: pixels whose samples differ, shaded once per distinct ID
-  // Visbuf shading: the mode used. Classified only: the materials with pixels, the (tile, material) pairs (=
-  // workgroups of all shading dispatches) and, per scene material, its 8x8 tiles and pixels on screen.
-  ShadingMode shading = ShadingMode::Uber;
-  uint32_t materialsPresent = 0;
-  uint32_t classifiedTiles = 0;
-  std::vector<uint32_t> materialTiles;
-  std::vector<uint32_t> materialPixels;
-  // Scene changes applied by this frame (setTransforms, setVisible, addObject, removeObject, rigid animation):
-  // object records rewritten, and the bytes uploaded for them (each record and its object ID: 68 bytes).
-  uint32_t objectsUpdated = 0;
-  uint64_t uploadedBytes = 0;
-  uint64_t frameIndex = 0;  // frames recorded before this one (renderFrame and record count alike)
 };
 
 // The colour of pixels that show nothing (linear RGBA; the colour image is cleared to it, then rounded to rgba16f).

@@ -226,8 +226,8 @@ void Renderer::Impl::recordObjectUploads(VkCommandBuffer cmd, FrameSlot& slot, F
   std::memcpy(ids, dirty.data(), size_t(count) * sizeof(uint32_t));
   for (uint32_t id : dirty) dirtyIndex[id] = 0;
   objectUpload.record(cmd, slot.staging, idsOffset, gpuScene.objects, count);  // (the frame graph orders it)
-  st.objectsUpdated = count;
-  st.uploadedBytes = bytes;
+  st.upload.objects = count;
+  st.upload.bytes = bytes;
   dirty.clear();
   dirtyRecords.clear();
 }

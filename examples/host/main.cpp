@@ -383,8 +383,8 @@ int main(int argc, char** argv) {
     }
     std::printf("host: last frame composed by the host vs renderFrame: max difference %.4f (RGBA8 rounding allows "
                 "0.5/255 = %.4f); %u objects drawn\n",
-                maxDiff, 0.5 / 255.0, ref->stats.drawsRendered);
-    if (maxDiff > 0.5 / 255.0 + 1e-3 || ref->stats.drawsRendered == 0) rc = 1;
+                maxDiff, 0.5 / 255.0, ref->stats.cull.drawsRendered);
+    if (maxDiff > 0.5 / 255.0 + 1e-3 || ref->stats.cull.drawsRendered == 0) rc = 1;
 
     if (compare > 0) {
       // Interleaved pairs (ring block, then renderFrame block over the same cameras): the ratio per pair and its

@@ -154,7 +154,7 @@ TEST(AlphaMask, FoliageCoverageMatchesForwardExactly) {
     for (int frame = 0; frame < (cull == CullMode::Occlusion ? 2 : 1); ++frame) {
       auto vis = render(**r, cam, RenderPath::Visbuf, cull);
       ASSERT_TRUE(vis.ok());
-      EXPECT_EQ(vis->stats.drawOverflow, 0u);
+      EXPECT_EQ(vis->stats.cull.drawOverflow, 0u);
       expectMatchesForward(*vis, *fwd, std::string("foliage_") + cullModeName(cull) + std::to_string(frame));
       if (cull == CullMode::Occlusion && frame == 1) writeDocImage("foliage_visbuf", *vis);
     }
@@ -267,9 +267,9 @@ TEST(AlphaMask, OverflowCountedPerDrawList) {
   fo.readDraws = true;
   auto f = (*r)->renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
-  EXPECT_EQ(f->stats.drawsAppended, uint32_t(scene.objects.size()));
-  EXPECT_EQ(f->stats.drawsRendered, kept);
-  EXPECT_EQ(f->stats.drawOverflow, dropped);
+  EXPECT_EQ(f->stats.cull.drawsAppended, uint32_t(scene.objects.size()));
+  EXPECT_EQ(f->stats.cull.drawsRendered, kept);
+  EXPECT_EQ(f->stats.cull.drawOverflow, dropped);
   EXPECT_EQ(f->drawnObjects.size(), size_t(kept));
   std::vector<uint32_t> drawn = f->drawnObjects;
   std::sort(drawn.begin(), drawn.end());
@@ -290,9 +290,9 @@ TEST(AlphaMask, OpaqueSceneRecordsNothingExtra) {
     fo.swRaster = SwRasterMode::Off;  // (its passes are the micro-raster's tests' subject: test_sw_raster.cpp)
     auto f = (*r)->renderFrame(scene.defaultCamera, fo);
     ASSERT_TRUE(f.ok());
-    EXPECT_EQ(f->stats.transparentDraws, 0u);
+    EXPECT_EQ(f->stats.transparent.draws, 0u);
     std::vector<std::string> names;
-    for (const auto& p : f->stats.passMs) names.push_back(p.first);
+    for (const auto& p : f->stats.graph.passMs) names.push_back(p.first);
     const std::vector<std::string> expected =
         path == RenderPath::Visbuf ? std::vector<std::string>{"cull", "visibility", "shade"}
                                    : std::vector<std::string>{"forward"};
@@ -397,9 +397,9 @@ TEST(Transparency, BackToFrontMatchesCpuComposite) {
     auto f = (*r)->renderFrame(cam, fo);
     ASSERT_TRUE(f.ok());
     writeDocImage(std::string("transparency_") + renderPathName(path), *f);
-    EXPECT_EQ(f->stats.transparentDraws, 2u);
+    EXPECT_EQ(f->stats.transparent.draws, 2u);
     bool recorded = false;
-    for (const auto& p : f->stats.passMs) recorded |= p.first == "transparent";
+    for (const auto& p : f->stats.graph.passMs) recorded |= p.first == "transparent";
     EXPECT_TRUE(recorded);
     for (const Probe& p : probes) {
       const glm::dvec4 clip = math.viewProj * glm::dvec4(p.world - cam.position, 1.0);
@@ -527,9 +527,9 @@ TEST(Transparency, OnlyBlendedObjects) {
   auto vis = render(**r, s.defaultCamera, RenderPath::Visbuf, CullMode::Occlusion);
   auto fwd = render(**r, s.defaultCamera, RenderPath::Forward, CullMode::Frustum);
   ASSERT_TRUE(vis.ok() && fwd.ok());
-  EXPECT_EQ(vis->stats.drawsRendered, 0u);
-  EXPECT_EQ(vis->stats.transparentDraws, 2u);
-  EXPECT_EQ(fwd->stats.transparentDraws, 2u);
+  EXPECT_EQ(vis->stats.cull.drawsRendered, 0u);
+  EXPECT_EQ(vis->stats.transparent.draws, 2u);
+  EXPECT_EQ(fwd->stats.transparent.draws, 2u);
   EXPECT_TRUE(std::all_of(vis->ids.begin(), vis->ids.end(), [](uint32_t v) { return v == 0; }));
   const test::ImageError e = test::compareColor(vis->color, fwd->color);
   EXPECT_LE(e.maxAbs, kMaxAbs);

@@ -71,13 +71,13 @@ TEST(Classification, ClassifiedShadingEqualsUbershader) {
   fo.shading = ShadingMode::Uber;
   auto uber = (*r)->renderFrame(s.defaultCamera, fo);
   ASSERT_TRUE(uber.ok()) << uber.error().message;
-  EXPECT_EQ(uber->stats.shading, ShadingMode::Uber);
+  EXPECT_EQ(uber->stats.shade.mode, ShadingMode::Uber);
   fo.shading = ShadingMode::Classified;
   for (int frame = 0; frame < 2; ++frame) {  // twice: the second frame's counts start from zero again
     auto cls = (*r)->renderFrame(s.defaultCamera, fo);
     ASSERT_TRUE(cls.ok()) << cls.error().message;
     const FrameStats& st = cls->stats;
-    ASSERT_EQ(st.shading, ShadingMode::Classified);
+    ASSERT_EQ(st.shade.mode, ShadingMode::Classified);
     EXPECT_EQ(cls->ids, uber->ids);
     EXPECT_EQ(st.coveredPixels, uber->stats.coveredPixels) << "each pixel shaded by exactly one material dispatch";
 
@@ -106,10 +106,10 @@ TEST(Classification, ClassifiedShadingEqualsUbershader) {
     ASSERT_LT(present, kMaterials);
     ASSERT_GE(mostInOneTile, 3u);
     ASSERT_GT(maskedPresent, 10u);
-    EXPECT_EQ(st.materialPixels, pixels);
-    EXPECT_EQ(st.materialTiles, tiles);
-    EXPECT_EQ(st.materialsPresent, present);
-    EXPECT_EQ(st.classifiedTiles, pairCount);
+    EXPECT_EQ(st.shade.materialPixels, pixels);
+    EXPECT_EQ(st.shade.materialTiles, tiles);
+    EXPECT_EQ(st.shade.materialsPresent, present);
+    EXPECT_EQ(st.shade.classifiedTiles, pairCount);
 
     // Same pixels, same arithmetic (the material index only becomes a push constant): equal up to rounding.
     const ImageError e = compareColor(cls->color, uber->color);
@@ -144,20 +144,20 @@ TEST(Classification, UntexturedAutoAndAttributes) {
   uint32_t covered = 0;
   for (size_t p = 0; p < cls->ids.size(); p += 2) covered += cls->ids[p] != 0;
   EXPECT_GT(covered, 0u);
-  EXPECT_EQ(cls->stats.materialsPresent, 1u);
-  EXPECT_EQ(cls->stats.materialPixels, std::vector<uint32_t>{covered});
-  ASSERT_EQ(cls->stats.materialTiles.size(), 1u);
-  EXPECT_GT(cls->stats.materialTiles[0], CLASSIFY_DISPATCH_WIDTH);
-  EXPECT_NE(cls->stats.materialTiles[0] % CLASSIFY_DISPATCH_WIDTH, 0u);
+  EXPECT_EQ(cls->stats.shade.materialsPresent, 1u);
+  EXPECT_EQ(cls->stats.shade.materialPixels, std::vector<uint32_t>{covered});
+  ASSERT_EQ(cls->stats.shade.materialTiles.size(), 1u);
+  EXPECT_GT(cls->stats.shade.materialTiles[0], CLASSIFY_DISPATCH_WIDTH);
+  EXPECT_NE(cls->stats.shade.materialTiles[0] % CLASSIFY_DISPATCH_WIDTH, 0u);
   fo = {};
   auto f = (*r)->renderFrame(s.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
-  EXPECT_EQ(f->stats.shading, defaultShading(dev));
+  EXPECT_EQ(f->stats.shade.mode, defaultShading(dev));
   fo.shading = ShadingMode::Classified;
   fo.readAttributes = true;
   f = (*r)->renderFrame(s.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
-  EXPECT_EQ(f->stats.shading, ShadingMode::Uber);
+  EXPECT_EQ(f->stats.shade.mode, ShadingMode::Uber);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
@@ -183,7 +183,7 @@ TEST(Classification, CoveredTilesEqualUbershader) {
     fo.shading = ShadingMode::Covered;
     auto covered = (*r)->renderFrame(cam, fo);
     ASSERT_TRUE(uber.ok() && covered.ok());
-    EXPECT_EQ(covered->stats.shading, ShadingMode::Covered);
+    EXPECT_EQ(covered->stats.shade.mode, ShadingMode::Covered);
     EXPECT_EQ(covered->ids, uber->ids);
     size_t idPixels = 0;
     for (size_t i = 0; i < uber->ids.size(); i += 2) idPixels += uber->ids[i] != 0;

@@ -155,9 +155,9 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
     auto a = (*renderer)->renderFrame(cam, on);
     auto b = (*renderer)->renderFrame(cam, off);
     ASSERT_TRUE(a.ok() && b.ok());
-    culledTotal += a->stats.frustumCulled + a->stats.occlusionCulled + a->stats.subpixelCulled;
-    occludedTotal += a->stats.occlusionCulled;
-    drawnTotal += a->stats.drawsRendered;
+    culledTotal += a->stats.cull.frustumCulled + a->stats.cull.occlusionCulled + a->stats.cull.subpixelCulled;
+    occludedTotal += a->stats.cull.occlusionCulled;
+    drawnTotal += a->stats.cull.drawsRendered;
     std::set<uint32_t> visible;
     for (size_t p = 0; p < a->ids.size(); p += 2)
       if (a->ids[p]) visible.insert(a->ids[p]);
@@ -278,8 +278,8 @@ TEST(Occlusion, FrozenCullingRedrawsTheFrozenDrawLists) {
   fo.freezeCulling = true;
   auto frozen = (*renderer)->renderFrame(elsewhere, fo);
   ASSERT_TRUE(frozen.ok());
-  EXPECT_TRUE(frozen->stats.cullingFrozen);
-  EXPECT_EQ(frozen->stats.pyramidLevels, 0u) << "a frozen frame builds no pyramid";
+  EXPECT_TRUE(frozen->stats.cull.cullingFrozen);
+  EXPECT_EQ(frozen->stats.pyramid.levels, 0u) << "a frozen frame builds no pyramid";
   auto sorted = [](std::vector<uint32_t> v) {
     std::sort(v.begin(), v.end());
     return v;
@@ -317,7 +317,7 @@ TEST(Occlusion, EarlyPhaseDrawsLastFramesVisibleList) {
   auto reference = (*renderer)->renderFrame(city.defaultCamera, none);
   ASSERT_TRUE(reference.ok());
   auto visibleAtEnd = [](const FrameStats& s) {
-    return s.objectsTested - s.frustumCulled - s.occlusionCulled - s.subpixelCulled;
+    return s.cull.objectsTested - s.cull.frustumCulled - s.cull.occlusionCulled - s.cull.subpixelCulled;
   };
   uint32_t lastVisible = 0;
   for (int i = 0; i < 6; ++i) {
@@ -327,13 +327,13 @@ TEST(Occlusion, EarlyPhaseDrawsLastFramesVisibleList) {
     ASSERT_EQ(f->ids, reference->ids) << "frame " << i;
     const FrameStats& s = f->stats;
     if (i == 0 || i == 4) {
-      EXPECT_EQ(s.drawsEarly, 0u) << "frame " << i << ": no history, nothing listed";
+      EXPECT_EQ(s.cull.drawsEarly, 0u) << "frame " << i << ": no history, nothing listed";
     } else {
-      EXPECT_EQ(s.drawsEarly, lastVisible) << "frame " << i << ": last frame's visible set, drawn early";
+      EXPECT_EQ(s.cull.drawsEarly, lastVisible) << "frame " << i << ": last frame's visible set, drawn early";
     }
     if (i == 2 || i == 3) {  // steady: the early set is the visible set, the late phase adds nothing
-      EXPECT_EQ(s.drawsLate, 0u) << "frame " << i;
-      EXPECT_EQ(s.drawsEarly, visibleAtEnd(s)) << "frame " << i;
+      EXPECT_EQ(s.cull.drawsLate, 0u) << "frame " << i;
+      EXPECT_EQ(s.cull.drawsEarly, visibleAtEnd(s)) << "frame " << i;
     }
     lastVisible = visibleAtEnd(s);
   }
@@ -359,14 +359,14 @@ TEST(Occlusion, FinerLevelOccludesWhatTheCoarseLevelKept) {
     ASSERT_TRUE(f.ok());
     ASSERT_EQ(f->ids, reference->ids) << "frame " << i;
     const FrameStats& s = f->stats;
-    EXPECT_LE(s.refineOccluded, s.refineTested) << "frame " << i;
-    EXPECT_LE(s.refineOccluded, s.occlusionCulled) << "frame " << i;
+    EXPECT_LE(s.cull.refineOccluded, s.cull.refineTested) << "frame " << i;
+    EXPECT_LE(s.cull.refineOccluded, s.cull.occlusionCulled) << "frame " << i;
     if (i > 0) {  // with a depth pyramid of the early phase
-      EXPECT_GT(s.refineTested, 0u) << "frame " << i;
-      EXPECT_GT(s.refineOccluded, 0u) << "frame " << i;
+      EXPECT_GT(s.cull.refineTested, 0u) << "frame " << i;
+      EXPECT_GT(s.cull.refineOccluded, 0u) << "frame " << i;
     }
-    std::printf("frame %d: %u occluded, %u tested again finer, %u of them occluded\n", i, s.occlusionCulled,
-                s.refineTested, s.refineOccluded);
+    std::printf("frame %d: %u occluded, %u tested again finer, %u of them occluded\n", i, s.cull.occlusionCulled,
+                s.cull.refineTested, s.cull.refineOccluded);
   }
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
@@ -382,11 +382,11 @@ TEST(Occlusion, UselessPyramidIsSkippedAndProbedAgain) {
   for (int i = 0; i < 40; ++i) {
     auto f = (*renderer)->renderFrame(field.defaultCamera, fo);
     ASSERT_TRUE(f.ok());
-    if (f->stats.pyramidLevels) {
+    if (f->stats.pyramid.levels) {
       ++built;
-      EXPECT_EQ(f->stats.occlusionCulled, 0u);
+      EXPECT_EQ(f->stats.cull.occlusionCulled, 0u);
     }
-    skipped += f->stats.pyramidSkipped;
+    skipped += f->stats.pyramid.skipped;
     auto ref = (*renderer)->renderFrame(field.defaultCamera, none);
     ASSERT_EQ(f->ids, ref->ids) << "frame " << i;
   }

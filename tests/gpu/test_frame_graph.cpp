@@ -178,25 +178,25 @@ TEST(FrameGraph, RendererDropsThePassesAFrameDoesNotRead) {
   fo.readPyramid = true;  // (built every frame while it is read back)
   auto tiled = (*renderer)->renderFrame(cam, fo);
   ASSERT_TRUE(tiled.ok());
-  EXPECT_TRUE(contains(tiled->stats.passesRecorded, "depth pyramid"));
-  EXPECT_TRUE(contains(tiled->stats.passesRecorded, "light cull"));
-  EXPECT_TRUE(tiled->stats.passesDropped.empty());
-  EXPECT_EQ(tiled->stats.passesRecorded.front(), "setup");
-  EXPECT_GT(tiled->stats.barriers, tiled->stats.passesRecorded.size() / 2);
+  EXPECT_TRUE(contains(tiled->stats.graph.passesRecorded, "depth pyramid"));
+  EXPECT_TRUE(contains(tiled->stats.graph.passesRecorded, "light cull"));
+  EXPECT_TRUE(tiled->stats.graph.passesDropped.empty());
+  EXPECT_EQ(tiled->stats.graph.passesRecorded.front(), "setup");
+  EXPECT_GT(tiled->stats.graph.barriers, tiled->stats.graph.passesRecorded.size() / 2);
 
   fo.tiledLights = false;
   fo.readPyramid = false;
   fo.skipUselessPyramid = true;
   // Frames until the pyramid is skipped: from above the field nothing is occluded, so the plan stops building it.
   Result<FrameResult> f = (*renderer)->renderFrame(cam, fo);
-  for (int i = 0; i < 4 && f.ok() && !f->stats.pyramidSkipped; ++i) f = (*renderer)->renderFrame(cam, fo);
+  for (int i = 0; i < 4 && f.ok() && !f->stats.pyramid.skipped; ++i) f = (*renderer)->renderFrame(cam, fo);
   ASSERT_TRUE(f.ok());
-  ASSERT_TRUE(f->stats.pyramidSkipped);
-  EXPECT_TRUE(contains(f->stats.passesDropped, "depth pyramid"));
-  EXPECT_TRUE(contains(f->stats.passesDropped, "light cull"));
-  EXPECT_FALSE(contains(f->stats.passesRecorded, "light cull"));
-  EXPECT_TRUE(contains(f->stats.passesRecorded, "shade")) << "the frame's colour is its product, read back or not";
+  ASSERT_TRUE(f->stats.pyramid.skipped);
+  EXPECT_TRUE(contains(f->stats.graph.passesDropped, "depth pyramid"));
+  EXPECT_TRUE(contains(f->stats.graph.passesDropped, "light cull"));
+  EXPECT_FALSE(contains(f->stats.graph.passesRecorded, "light cull"));
+  EXPECT_TRUE(contains(f->stats.graph.passesRecorded, "shade")) << "the frame's colour is its product, read back or not";
   // The skipped passes took no GPU time.
-  for (const auto& [name, ms] : f->stats.passMs) EXPECT_NE(name, "depth pyramid");
+  for (const auto& [name, ms] : f->stats.graph.passMs) EXPECT_NE(name, "depth pyramid");
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }

@@ -73,7 +73,7 @@ void compareGBuffer(Renderer& r, const Camera& cam, CullMode cull, const std::st
   ASSERT_EQ(f.gbuffer.color.size(), f.visbuf.color.size());
   ASSERT_EQ(f.visbuf.ids.size() * 2, f.visbuf.color.size());
   EXPECT_EQ(f.gbuffer.stats.trianglesDrawn, f.visbuf.stats.trianglesDrawn) << "same culling, same draw lists";
-  EXPECT_GT(f.gbuffer.stats.drawsEarly, 0u) << "the steady state has an early phase";
+  EXPECT_GT(f.gbuffer.stats.cull.drawsEarly, 0u) << "the steady state has an early phase";
   // Where visbuf and forward show the same triangle, compare colours; pixels with nothing must be background in
   // the G-buffer image exactly as in visbuf's.
   std::vector<float> g = f.gbuffer.color, fw = f.forward.color, vb = f.visbuf.color;
@@ -163,7 +163,7 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
   fo.freezeCulling = true;
   auto g = (*r)->renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(g.ok() && v.ok());
-  EXPECT_TRUE(g->stats.cullingFrozen);
+  EXPECT_TRUE(g->stats.cull.cullingFrozen);
   ASSERT_EQ(g->overdraw.size(), v->overdraw.size());
   uint64_t fragments = 0, covered = 0, differ = 0, coverageDiffers = 0;
   for (size_t p = 0; p < g->overdraw.size(); ++p) {

@@ -153,16 +153,16 @@ TEST(Lights, TiledEqualsAllLights) {
     fo.path = RenderPath::Forward;
     auto forward = (*renderer)->renderFrame(cam, fo);
     ASSERT_TRUE(tiled.ok() && all.ok() && forward.ok());
-    EXPECT_TRUE(tiled->stats.lightsCulled);
-    EXPECT_FALSE(all->stats.lightsCulled);
-    EXPECT_EQ(tiled->stats.lightTileOverflow, 0u);
-    EXPECT_GT(tiled->stats.meanLightsPerTile, 1.0);
-    EXPECT_LT(tiled->stats.meanLightsPerTile, 500.0) << "culling must cull";
+    EXPECT_TRUE(tiled->stats.lights.culled);
+    EXPECT_FALSE(all->stats.lights.culled);
+    EXPECT_EQ(tiled->stats.lights.tileOverflow, 0u);
+    EXPECT_GT(tiled->stats.lights.meanPerTile, 1.0);
+    EXPECT_LT(tiled->stats.lights.meanPerTile, 500.0) << "culling must cull";
     const test::ImageError e = test::compareColor(tiled->color, all->color);
     const test::ImageError f = test::compareColor(tiled->color, forward->color);
     std::printf("%ux%u, 1000 point lights, %.1f mean / %u max per tile: tiled vs all lights max %.2e; vs forward "
                 "max %.2e, PSNR %.1f dB\n",
-                w, h, tiled->stats.meanLightsPerTile, tiled->stats.maxLightsPerTile, e.maxAbs, f.maxAbs, f.psnr);
+                w, h, tiled->stats.lights.meanPerTile, tiled->stats.lights.maxPerTile, e.maxAbs, f.maxAbs, f.psnr);
     EXPECT_LE(e.maxAbs, 1e-5);
     if (dev.isCpu()) {
       EXPECT_GE(f.psnr, 80.0);
@@ -179,7 +179,7 @@ TEST(Lights, SkippedWithoutPointLights) {
   const uint32_t before = dev.validationMessages();
   Scene scene = brdfScene(0);
   auto hasPass = [](const FrameStats& s) {
-    return std::any_of(s.passMs.begin(), s.passMs.end(), [](const auto& p) { return p.first == "light cull"; });
+    return std::any_of(s.graph.passMs.begin(), s.graph.passMs.end(), [](const auto& p) { return p.first == "light cull"; });
   };
   {
     auto renderer = Renderer::create(dev, scene, {.width = 64, .height = 48});
@@ -187,9 +187,9 @@ TEST(Lights, SkippedWithoutPointLights) {
     auto frame = (*renderer)->renderFrame(brdfCamera(), {});
     ASSERT_TRUE(frame.ok());
     EXPECT_FALSE(hasPass(frame->stats));
-    EXPECT_FALSE(frame->stats.lightsCulled);
-    EXPECT_EQ(frame->stats.pointLights, 0u);
-    EXPECT_EQ(frame->stats.lightBytes, 0u);
+    EXPECT_FALSE(frame->stats.lights.culled);
+    EXPECT_EQ(frame->stats.lights.pointLights, 0u);
+    EXPECT_EQ(frame->stats.lights.bytes, 0u);
   }
   scatterPointLights(scene, 3, 1);
   auto renderer = Renderer::create(dev, scene, {.width = 64, .height = 48});
@@ -197,8 +197,8 @@ TEST(Lights, SkippedWithoutPointLights) {
   auto frame = (*renderer)->renderFrame(brdfCamera(), {});
   ASSERT_TRUE(frame.ok());
   EXPECT_TRUE(hasPass(frame->stats));
-  EXPECT_EQ(frame->stats.pointLights, 3u);
-  EXPECT_GT(frame->stats.lightBytes, 0u);
+  EXPECT_EQ(frame->stats.lights.pointLights, 3u);
+  EXPECT_GT(frame->stats.lights.bytes, 0u);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
@@ -223,9 +223,9 @@ TEST(Lights, TileOverflowIsCounted) {
   fo.tiledLights = false;
   auto all = (*renderer)->renderFrame(brdfCamera(), fo);
   ASSERT_TRUE(tiled.ok() && all.ok());
-  EXPECT_GT(tiled->stats.lightTileOverflow, 0u);
-  EXPECT_EQ(tiled->stats.maxLightsPerTile, uint32_t(LIGHTS_PER_TILE + 40));
-  EXPECT_EQ(tiled->stats.lightsDropped, 40u * tiled->stats.lightTileOverflow);
+  EXPECT_GT(tiled->stats.lights.tileOverflow, 0u);
+  EXPECT_EQ(tiled->stats.lights.maxPerTile, uint32_t(LIGHTS_PER_TILE + 40));
+  EXPECT_EQ(tiled->stats.lights.dropped, 40u * tiled->stats.lights.tileOverflow);
   EXPECT_GT(test::compareColor(tiled->color, all->color).maxAbs, 1e-3) << "dropped lights must show";
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
@@ -317,7 +317,7 @@ TEST(Lights, SpotAndDirectionalMatchCpuReference) {
   tiledOptions.lodErrorPixels = 0.0f;
   auto tiledFrame = (*renderer)->renderFrame(cam, tiledOptions);
   ASSERT_TRUE(allFrame.ok() && tiledFrame.ok());
-  EXPECT_TRUE(tiledFrame->stats.lightsCulled);
+  EXPECT_TRUE(tiledFrame->stats.lights.culled);
   const test::ImageError e = test::compareColor(tiledFrame->color, allFrame->color);
   std::printf("spot + directional: tiled vs all lights max %.2e\n", e.maxAbs);
   EXPECT_LE(e.maxAbs, 1e-5);

@@ -139,8 +139,8 @@ void expectMatchesForwardResolve(const Scene& scene, const char* name, uint32_t 
   std::printf("%s %ux%u msaa %u: visbuf vs forward (hardware resolve) PSNR %.1f dB, max %.4f, mean %.2e, %.3f%% pixels "
               "> 1/255; per-sample pixels %u (%.2f%%). 1x vs 1x: PSNR %.1f dB, max %.4f, %.3f%% pixels; visbuf 1x vs "
               "forward %ux: PSNR %.1f dB, %.3f%% pixels\n",
-              name, w, h, n, e.psnr, e.maxAbs, e.meanAbs, 100.0 * e.differingFraction, vis.stats.perSamplePixels,
-              100.0 * vis.stats.perSamplePixels / (double(w) * h), e11.psnr, e11.maxAbs, 100.0 * e11.differingFraction,
+              name, w, h, n, e.psnr, e.maxAbs, e.meanAbs, 100.0 * e.differingFraction, vis.stats.shade.perSamplePixels,
+              100.0 * vis.stats.shade.perSamplePixels / (double(w) * h), e11.psnr, e11.maxAbs, 100.0 * e11.differingFraction,
               n, e1.psnr, 100.0 * e1.differingFraction);
   // Both resolves against the exact one (pixel_judge.h: the mean of the exact colours at the sample locations).
   auto j = judgeMsaaPixels(scene, cam, vis, fwd, n);
@@ -159,7 +159,7 @@ void expectMatchesForwardResolve(const Scene& scene, const char* name, uint32_t 
   EXPECT_LE(e.maxAbs, std::max(bound.maxAbs, e11.maxAbs));
   EXPECT_LE(e.differingFraction, e11.differingFraction + bound.extraDiffering);
   EXPECT_GE(e.psnr, e1.psnr + 6.0) << "MSAA must bring visbuf much closer to the multisampled reference than 1x";
-  EXPECT_GT(vis.stats.perSamplePixels, 0u);
+  EXPECT_GT(vis.stats.shade.perSamplePixels, 0u);
   EXPECT_EQ(vis.stats.msaaSamples, n);
   test::saveOnFailure(fmt::format("msaa_{}", name), vis, fwd);
   EXPECT_NO_VALIDATION_MESSAGES(before);
@@ -247,8 +247,8 @@ TEST(Msaa, PerSamplePathOnlyWhereSamplesDiffer) {
   }
   std::printf("box field %ux%u msaa %u: %zu pixels with differing samples (CPU) vs %u per-sample pixels (GPU), %zu "
               "covered; %zu uniform pixels vs 1x: max |diff| %.2e\n",
-              w, h, n, differing, ms.stats.perSamplePixels, covered, interiorCompared, interiorMax);
-  EXPECT_EQ(ms.stats.perSamplePixels, differing);
+              w, h, n, differing, ms.stats.shade.perSamplePixels, covered, interiorCompared, interiorMax);
+  EXPECT_EQ(ms.stats.shade.perSamplePixels, differing);
   EXPECT_GT(differing, 0u);
   // (Edges include those between the two triangles of a box face: their IDs differ too. Measured on lavapipe:
   // 6,669 of 20,079 covered pixels.)
@@ -276,7 +276,7 @@ TEST(Msaa, OneSampleIsTheSingleSampledFrame) {
     EXPECT_EQ(after.color, fresh.color) << renderPathName(path);
     EXPECT_EQ(after.ids, fresh.ids) << renderPathName(path);
     EXPECT_EQ(after.stats.msaaSamples, 1u);
-    EXPECT_EQ(after.stats.perSamplePixels, 0u);
+    EXPECT_EQ(after.stats.shade.perSamplePixels, 0u);
   }
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }

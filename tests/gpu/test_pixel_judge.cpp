@@ -101,7 +101,7 @@ TEST(PixelJudge, RefusesWhatItCannotJudge) {
   badId.ids[0] = 7;  // object 6 of a one-object scene
   EXPECT_EQ(judgePixels(scene, cam, f.visbuf, badId).error().code, ErrorCode::InvalidArgument);
   FrameResult coarse = f.forward;  // drew LOD 1 without saying which objects
-  coarse.stats.lodHistogram = {0u, 1u};
+  coarse.stats.cull.lodHistogram = {0u, 1u};
   coarse.drawnObjects.clear();
   EXPECT_EQ(judgePixels(scene, cam, f.visbuf, coarse).error().code, ErrorCode::InvalidArgument);
   scene.materials[0].alphaMode = AlphaMode::Blend;

@@ -93,10 +93,10 @@ TEST(SceneUpdates, MovingObjectsOcclusionEqualsNoCulling) {
     auto a = (*culled)->renderFrame(cam, on);
     auto b = (*reference)->renderFrame(cam, off);
     ASSERT_TRUE(a.ok() && b.ok());
-    occluded += a->stats.occlusionCulled;
-    lateDraws += a->stats.drawsLate;
-    uploaded += a->stats.uploadedBytes;
-    EXPECT_EQ(a->stats.uploadedBytes, b->stats.uploadedBytes);
+    occluded += a->stats.cull.occlusionCulled;
+    lateDraws += a->stats.cull.drawsLate;
+    uploaded += a->stats.upload.bytes;
+    EXPECT_EQ(a->stats.upload.bytes, b->stats.upload.bytes);
     size_t mismatches = 0;
     std::set<std::pair<uint32_t, uint32_t>> wrong;  // (object + 1 culled, object + 1 reference)
     for (size_t p = 0; p < a->ids.size(); p += 2) {
@@ -248,7 +248,7 @@ TEST(SceneUpdates, RefusalsAndUploadedBytes) {
   fo.readColor = false;
   auto f = R.renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
-  EXPECT_EQ(f->stats.uploadedBytes, 0u) << "a frame without changes uploads nothing";
+  EXPECT_EQ(f->stats.upload.bytes, 0u) << "a frame without changes uploads nothing";
   EXPECT_EQ(R.objectSlots(), 202u);
 
   const glm::dmat4 moved = glm::translate(scene.objects[3].transform, glm::dvec3(1.0, 0.0, 0.0));
@@ -281,11 +281,11 @@ TEST(SceneUpdates, RefusalsAndUploadedBytes) {
   f = R.renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
   // Objects 3, 4, 10, 11, 200, 201: six records and their IDs.
-  EXPECT_EQ(f->stats.objectsUpdated, 6u);
-  EXPECT_EQ(f->stats.uploadedBytes, 6u * (sizeof(gpu::ObjectData) + sizeof(uint32_t)));
+  EXPECT_EQ(f->stats.upload.objects, 6u);
+  EXPECT_EQ(f->stats.upload.bytes, 6u * (sizeof(gpu::ObjectData) + sizeof(uint32_t)));
   f = R.renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
-  EXPECT_EQ(f->stats.uploadedBytes, 0u);
+  EXPECT_EQ(f->stats.upload.bytes, 0u);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
@@ -324,11 +324,11 @@ TEST(SceneUpdates, RigidAnimationEqualsTheSamePoseAsStaticTransforms) {
   fo.animationTime = t;
   auto a = (*animated)->renderFrame(side, fo);
   ASSERT_TRUE(a.ok());
-  EXPECT_EQ(a->stats.objectsUpdated, 2u) << "the two wheels";
-  EXPECT_EQ(a->stats.uploadedBytes, 2u * (sizeof(gpu::ObjectData) + sizeof(uint32_t)));
+  EXPECT_EQ(a->stats.upload.objects, 2u) << "the two wheels";
+  EXPECT_EQ(a->stats.upload.bytes, 2u * (sizeof(gpu::ObjectData) + sizeof(uint32_t)));
   auto again = (*animated)->renderFrame(side, fo);
   ASSERT_TRUE(again.ok());
-  EXPECT_EQ(again->stats.uploadedBytes, 0u) << "the same time again: nothing changed";
+  EXPECT_EQ(again->stats.upload.bytes, 0u) << "the same time again: nothing changed";
   fo.animationTime = 0.0;
   auto b = (*still)->renderFrame(side, fo);
   ASSERT_TRUE(b.ok());

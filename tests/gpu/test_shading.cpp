@@ -168,9 +168,9 @@ TEST(Renderer, DrawCapacityOverflowIsReported) {
   fo.readDraws = true;
   auto f = (*r)->renderFrame(cam, fo);
   ASSERT_TRUE(f.ok());
-  EXPECT_GT(f->stats.drawsAppended, 50u);
-  EXPECT_EQ(f->stats.drawsRendered, 50u);
-  EXPECT_EQ(f->stats.drawOverflow, f->stats.drawsAppended - 50u) << "every dropped draw is counted";
+  EXPECT_GT(f->stats.cull.drawsAppended, 50u);
+  EXPECT_EQ(f->stats.cull.drawsRendered, 50u);
+  EXPECT_EQ(f->stats.cull.drawOverflow, f->stats.cull.drawsAppended - 50u) << "every dropped draw is counted";
   EXPECT_EQ(f->drawnObjects.size(), 50u);
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }

@@ -52,7 +52,7 @@ TEST(Skinning, EightInfluencesMatchCpuDoubleSkinning) {
     fo.readColor = false;
     auto frame = (*r)->renderFrame(scene->defaultCamera, fo);
     ASSERT_TRUE(frame.ok()) << frame.error().message;
-    EXPECT_TRUE(frame->stats.skinned);
+    EXPECT_TRUE(frame->stats.skin.ran);
     auto back = (*r)->readSkinnedInstance(0);
     ASSERT_TRUE(back.ok()) << back.error().message;
     ASSERT_EQ(back->vertices.size(), mesh.vertices.size());

@@ -59,7 +59,7 @@ void expectMatchesCpuSkinned(const std::string& a, const Scene* scene, std::init
       fo.animationTime = t;
       auto gpuFrame = (*r)->renderFrame(scene->defaultCamera, fo);
       ASSERT_TRUE(gpuFrame.ok()) << gpuFrame.error().message;
-      EXPECT_TRUE(gpuFrame->stats.skinned);
+      EXPECT_TRUE(gpuFrame->stats.skin.ran);
       const Scene reference = test::cpuSkinned(*scene, t);
       auto rr = Renderer::create(dev, reference, {.width = 256, .height = 256});
       ASSERT_TRUE(rr.ok()) << rr.error().message;
@@ -252,7 +252,7 @@ TEST(Skinning, IdImageUnchangedByCullingOnAnimatedPath) {
       size_t mismatch = 0;
       for (size_t i = 0; i < a1->ids.size(); ++i) mismatch += a1->ids[i] != a2->ids[i];
       for (size_t i = 0; i < a2->ids.size(); i += 2) covered += a2->ids[i] != 0;
-      culledObjects += a1->stats.frustumCulled + a1->stats.occlusionCulled;
+      culledObjects += a1->stats.cull.frustumCulled + a1->stats.cull.occlusionCulled;
       EXPECT_EQ(mismatch, 0u) << skinBoundsName(kind) << " frame " << f;
     }
     std::printf("%s bounds: %zu objects culled over 24 frames\n", skinBoundsName(kind), culledObjects);
@@ -274,9 +274,9 @@ TEST(Skinning, StaticScenesAndPausedPosesRecordNoSkinning) {
   ASSERT_TRUE(rs.ok());
   auto fs = (*rs)->renderFrame(still->defaultCamera, {});
   ASSERT_TRUE(fs.ok());
-  EXPECT_EQ(fs->stats.skinnedInstances, 0u);
-  EXPECT_FALSE(fs->stats.skinned);
-  for (const auto& [name, ms] : fs->stats.passMs) EXPECT_NE(name, "skin");
+  EXPECT_EQ(fs->stats.skin.instances, 0u);
+  EXPECT_FALSE(fs->stats.skin.ran);
+  for (const auto& [name, ms] : fs->stats.graph.passMs) EXPECT_NE(name, "skin");
 
   REQUIRE_ASSET(assetPath("Fox/glTF-Binary/Fox.glb"));
   auto fox = loadAsset("Fox/glTF-Binary/Fox.glb");
@@ -291,13 +291,13 @@ TEST(Skinning, StaticScenesAndPausedPosesRecordNoSkinning) {
   auto f3 = (*ra)->renderFrame(fox->defaultCamera, fo);
   ASSERT_TRUE(f1.ok() && f2.ok() && f3.ok());
   auto hasSkin = [](const FrameStats& s) {
-    for (const auto& [name, ms] : s.passMs)
+    for (const auto& [name, ms] : s.graph.passMs)
       if (name == "skin") return true;
     return false;
   };
-  EXPECT_TRUE(f1->stats.skinned && hasSkin(f1->stats));
-  EXPECT_FALSE(f2->stats.skinned || hasSkin(f2->stats));
-  EXPECT_TRUE(f3->stats.skinned && hasSkin(f3->stats));
+  EXPECT_TRUE(f1->stats.skin.ran && hasSkin(f1->stats));
+  EXPECT_FALSE(f2->stats.skin.ran || hasSkin(f2->stats));
+  EXPECT_TRUE(f3->stats.skin.ran && hasSkin(f3->stats));
   EXPECT_EQ(f1->color, f2->color);
   EXPECT_NE(f2->color, f3->color);
 }
@@ -336,8 +336,8 @@ TEST(Skinning, PoolAcrossVertexWindowsMatchesCpuSkinning) {
   }
   const test::ImageError e = test::compareColor(f->color, g->color);
   std::printf("3000 Foxes, %llu skinned vertices: %zu px covered, %zu differ, PSNR %.1f dB\n",
-              (unsigned long long)f->stats.skinnedVertices, covered, different, e.psnr);
-  EXPECT_GT(f->stats.skinnedVertices, uint64_t(1) << 22);  // the reference: more than one lavapipe window
+              (unsigned long long)f->stats.skin.vertices, covered, different, e.psnr);
+  EXPECT_GT(f->stats.skin.vertices, uint64_t(1) << 22);  // the reference: more than one lavapipe window
   EXPECT_GT(covered, 2000u);
   EXPECT_LE(double(different), 0.001 * 200 * 120);
   EXPECT_GE(e.psnr, 60.0);

@@ -77,14 +77,14 @@ TEST(SwRaster, MatchesHardwareRaster) {
     auto a = (*renderer)->renderFrame(cam, sw);
     auto b = (*renderer)->renderFrame(cam, hw);
     ASSERT_TRUE(a.ok() && b.ok());
-    EXPECT_TRUE(a->stats.swRaster);
-    EXPECT_FALSE(b->stats.swRaster);
-    EXPECT_EQ(b->stats.swDraws, 0u);
-    EXPECT_EQ(a->stats.swOversize, 0u);
-    EXPECT_EQ(a->stats.drawsRendered, b->stats.drawsRendered);
+    EXPECT_TRUE(a->stats.sw.on);
+    EXPECT_FALSE(b->stats.sw.on);
+    EXPECT_EQ(b->stats.sw.draws, 0u);
+    EXPECT_EQ(a->stats.sw.oversize, 0u);
+    EXPECT_EQ(a->stats.cull.drawsRendered, b->stats.cull.drawsRendered);
     EXPECT_EQ(a->stats.trianglesDrawn, b->stats.trianglesDrawn);
-    routed += a->stats.swDraws;
-    drawn += a->stats.drawsRendered;
+    routed += a->stats.sw.draws;
+    drawn += a->stats.cull.drawsRendered;
     const IdDiff d = compareIds(a.value(), b.value());
     total.pixels += d.pixels;
     total.covered += d.covered;
@@ -146,7 +146,7 @@ TEST(SwRaster, CoincidentTrianglesKeepTheFirstInDrawOrder) {
     auto a = (*renderer)->renderFrame(cam, sw);
     auto b = (*renderer)->renderFrame(cam, hw);
     ASSERT_TRUE(a.ok() && b.ok());
-    routed += a->stats.swDraws;
+    routed += a->stats.sw.draws;
     for (size_t q = 0; q < a->ids.size(); q += 2) {
       covered += b->ids[q] != 0;
       if (a->ids[q] == b->ids[q] && a->ids[q + 1] == b->ids[q + 1]) continue;
@@ -192,8 +192,8 @@ TEST(SwRaster, IdImageUnchangedByCulling) {
       o.cull = mode;
       auto a = (*renderer)->renderFrame(cam, o);
       ASSERT_TRUE(a.ok());
-      routed += a->stats.swDraws;
-      occluded += a->stats.occlusionCulled;
+      routed += a->stats.sw.draws;
+      occluded += a->stats.cull.occlusionCulled;
       const IdDiff d = compareIds(a.value(), ref.value());
       ASSERT_EQ(d.otherObject + d.otherTriangle, 0u) << "frame " << i << " " << cullModeName(mode);
     }
@@ -214,14 +214,14 @@ TEST(SwRaster, SkippedWhereItDoesNotApplyAndRefusesImpossibleBounds) {
   auto renderer = Renderer::create(dev, scene, {.width = 160, .height = 90});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
   auto hasSwPass = [](const FrameResult& f) {
-    return std::any_of(f.stats.passMs.begin(), f.stats.passMs.end(),
+    return std::any_of(f.stats.graph.passMs.begin(), f.stats.graph.passMs.end(),
                        [](const auto& p) { return p.first.rfind("sw ", 0) == 0; });
   };
   FrameOptions on;
   on.swRaster = SwRasterMode::On;
   auto a = (*renderer)->renderFrame(outsideCamera(0.5), on);
   ASSERT_TRUE(a.ok());
-  EXPECT_TRUE(a->stats.swRaster);
+  EXPECT_TRUE(a->stats.sw.on);
   EXPECT_TRUE(hasSwPass(a.value()));
   FrameOptions off = on;
   off.swRaster = SwRasterMode::Off;
@@ -230,9 +230,9 @@ TEST(SwRaster, SkippedWhereItDoesNotApplyAndRefusesImpossibleBounds) {
   for (const FrameOptions& o : {off, overdraw}) {
     auto f = (*renderer)->renderFrame(outsideCamera(0.5), o);
     ASSERT_TRUE(f.ok());
-    EXPECT_FALSE(f->stats.swRaster);
+    EXPECT_FALSE(f->stats.sw.on);
     EXPECT_FALSE(hasSwPass(f.value()));
-    EXPECT_EQ(f->stats.swDraws, 0u);
+    EXPECT_EQ(f->stats.sw.draws, 0u);
   }
   for (float px : {0.0f, -1.0f, 95.0f, float(NAN)}) {
     FrameOptions bad = on;
@@ -271,8 +271,8 @@ TEST(SwRaster, UselessMicroRasterIsSkippedAndProbedAgain) {
   for (int i = 0; i < 19; ++i) {
     auto f = (*renderer)->renderFrame(near, on);
     ASSERT_TRUE(f.ok());
-    EXPECT_EQ(f->stats.swDraws, 0u);
-    recorded.push_back(f->stats.swRaster);
+    EXPECT_EQ(f->stats.sw.draws, 0u);
+    recorded.push_back(f->stats.sw.on);
     if (i == 0) firstIds = f->ids;
     EXPECT_EQ(f->ids, firstIds) << "frame " << i;
   }

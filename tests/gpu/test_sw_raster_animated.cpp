@@ -119,8 +119,8 @@ EXTRA_ASSET_TEST(SwRaster, AnimatedInstancesMatchHardwareRaster, "BrainStem/glTF
     auto a = (*r)->renderFrame(cam, on);
     auto b = (*r)->renderFrame(cam, off);
     ASSERT_TRUE(a.ok() && b.ok());
-    EXPECT_EQ(a->stats.swOversize, 0u);
-    routed += a->stats.swDraws;
+    EXPECT_EQ(a->stats.sw.oversize, 0u);
+    routed += a->stats.sw.draws;
     worstPsnr = std::min(worstPsnr, test::compareColor(a->color, b->color).psnr);
     const Scene posed = test::cpuSkinned(*scene, on.animationTime);
     const std::vector<uint32_t> lodsA = drawnLods(*scene, *a), lodsB = drawnLods(*scene, *b);
