@@ -216,6 +216,9 @@ struct Row {
   std::vector<std::pair<std::string, std::pair<double, double>>> passMs;  // name -> median, p95
   double frameMedian = 0, frameP95 = 0, gpuMedian = 0, gpuP95 = 0, cpuMedian = 0, wallMedian = 0;
   double trianglesMedian = 0, drawnMedian = 0;
+  // Visbuf, single-sampled: triangles drawn per covered pixel (median; a visibility buffer's ideal is about 1);
+  // 0 where the path does not count covered pixels.
+  double trianglesPerCoveredPixel = 0;
   uint64_t sceneBytes = 0, targetBytesPerPixel = 0;
   // One extra (untimed) frame at the last measured camera with countOverdraw: depth-passing raster writes per
   // pixel and the bytes written per pixel (FrameStats::bytesWrittenPerPixel).
@@ -534,12 +537,14 @@ int runBench(const BenchCommand& c) {
       }
       std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
       std::vector<std::string> passNames;
+      std::vector<double> perCovered;
       for (const FrameStats& s : measured) {
         frameMs.push_back(s.gpuMs + s.cpuRecordMs);
         gpu.push_back(s.gpuMs);
         cpu.push_back(s.cpuRecordMs);
         wall.push_back(s.wallMs);
         tris.push_back(double(s.trianglesDrawn));
+        if (s.coveredPixels > 0) perCovered.push_back(double(s.trianglesDrawn) / double(s.coveredPixels));
         drawn.push_back(double(s.cull.drawsRendered));
         for (const auto& [name, ms] : s.graph.passMs)
           if (std::find(passNames.begin(), passNames.end(), name) == passNames.end()) passNames.push_back(name);
@@ -562,6 +567,7 @@ int runBench(const BenchCommand& c) {
       row.wallMedian = median(wall);
       row.trianglesMedian = median(tris);
       row.drawnMedian = median(drawn);
+      row.trianglesPerCoveredPixel = perCovered.empty() ? 0.0 : median(perCovered);
       {
         std::vector<double> present, pairs;
         for (const FrameStats& s : measured)
@@ -683,6 +689,7 @@ int runBench(const BenchCommand& c) {
     x["wallMs"] = {{"median", row.wallMedian}};
     x["trianglesDrawn"] = row.trianglesMedian;
     x["objectsDrawn"] = row.drawnMedian;
+    if (row.trianglesPerCoveredPixel > 0) x["trianglesPerCoveredPixel"] = row.trianglesPerCoveredPixel;
     x["sceneBytes"] = row.sceneBytes;
     x["targetBytesPerPixel"] = row.targetBytesPerPixel;
     x["rasterWritesPerPixel"] = row.rasterWritesPerPixel;
@@ -714,7 +721,8 @@ int runBench(const BenchCommand& c) {
     std::replace(n.begin(), n.end(), ' ', '_');
     csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
   }
-  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels,shading,raster\n";  // appended: earlier columns fixed
+  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels,shading,raster,"
+         "triangles_per_covered_pixel\n";  // appended: earlier columns fixed
   for (const Row& row : rows) {
     csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
                        c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
@@ -729,8 +737,9 @@ int runBench(const BenchCommand& c) {
       const auto* p = passOf(row, n);
       csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
     }
-    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f},{},{}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
-                       row.config.msaa, row.perSamplePixels, row.shading, row.raster);
+    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f},{},{},{}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
+                       row.config.msaa, row.perSamplePixels, row.shading, row.raster,
+                       row.trianglesPerCoveredPixel > 0 ? fmt::format("{:.3f}", row.trianglesPerCoveredPixel) : "");
   }
 
   // bench.md
@@ -745,18 +754,19 @@ int runBench(const BenchCommand& c) {
   for (const SceneInfo& s : scenes)
     md += fmt::format("- {} objects: {} objects, {} full-detail triangles; reference {} ({:.1f} ms a frame)\n",
                       objectsLabel(s.objects), s.sceneObjects, s.triangles, s.reference, s.referenceFrameMsMedian);
-  md += "\n| objects | path | cull | LOD px | IDs | vertices | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | drawn | "
-        "scene MiB | B/px | PSNR dB | worst dB | max err | px > 1/255 | ID mism. | P |\n";
-  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md += "\n| objects | path | cull | LOD px | IDs | vertices | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | "
+        "tri/px | drawn | scene MiB | B/px | PSNR dB | worst dB | max err | px > 1/255 | ID mism. | P |\n";
+  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Row& row : rows) {
     std::string passes;
     for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
-    md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f} | {} / {:.1f} | {} | {} | "
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {} | {:.0f} | {:.1f} | {} / {:.1f} | {} | {} | "
                       "{:.4f} | {:.3f}% | {} | {} |\n",
                       objectsLabel(row.objects),
                       row.shading == "-" ? pathLabel(row.config)
                                          : fmt::format("{} ({}, {})", pathLabel(row.config), row.shading, row.raster),
                       cullModeName(row.config.cull), row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
+                      row.trianglesPerCoveredPixel > 0 ? fmt::format("{:.2f}", row.trianglesPerCoveredPixel) : "-",
                       row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, row.bytesWrittenPerPixel, dbText(row.psnrMean),
                       dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),
