@@ -10,11 +10,11 @@
 #include "visibility_id.glsl"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
-layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
+layout(std430, set = 1, binding = BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
   uint header[CLASSIFY_HEADER];
   MaterialTiles materialTiles[];
 };
-layout(std430, set = 0, binding = BINDING_TILE_LIST) writeonly buffer TileListBlock { uint tileList[]; };
+layout(std430, set = 1, binding = BINDING_TILE_LIST) writeonly buffer TileListBlock { uint tileList[]; };
 
 const uint LANES = SHADE_TILE_X * SHADE_TILE_Y;
 shared uint laneMaterial[LANES];

@@ -9,7 +9,7 @@
 
 layout(local_size_x = CLASSIFY_SCAN_WORKGROUP) in;
 layout(push_constant) uniform Push { PassConstants pc; };  // material: the scene's material count
-layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
+layout(std430, set = 1, binding = BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
   uint header[CLASSIFY_HEADER];
   MaterialTiles materialTiles[];
 };

@@ -20,12 +20,12 @@
 #include "common.glsl"
 
 layout(local_size_x = CULL_WORKGROUP_SIZE) in;
-layout(std430, set = 0, binding = BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
-layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
-layout(std430, set = 0, binding = BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
-layout(std430, set = 0, binding = BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
-layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
-layout(set = 0, binding = BINDING_PYRAMID) uniform sampler2D pyramid;
+layout(std430, set = 1, binding = BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatBlock { uint stats[]; };
+layout(std430, set = 1, binding = BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
+layout(std430, set = 1, binding = BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
+layout(std430, set = 1, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
+layout(set = 1, binding = BINDING_PYRAMID) uniform sampler2D pyramid;
 layout(push_constant) uniform Push { PassConstants pc; };
 
 bool frustumVisible(vec3 c, float r) {

@@ -25,7 +25,7 @@ layout(location = 3) out vec4 outEmissive;
 layout(early_fragment_tests) in;  // (not with discard: a cut-out fragment must not write depth)
 #endif
 // Debug/bandwidth variant: count the raster writes per pixel (fragments that pass the depth test when they run).
-layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+layout(set = 1, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
 #endif
 
 void main() {

@@ -6,12 +6,12 @@
 #include "lighting.glsl"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
-layout(set = 0, binding = BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_TARGETS];
-layout(set = 0, binding = BINDING_GBUFFER_DEPTH) uniform sampler2D gbufferDepth;
-layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+layout(set = 1, binding = BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_TARGETS];
+layout(set = 1, binding = BINDING_GBUFFER_DEPTH) uniform sampler2D gbufferDepth;
+layout(set = 1, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
 #if WRITE_ATTRIBUTES
 // Test variant: the rebuilt position and the depth in the attribute record's slots 0..3 (config.h), slot 7 = 1.
-layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
+layout(std430, set = 1, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
 #endif
 
 // Inverse of the reverse-Z infinite projection (render/frame_math.cpp): depth = near / -z_view,

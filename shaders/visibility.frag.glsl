@@ -19,7 +19,7 @@
 #if !ALPHA_MASK
 layout(early_fragment_tests) in;
 #endif
-layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+layout(set = 1, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
 #endif
 layout(location = 0) flat in uint inDrawSlot;
 #if ALPHA_MASK

@@ -39,13 +39,13 @@ void ClassifyPass::resize(gpu::Device& device, uint32_t width, uint32_t height) 
                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::DeviceLocal);
 }
 
-void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const {
+void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets) const {
   constexpr VkAccessFlags2 kReadWrite = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
   // The previous frame's shading read the records this frame clears (its fence has passed; ordering only).
   vkCmdFillBuffer(cmd, materialTiles_.handle(), 0, VK_WHOLE_SIZE, 0);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, sets, 0, nullptr);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, count_.handle());
   vkCmdDispatch(cmd, tilesX_, tilesY_, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
@@ -67,8 +67,8 @@ void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, 
   vkCmdCopyBuffer(cmd, materialTiles_.handle(), readback_.handle(), 1, &c);
 }
 
-void ClassifyPass::recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const {
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+void ClassifyPass::recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets) const {
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, sets, 0, nullptr);
   for (bool textured : {true, false}) {
     const gpu::Pipeline& p = textured ? shadeTextured_ : shadeUntextured_;
     if (!p.handle()) continue;

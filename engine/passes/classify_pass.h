@@ -37,9 +37,9 @@ class ClassifyPass {
   // (Re)allocates the tile list for a width x height frame: tiles x min(materials, 64) entries.
   void resize(gpu::Device& device, uint32_t width, uint32_t height);
   // Count, scan and scatter, then the barrier to the indirect dispatches and a copy of the records for stats().
-  void recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  void recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets) const;
   // The shading dispatches, one per material.
-  void recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  void recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets) const;
   ClassifyStats stats() const;  // after the frame's fence
   const gpu::Buffer& materialTiles() const { return materialTiles_; }
   const gpu::Buffer& tileList() const { return tileList_; }

@@ -13,12 +13,12 @@ struct CullPass {
   static CullPass create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec);
   // phase: CULL_PHASE_EARLY/LATE. Occlusion mode also reads the depth pyramid and reads/writes the per-object
   // history.
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t objectCount,
               uint32_t phase) const;
   // One thread per object of a list in BINDING_VISIBLE_LIST's buffer, whose header (at byte `headerOffset`) holds
   // the dispatch size: the early phase of occlusion culling over last frame's visible list, and the late phase's
   // refinement dispatch (variant CULL_REFINE) over the objects its first dispatch listed (config.h).
-  void recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& lists,
+  void recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Buffer& lists,
                     VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const;
 };
 

@@ -28,14 +28,14 @@ ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gp
   return p;
 }
 
-void ForwardPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+void ForwardPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Image& color,
                          VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
                          const std::vector<ForwardDraw>& draws, const gpu::Image* ids, bool countOverdraw,
                          const gpu::Image* resolve) const {
   if (countOverdraw) ids = nullptr;  // one diagnostic at a time
   beginRendering(cmd, color, background, depth, false, ids, VkClearColorValue{}, resolve);
   const Variant variant = countOverdraw ? Overdraw : ids ? WithIds : Plain;
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 2, sets, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   uint32_t bound = DRAW_LIST_NONE;
   for (const ForwardDraw& d : draws) {

@@ -32,7 +32,7 @@ struct ForwardPass {
   // ids: optional rg32ui target (cleared to 0) written with the same IDs the visibility path decodes.
   // draws: in any order; the pipeline is rebound where the list changes (sort by list to bind each once).
   // resolve: MSAA, the single-sample image the multisampled colour is averaged into (hardware resolve).
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Image& color,
               VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
               const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr, bool countOverdraw = false,
               const gpu::Image* resolve = nullptr) const;

@@ -13,7 +13,7 @@ struct GBufferLightingPass {
   gpu::Pipeline pipeline;
   gpu::Pipeline attributesPipeline;  // same lighting, plus the position record (tests)
   static GBufferLightingPass create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width, uint32_t height,
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t width, uint32_t height,
               bool writeAttributes) const;
 };
 

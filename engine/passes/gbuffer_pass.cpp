@@ -49,7 +49,7 @@ GBufferPass GBufferPass::create(gpu::Device& device, VkPipelineLayout layout, gp
   return p;
 }
 
-void GBufferPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+void GBufferPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets,
                          const GBufferInputs& in) const {
   std::array<VkRenderingAttachmentInfo, GBUFFER_TARGETS> cas{};
   for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) {
@@ -78,7 +78,7 @@ void GBufferPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescrip
   VkRect2D sc{{0, 0}, {w, h}};
   vkCmdSetViewport(cmd, 0, 1, &vp);
   vkCmdSetScissor(cmd, 0, 1, &sc);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 2, sets, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   for (const VisibilityList& l : in.lists) {
     if (l.maxDraws == 0) continue;

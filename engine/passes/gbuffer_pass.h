@@ -38,7 +38,7 @@ struct GBufferPass {
   // Per draw list (its cull mode; masked lists discard like the visibility raster): plain and overdraw-counting.
   std::array<std::array<gpu::Pipeline, 2>, DRAW_LISTS> pipelines;
   static GBufferPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const GBufferInputs& in) const;
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const GBufferInputs& in) const;
 };
 
 }  // namespace visbuf::passes

@@ -21,13 +21,13 @@ void LightCullPass::resize(gpu::Device& device, uint32_t width, uint32_t height)
                        gpu::MemoryUse::DeviceLocal);
 }
 
-void LightCullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, bool multisampled) const {
+void LightCullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, bool multisampled) const {
   vkCmdFillBuffer(cmd, tiles_.handle(), 0, LIGHT_TILE_HEADER * sizeof(uint32_t), 0);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (multisampled ? msaaPipeline_ : pipeline_).handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, sets, 0, nullptr);
   vkCmdDispatch(cmd, (tilesX_ + 7) / 8, (tilesY_ + 7) / 8, 1);  // one thread per tile, 8x8 per workgroup
 }
 

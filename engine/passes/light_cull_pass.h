@@ -28,7 +28,7 @@ class LightCullPass {
   void resize(gpu::Device& device, uint32_t width, uint32_t height);
   // Resets the counters, then one dispatch over every tile. The depth must be in SHADER_READ_ONLY_OPTIMAL.
   // multisampled: BINDING_LIGHT_DEPTH is the MSAA depth; the bounds take every sample.
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, bool multisampled = false) const;
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, bool multisampled = false) const;
   // After record: copies the counters to a host-visible buffer (transfer stage), read by stats().
   void recordReadback(VkCommandBuffer cmd) const;
   LightCullStats stats() const;

@@ -22,21 +22,21 @@ void ShadePass::createMsaa(gpu::Device& device, VkPipelineLayout layout, gpu::Sp
 }
 
 namespace {
-void dispatchPixels(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Pipeline& p,
+void dispatchPixels(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Pipeline& p,
                     uint32_t width, uint32_t height) {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, sets, 0, nullptr);
   vkCmdDispatch(cmd, (width + SHADE_TILE_X - 1) / SHADE_TILE_X, (height + SHADE_TILE_Y - 1) / SHADE_TILE_Y, 1);
 }
 }  // namespace
 
-void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
+void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t width,
                        uint32_t height, Variant variant) const {
-  dispatchPixels(cmd, layout, set,
+  dispatchPixels(cmd, layout, sets,
                  variant == Msaa ? msaaPipeline : variant == Attributes ? attributesPipeline : pipeline, width, height);
 }
 
-void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets,
                               const gpu::Buffer& tiles, uint32_t width, uint32_t height) const {
   const uint32_t tileCount = ((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
   // (The previous frame's reads of the list are behind the frame graph's frame boundary.)
@@ -45,7 +45,7 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDe
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredTilesPipeline.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, sets, 0, nullptr);
   gpu::PassConstants pc{};
   vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   vkCmdDispatch(cmd, (tileCount + COVERED_TILES_WORKGROUP - 1) / COVERED_TILES_WORKGROUP, 1, 1);
@@ -62,9 +62,9 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDe
   vkCmdDispatchIndirect(cmd, tiles.handle(), 0);
 }
 
-void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
+void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t width,
                                 uint32_t height) const {
-  dispatchPixels(cmd, layout, set, sampleIdsPipeline, width, height);
+  dispatchPixels(cmd, layout, sets, sampleIdsPipeline, width, height);
 }
 
 }  // namespace visbuf::passes

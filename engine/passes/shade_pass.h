@@ -21,14 +21,14 @@ struct ShadePass {
   gpu::Pipeline coveredTilesPipeline;  // covered_tiles.comp: the list and its indirect dispatch
   static ShadePass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   void createMsaa(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width, uint32_t height,
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t width, uint32_t height,
               Variant variant) const;
   // The ubershader over the covered tiles only: covered_tiles.comp lists the 8x8 tiles whose IDs show anything
   // into `tiles` (FrameData.coveredTiles* holds its address) and writes the indirect dispatch, then one workgroup
   // per listed tile shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
-  void recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& tiles,
+  void recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Buffer& tiles,
                      uint32_t width, uint32_t height) const;
-  void recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
+  void recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t width,
                        uint32_t height) const;
 };
 

@@ -38,22 +38,22 @@ bool SwRasterPass::ensureBuffer(gpu::Device& device, uint32_t width, uint32_t he
   return true;
 }
 
-void SwRasterPass::recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
+void SwRasterPass::recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t phase,
                                 const gpu::Buffer& stats) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, raster.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, sets, 0, nullptr);
   gpu::PassConstants pc{phase, 0, 0, 0};
   vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
   vkCmdDispatchIndirect(cmd, stats.handle(), (SW_ARGS + phase * SW_ARGS_UINTS + SW_ARGS_DISPATCH) * sizeof(uint32_t));
 }
 
-void SwRasterPass::recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+void SwRasterPass::recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets,
                                const gpu::Image& ids, const gpu::Image& depth, const gpu::Buffer& stats,
                                uint32_t phase) const {
   beginRendering(cmd, ids, {}, depth, /*load=*/true);
   const bool wide = ids.format() == VK_FORMAT_R32G32_UINT;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, merge[wide ? 1 : 0].handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 2, sets, 0, nullptr);
   vkCmdDrawIndirect(cmd, stats.handle(), (SW_ARGS + phase * SW_ARGS_UINTS + SW_ARGS_MERGE) * sizeof(uint32_t), 1,
                     sizeof(VkDrawIndirectCommand));
   vkCmdEndRendering(cmd);

@@ -24,10 +24,10 @@ struct SwRasterPass {
   // The raster dispatch and the merge draw take their sizes from the cull pass (config.h SW_ARGS in `stats`): a
   // phase that routed nothing here dispatches no workgroup and draws no triangle. Each workgroup loops over the
   // phase's routed draws.
-  void recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
+  void recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, uint32_t phase,
                     const gpu::Buffer& stats) const;
   // ids / depth: COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL, loaded and stored.
-  void recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& ids,
+  void recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Image& ids,
                    const gpu::Image& depth, const gpu::Buffer& stats, uint32_t phase) const;
 
  private:

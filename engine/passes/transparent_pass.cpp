@@ -25,11 +25,11 @@ TransparentPass TransparentPass::create(gpu::Device& device, VkPipelineLayout la
   return p;
 }
 
-void TransparentPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+void TransparentPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets,
                              const gpu::Image& color, const gpu::Image& depth, VkBuffer indexBuffer,
                              const std::vector<TransparentDraw>& draws) const {
   beginRendering(cmd, color, VkClearColorValue{}, depth, true);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 2, sets, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   uint32_t bound = DRAW_LIST_NONE;
   for (const TransparentDraw& t : draws) {

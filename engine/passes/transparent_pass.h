@@ -29,7 +29,7 @@ class TransparentPass {
   static TransparentPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
   // color: rgba16f in COLOR_ATTACHMENT_OPTIMAL, loaded; depth: D32 in DEPTH_ATTACHMENT_OPTIMAL, loaded, not
   // written. draws: drawn in the given order (sortBackToFront).
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const gpu::Image& color,
               const gpu::Image& depth, VkBuffer indexBuffer, const std::vector<TransparentDraw>& draws) const;
   bool created() const { return pipelines_[0].handle() != VK_NULL_HANDLE; }
 

@@ -83,7 +83,7 @@ void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorVa
   vkCmdSetScissor(cmd, 0, 1, &sc);
 }
 
-void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
+void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets,
                             const VisibilityInputs& in) const {
   VkClearColorValue nothing{};
   nothing.uint32[0] = VIS_NOTHING;
@@ -91,7 +91,7 @@ void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDesc
   beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear);
   const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
   const Variant variant = in.countOverdraw ? (isWide ? WideOverdraw : NarrowOverdraw) : (isWide ? Wide : Narrow);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 2, sets, 0, nullptr);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   for (const VisibilityList& l : in.lists) {
     if (l.maxDraws == 0) continue;

@@ -49,7 +49,7 @@ struct VisibilityPass {
   // samples: rasterisation samples of the targets it will draw into (MSAA: multisampled IDs and depth).
   static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
                                VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
+  void record(VkCommandBuffer cmd, VkPipelineLayout layout, const VkDescriptorSet* sets, const VisibilityInputs& in) const;
 };
 
 // Begins dynamic rendering on colour + depth, cleared (depth to 0, reverse-Z) or loaded; shared by the

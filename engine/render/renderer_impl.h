@@ -37,6 +37,7 @@
 #include "visbuf/passes/visibility_pass.h"
 #include "visbuf/render/frame_math.h"
 #include "visbuf/render/frame_plan.h"
+#include "visbuf/render/scene_descriptors.h"
 #include "visbuf/scene/gpu_scene.h"
 
 namespace visbuf {
@@ -77,8 +78,7 @@ struct FrameReadback {
 
 // Per-frame resources: a ring of RendererConfig::framesInFlight slots. Frame n uses slot n % framesInFlight.
 struct FrameSlot {
-  VkDescriptorSet set = VK_NULL_HANDLE;  // every binding shared, except BINDING_FRAME: this slot's frameBuffer
-  gpu::Buffer frameBuffer;               // FrameData, host visible
+  gpu::Buffer frameBuffer;               // FrameData, host visible (the slot's scene set: SCENE_BINDING_FRAME)
   gpu::Buffer statsReadback;             // the counters, copied at the end of the frame
   gpu::Buffer staging;                   // object records the frame uploads, host visible (grown on demand)
   std::unique_ptr<gpu::TimestampPool> timestamps;
@@ -89,8 +89,6 @@ struct FrameSlot {
   FrameStats stats;      // what recording knew; completed from the counters (Renderer::Impl::collectStats)
 };
 
-std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift);
-
 struct Renderer::Impl {
   gpu::Device& device;
   const Scene& scene;
@@ -99,7 +97,7 @@ struct Renderer::Impl {
   IdEncoding encoding;
   uint32_t capacity = 0;      // draws per phase (all draw lists together): draws[0, capacity) early, then late
   // Draw lists (config.h DRAW_LIST_*): list l holds slots [listFirst[l], + listCapacity[l]) of each phase's region;
-  // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (BINDING_DRAW_LISTS).
+  // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (read by the cull pass).
   std::array<uint32_t, DRAW_LISTS> listFirst{}, listCapacity{};
   uint32_t listMask = 0;                 // bit l: listCapacity[l] > 0
   uint32_t swListMask = 0;               // bit l: the micro-raster may take list l's draws (opaque, uncapped)
@@ -108,16 +106,16 @@ struct Renderer::Impl {
   uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
   uint32_t vertexShift = 0;  // vertices per vertex-pool window: 1 << vertexShift (vertexWindowShift)
 
-  VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
-  VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
-  VkDescriptorPool pool = VK_NULL_HANDLE;
+  SceneDescriptors sceneSets;  // set 0 of every pass, one per slot
+  gpu::DescriptorLayout passSet;  // set 1 of the passes without their own
+  VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;  // the scene set and passSet
   VkSampler sampler = VK_NULL_HANDLE;
   VkFence fence = VK_NULL_HANDLE;  // renderFrame's own wait
   std::vector<FrameSlot> slots;
   uint64_t frameCounter = 0;             // frames recorded so far (renderFrame and record)
   std::optional<FrameStats> completed;   // the newest collected frame's stats (record())
-  // The frame being recorded: its slot's descriptor set, command buffers and timestamps (beginFrame).
-  VkDescriptorSet set = VK_NULL_HANDLE;
+  // The frame being recorded: its slot's scene set (and passSet), command buffers and timestamps (beginFrame).
+  std::array<VkDescriptorSet, 2> sets{};
   VkCommandBuffer* cmds = nullptr;
   gpu::TimestampPool* timestamps = nullptr;
 
@@ -207,9 +205,7 @@ struct Renderer::Impl {
       if (f.cmds[0]) vkFreeCommandBuffers(dev, device.commandPool(), kCommandBuffers, f.cmds.data());
     vkDestroyFence(dev, fence, nullptr);
     vkDestroySampler(dev, sampler, nullptr);
-    vkDestroyDescriptorPool(dev, pool, nullptr);
     vkDestroyPipelineLayout(dev, pipelineLayout, nullptr);
-    vkDestroyDescriptorSetLayout(dev, setLayout, nullptr);
   }
 
   void createLayouts();
@@ -229,7 +225,10 @@ struct Renderer::Impl {
   // The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
   void resizeAttributes(VkDeviceSize bytes);
 
+  // Every set (scene and pass sets) from the current resources; the device goes idle first (only lazily created
+  // resources and resizes get here, never a steady frame).
   void writeDescriptors();
+  void writePassSet();
 
   // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
   // for them).
