@@ -210,14 +210,14 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.prepare({Graph::writes(r.history, access::transferWrite)}, [this](VkCommandBuffer cmd) { resetVisibleList(cmd); });
   if (occlusion && !late) {
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
-      cull.recordListed(cmd, pipelineLayout, sets.data(), visibleList, 0, CULL_PHASE_EARLY, 0);
+      cull.recordListed(cmd, sets[0], visibleList, 0, CULL_PHASE_EARLY, 0);
     });
     return;
   }
-  p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, pipelineLayout, sets.data(), gpuScene.objectCount, phase); });
+  p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, sets[0], gpuScene.objectCount, phase); });
   if (occlusion && late && plan.usePyramid)  // the objects the coarse pyramid test left, at a finer level
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
-      cull.recordListed(cmd, pipelineLayout, sets.data(), visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
+      cull.recordListed(cmd, sets[0], visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
     });
 }
 
@@ -280,12 +280,12 @@ void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint3
                 [this](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, swRaster.buffer.handle(), 0, VK_WHOLE_SIZE, 0); });
   raster.step({Graph::writes(r.sw, access::computeReadWrite), Graph::writes(r.stats, access::computeReadWrite | access::indirect),
                Graph::reads(r.draws, access::computeRead), Graph::reads(r.scene, access::computeRead)},
-              [this, phase](VkCommandBuffer cmd) { swRaster.recordRaster(cmd, pipelineLayout, sets.data(), phase, stats); });
+              [this, phase](VkCommandBuffer cmd) { swRaster.recordRaster(cmd, sets[0], phase, stats); });
   const gpu::Access swRead{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT};
   g.pass(late ? "micro-raster merge late" : "micro-raster merge", late ? "sw merge late" : "sw merge")
       .step({Graph::reads(r.sw, swRead), Graph::reads(r.stats, access::indirect),
              Graph::writes(r.ids, access::colorAttachment), Graph::writes(r.depth, access::depthAttachment)},
-            [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, pipelineLayout, sets.data(), ids, depth, stats, phase); });
+            [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, sets[0], ids, depth, stats, phase); });
 }
 
 void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa) {
@@ -301,7 +301,7 @@ void Renderer::Impl::declareLightCull(Graph& g, const FrameResources& r, bool ms
   g.pass("light cull", "light cull")
       .step({Graph::reads(r.depth, access::computeSampled),
              Graph::overwrites(r.lightTiles, access::transferWrite | access::computeReadWrite)},
-            [this, msaa](VkCommandBuffer cmd) { lightCull.record(cmd, pipelineLayout, sets.data(), msaa); });
+            [this, msaa](VkCommandBuffer cmd) { lightCull.record(cmd, sets[0], msaa); });
 }
 
 void Renderer::Impl::declareClassify(Graph& g, const FrameResources& r) {

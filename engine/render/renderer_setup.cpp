@@ -20,21 +20,15 @@ void Renderer::Impl::createLayouts() {
   constexpr VkDescriptorType image = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
   constexpr VkShaderStageFlags fragment = VK_SHADER_STAGE_FRAGMENT_BIT, all = gpu::kPassConstantStages;
   passSet = gpu::DescriptorLayout(device,
-                                  {{BINDING_DRAWS, storage, 1, all},
+                                  {{BINDING_DRAWS, storage},
                                    {BINDING_VISIBILITY, sampled},
                                    {BINDING_COLOR, image},
-                                   {BINDING_PYRAMID, sampled},
-                                   {BINDING_HISTORY, storage},
-                                   {BINDING_VISIBLE_LIST, storage},
                                    {BINDING_OVERDRAW, image, 1, fragment},
                                    {BINDING_ATTRIBUTES, storage},
-                                   {BINDING_DRAW_LISTS, storage},
-                                   {BINDING_SW_VISIBILITY, storage, 1, all},
                                    {BINDING_GBUFFER, sampled, GBUFFER_TARGETS},
                                    {BINDING_GBUFFER_DEPTH, sampled},
                                    {LIGHTING_BINDING_LIGHTS, storage, 1, all},
                                    {LIGHTING_BINDING_LIGHT_TILES, storage, 1, all},
-                                   {BINDING_LIGHT_DEPTH, sampled},
                                    {BINDING_MATERIAL_TILES, storage},
                                    {BINDING_TILE_LIST, storage},
                                    {BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
@@ -121,6 +115,10 @@ void Renderer::Impl::writeDescriptors() {
   vkDeviceWaitIdle(device.device());
   for (uint32_t i = 0; i < slots.size(); ++i)
     sceneSets.write(i, slots[i].frameBuffer, {&gpuScene, &stats, objectSplit, vertexShift});
+  cull.bind(draws, history, visibleList, drawLists, pyramid.pyramid(), sampler);
+  if (swRaster.created()) swRaster.bind(draws, drawLists);
+  // MSAA frames: the light culling reads the multisampled depth.
+  if (hasPointLights()) lightCull.bind(pointLights, descriptorsMsaa ? depthMs : depth, sampler);
   writePassSet();
 }
 
@@ -128,18 +126,12 @@ void Renderer::Impl::writePassSet() {
   const VkImageLayout readOnly = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
   gpu::DescriptorWriter w(passSet);
   w.buffer(BINDING_DRAWS, draws.handle())
-      .buffer(BINDING_HISTORY, history.handle())
       .buffer(BINDING_ATTRIBUTES, attributes.handle())
-      .buffer(BINDING_DRAW_LISTS, drawLists.handle())
-      .buffer(BINDING_SW_VISIBILITY, swRaster.buffer.handle())
-      .buffer(BINDING_VISIBLE_LIST, visibleList.handle())
       .texels(BINDING_DRAW_TEXELS, drawTexels.handle());
-  // MSAA frames: the shading pass and the light culling read the multisampled targets (only those variants
-  // declare multisampled images; every other shader ignores these bindings).
+  // MSAA frames: the shading pass reads the multisampled IDs (only its MSAA variants declare multisampled images).
   w.image(BINDING_VISIBILITY, (descriptorsMsaa ? idsMs : ids).view(), readOnly, sampler)
       .image(BINDING_COLOR, color.view(), VK_IMAGE_LAYOUT_GENERAL)
-      .image(BINDING_OVERDRAW, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL)
-      .image(BINDING_PYRAMID, pyramid.pyramid().view(), VK_IMAGE_LAYOUT_GENERAL, sampler);
+      .image(BINDING_OVERDRAW, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL);
   // G-buffer targets: until a G-buffer frame creates them, the depth stands in (lavapipe reads every descriptor
   // of a bound set, so none may stay unwritten; only gbuffer_lighting.comp samples these).
   std::vector<VkDescriptorImageInfo> gbufferInfo;
@@ -149,8 +141,7 @@ void Renderer::Impl::writePassSet() {
   // Lights: with no point lights nothing is allocated; the shaders never read these bindings then
   // (FrameData.pointLightCount = 0), which alias the stats buffer only to keep the set complete.
   w.buffer(LIGHTING_BINDING_LIGHTS, (hasPointLights() ? pointLights : stats).handle())
-      .buffer(LIGHTING_BINDING_LIGHT_TILES, (hasPointLights() ? lightCull.tiles() : stats).handle())
-      .image(BINDING_LIGHT_DEPTH, (descriptorsMsaa ? depthMs : depth).view(), readOnly, sampler);
+      .buffer(LIGHTING_BINDING_LIGHT_TILES, (hasPointLights() ? lightCull.tiles() : stats).handle());
   // Classification: until a classified frame creates its buffers, the stats buffer stands in (never read).
   w.buffer(BINDING_MATERIAL_TILES, (classify.created() ? classify.materialTiles() : stats).handle())
       .buffer(BINDING_TILE_LIST, (classify.created() ? classify.tileList() : stats).handle())
@@ -325,11 +316,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
   const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
                                      impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
-  impl->cull = passes::CullPass::create(device, impl->pipelineLayout, textured);
+  impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
   impl->objectUpload.create(device);
   impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
-  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->pipelineLayout, textured);
+  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->sceneSets.layout(), textured);
   impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
   if (!impl->blendObjects.empty())
     impl->transparent = passes::TransparentPass::create(device, impl->pipelineLayout, textured);
@@ -366,7 +357,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                         glm::vec4(l.direction, 0.0f), cone.x, cone.y, uint32_t(l.type), 0u});
     }
     impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
-    impl->lightCull.create(device, impl->pipelineLayout, w);
+    impl->lightCull.create(device, impl->sceneSets.layout(), w);
   }
   impl->createTargets(config.width, config.height);
   const bool gpuBounds = config.skinBounds == SkinBounds::Gpu;
