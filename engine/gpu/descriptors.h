@@ -90,6 +90,7 @@ class PassLayout {
   PassLayout& operator=(const PassLayout&) = delete;
 
   void reset();
+  explicit operator bool() const { return pipelineLayout_ != VK_NULL_HANDLE; }
   VkPipelineLayout pipelineLayout() const { return pipelineLayout_; }
   DescriptorWriter writer() const { return DescriptorWriter(set_); }
   // Binds the scene set (set 0) and the pass's own set (set 1).

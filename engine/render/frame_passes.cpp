@@ -260,12 +260,12 @@ void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const Fram
       passes::GBufferInputs in;
       for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) in.targets[i] = &gbufferTargets[i];
       common(in);
-      gbuffer.record(cmd, pipelineLayout, sets.data(), in);
+      gbuffer.record(cmd, sets[0], in);
     } else {
       passes::VisibilityInputs in;
       in.ids = msaa ? &idsMs : &ids;
       common(in);
-      (msaa ? visibilityMs : visibility).record(cmd, pipelineLayout, sets.data(), in);
+      (msaa ? visibilityMs : visibility).record(cmd, sets[0], in);
     }
   });
 }
@@ -408,7 +408,7 @@ void Renderer::Impl::declareForward(Graph& g, const FrameResources& r, const Cam
       .step(std::move(uses), [this, msaa, fdraws = std::move(fdraws), readIds = options.readIds,
                               overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
         (msaa ? forwardMs : forward)
-            .record(cmd, pipelineLayout, sets.data(), msaa ? colorMs : color, kBackground, msaa ? depthMs : depth,
+            .record(cmd, sets[0], msaa ? colorMs : color, kBackground, msaa ? depthMs : depth,
                     gpuScene.indices.handle(), fdraws, readIds ? &forwardIds : nullptr, overdrawCount,
                     msaa ? &color : nullptr);
       });
@@ -425,7 +425,7 @@ void Renderer::Impl::declareTransparent(Graph& g, const FrameResources& r, const
       .step({Graph::reads(r.scene, access::rasterRead), Graph::writes(r.color, access::colorAttachment),
              Graph::reads(r.depth, depthTest)},
             [this, draws = transparentCull(camera, math, options, st)](VkCommandBuffer cmd) {
-              transparent.record(cmd, pipelineLayout, sets.data(), color, depth, gpuScene.indices.handle(), draws);
+              transparent.record(cmd, sets[0], color, depth, gpuScene.indices.handle(), draws);
             });
 }
 

@@ -170,6 +170,10 @@ struct Renderer::Impl {
   gpu::Buffer pointLights;
   passes::LightCullPass lightCull;
   bool hasPointLights() const { return !scene.pointLights.empty(); }
+  // The lights and tile lists the passes' sets hold: with no point lights nothing is allocated and the stats buffer
+  // stands in (never read: FrameData.pointLightCount = 0; lavapipe reads every descriptor of a bound set).
+  const gpu::Buffer& boundLights() const { return hasPointLights() ? pointLights : stats; }
+  const gpu::Buffer& boundLightTiles() const { return hasPointLights() ? lightCull.tiles() : stats; }
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
   gpu::Buffer visibleList;  // the same set listed (config.h BINDING_VISIBLE_LIST): the early cull's threads
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
@@ -228,6 +232,7 @@ struct Renderer::Impl {
   // Every set (scene and pass sets) from the current resources; the device goes idle first (only lazily created
   // resources and resizes get here, never a steady frame).
   void writeDescriptors();
+  void bindPasses();  // each created pass's own set
   void writePassSet();
 
   // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay

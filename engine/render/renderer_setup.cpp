@@ -18,17 +18,15 @@ void Renderer::Impl::createLayouts() {
   constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   constexpr VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
   constexpr VkDescriptorType image = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-  constexpr VkShaderStageFlags fragment = VK_SHADER_STAGE_FRAGMENT_BIT, all = gpu::kPassConstantStages;
   passSet = gpu::DescriptorLayout(device,
                                   {{BINDING_DRAWS, storage},
                                    {BINDING_VISIBILITY, sampled},
                                    {BINDING_COLOR, image},
-                                   {BINDING_OVERDRAW, image, 1, fragment},
                                    {BINDING_ATTRIBUTES, storage},
                                    {BINDING_GBUFFER, sampled, GBUFFER_TARGETS},
                                    {BINDING_GBUFFER_DEPTH, sampled},
-                                   {LIGHTING_BINDING_LIGHTS, storage, 1, all},
-                                   {LIGHTING_BINDING_LIGHT_TILES, storage, 1, all},
+                                   {LIGHTING_BINDING_LIGHTS, storage},
+                                   {LIGHTING_BINDING_LIGHT_TILES, storage},
                                    {BINDING_MATERIAL_TILES, storage},
                                    {BINDING_TILE_LIST, storage},
                                    {BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
@@ -115,11 +113,21 @@ void Renderer::Impl::writeDescriptors() {
   vkDeviceWaitIdle(device.device());
   for (uint32_t i = 0; i < slots.size(); ++i)
     sceneSets.write(i, slots[i].frameBuffer, {&gpuScene, &stats, objectSplit, vertexShift});
+  bindPasses();
+  writePassSet();
+}
+
+void Renderer::Impl::bindPasses() {
   cull.bind(draws, history, visibleList, drawLists, pyramid.pyramid(), sampler);
+  visibility.bind(overdraw);
+  if (visibilityMs.layout) visibilityMs.bind(overdraw);
   if (swRaster.created()) swRaster.bind(draws, drawLists);
   // MSAA frames: the light culling reads the multisampled depth.
   if (hasPointLights()) lightCull.bind(pointLights, descriptorsMsaa ? depthMs : depth, sampler);
-  writePassSet();
+  forward.bind(boundLights(), boundLightTiles(), overdraw);
+  if (forwardMs.layout) forwardMs.bind(boundLights(), boundLightTiles(), overdraw);
+  if (transparent.created()) transparent.bind(boundLights(), boundLightTiles());
+  if (gbuffer.created()) gbuffer.bind(overdraw);
 }
 
 void Renderer::Impl::writePassSet() {
@@ -130,18 +138,14 @@ void Renderer::Impl::writePassSet() {
       .texels(BINDING_DRAW_TEXELS, drawTexels.handle());
   // MSAA frames: the shading pass reads the multisampled IDs (only its MSAA variants declare multisampled images).
   w.image(BINDING_VISIBILITY, (descriptorsMsaa ? idsMs : ids).view(), readOnly, sampler)
-      .image(BINDING_COLOR, color.view(), VK_IMAGE_LAYOUT_GENERAL)
-      .image(BINDING_OVERDRAW, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL);
+      .image(BINDING_COLOR, color.view(), VK_IMAGE_LAYOUT_GENERAL);
   // G-buffer targets: until a G-buffer frame creates them, the depth stands in (lavapipe reads every descriptor
   // of a bound set, so none may stay unwritten; only gbuffer_lighting.comp samples these).
   std::vector<VkDescriptorImageInfo> gbufferInfo;
   for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
     gbufferInfo.push_back({sampler, (gbufferTargets[i] ? gbufferTargets[i] : depth).view(), readOnly});
   w.images(BINDING_GBUFFER, std::move(gbufferInfo)).image(BINDING_GBUFFER_DEPTH, depth.view(), readOnly, sampler);
-  // Lights: with no point lights nothing is allocated; the shaders never read these bindings then
-  // (FrameData.pointLightCount = 0), which alias the stats buffer only to keep the set complete.
-  w.buffer(LIGHTING_BINDING_LIGHTS, (hasPointLights() ? pointLights : stats).handle())
-      .buffer(LIGHTING_BINDING_LIGHT_TILES, (hasPointLights() ? lightCull.tiles() : stats).handle());
+  w.buffer(LIGHTING_BINDING_LIGHTS, boundLights().handle()).buffer(LIGHTING_BINDING_LIGHT_TILES, boundLightTiles().handle());
   // Classification: until a classified frame creates its buffers, the stats buffer stands in (never read).
   w.buffer(BINDING_MATERIAL_TILES, (classify.created() ? classify.materialTiles() : stats).handle())
       .buffer(BINDING_TILE_LIST, (classify.created() ? classify.tileList() : stats).handle())
@@ -151,8 +155,8 @@ void Renderer::Impl::writePassSet() {
 // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
 // for them).
 void Renderer::Impl::ensureGBufferTargets() {
-  if (gbuffer.formats.color[0] == VK_FORMAT_UNDEFINED) {  // not created yet
-    gbuffer = passes::GBufferPass::create(device, pipelineLayout, textured, listMask);
+  if (!gbuffer.created()) {
+    gbuffer = passes::GBufferPass::create(device, sceneSets.layout(), textured, listMask);
     gbufferLighting = passes::GBufferLightingPass::create(device, pipelineLayout, textured.windowed);
   }
   if (gbufferTargets[0]) return;
@@ -203,14 +207,18 @@ void Renderer::Impl::prepareMsaa(const FrameOptions& options) {
     descriptorsMsaa = !msaa;  // the pyramid and the ID views changed: rewrite below
   }
   if (msaa && options.path == RenderPath::Visbuf) {
-    if (visibilityMsSamples != options.msaa)
-      visibilityMs = passes::VisibilityPass::create(device, pipelineLayout, textured, listMask, samples);
+    if (visibilityMsSamples != options.msaa) {
+      visibilityMs = passes::VisibilityPass::create(device, sceneSets.layout(), textured, listMask, samples);
+      visibilityMs.bind(overdraw);
+    }
     visibilityMsSamples = options.msaa;
     shade.createMsaa(device, pipelineLayout, textured);
   }
   if (msaa && options.path == RenderPath::Forward) {
-    if (forwardMsSamples != options.msaa)
-      forwardMs = passes::ForwardPass::create(device, pipelineLayout, textured, listMask, samples);
+    if (forwardMsSamples != options.msaa) {
+      forwardMs = passes::ForwardPass::create(device, sceneSets.layout(), textured, listMask, samples);
+      forwardMs.bind(boundLights(), boundLightTiles(), overdraw);
+    }
     forwardMsSamples = options.msaa;
     if (!colorMs)
       colorMs = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, config.width, config.height,
@@ -318,12 +326,12 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                                      impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
   impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
   impl->objectUpload.create(device);
-  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
+  impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
   impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
   if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->sceneSets.layout(), textured);
-  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
+  impl->forward = passes::ForwardPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
   if (!impl->blendObjects.empty())
-    impl->transparent = passes::TransparentPass::create(device, impl->pipelineLayout, textured);
+    impl->transparent = passes::TransparentPass::create(device, impl->sceneSets.layout(), textured);
   std::array<glm::uvec4, DRAW_LISTS> lists{};
   for (uint32_t l = 0; l < DRAW_LISTS; ++l)
     lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
