@@ -16,7 +16,7 @@ DescriptorLayout::DescriptorLayout(Device& device, std::vector<DescriptorBinding
   std::vector<VkDescriptorSetLayoutBinding> b;
   std::map<VkDescriptorType, uint32_t> perType;  // the pool: every binding's count, per set
   for (const DescriptorBinding& x : bindings_) {
-    b.push_back({x.binding, x.type, x.count, x.stages ? x.stages : stages, nullptr});
+    b.push_back({x.binding, x.type, x.count, stages, nullptr});
     perType[x.type] += x.count * sets;
   }
   VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};

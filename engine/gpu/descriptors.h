@@ -18,11 +18,11 @@ struct DescriptorBinding {
   uint32_t binding;
   VkDescriptorType type;
   uint32_t count = 1;  // array size
-  VkShaderStageFlags stages = 0;  // 0: the layout's
 };
 
-// A set layout of `bindings` (each seen by `stages` unless it names its own), a pool holding exactly `sets` sets of it, and those sets.
-// Move-only; destroys what it created.
+// A set layout of `bindings`, each seen by `stages` (only the stages that read them: lavapipe's queue crashed with a
+// multisampled image in a binding the graphics stages could see), a pool holding exactly `sets` sets of it, and
+// those sets. Move-only; destroys what it created.
 class DescriptorLayout {
  public:
   DescriptorLayout() = default;

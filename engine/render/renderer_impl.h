@@ -106,16 +106,14 @@ struct Renderer::Impl {
   uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
   uint32_t vertexShift = 0;  // vertices per vertex-pool window: 1 << vertexShift (vertexWindowShift)
 
-  SceneDescriptors sceneSets;  // set 0 of every pass, one per slot
-  gpu::DescriptorLayout passSet;  // set 1 of the passes without their own
-  VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;  // the scene set and passSet
+  SceneDescriptors sceneSets;  // set 0 of every pass, one per slot (each pass owns its set 1)
   VkSampler sampler = VK_NULL_HANDLE;
   VkFence fence = VK_NULL_HANDLE;  // renderFrame's own wait
   std::vector<FrameSlot> slots;
   uint64_t frameCounter = 0;             // frames recorded so far (renderFrame and record)
   std::optional<FrameStats> completed;   // the newest collected frame's stats (record())
-  // The frame being recorded: its slot's scene set (and passSet), command buffers and timestamps (beginFrame).
-  std::array<VkDescriptorSet, 2> sets{};
+  // The frame being recorded: its slot's scene set, command buffers and timestamps (beginFrame).
+  VkDescriptorSet sceneSet = VK_NULL_HANDLE;
   VkCommandBuffer* cmds = nullptr;
   gpu::TimestampPool* timestamps = nullptr;
 
@@ -175,7 +173,7 @@ struct Renderer::Impl {
   const gpu::Buffer& boundLights() const { return hasPointLights() ? pointLights : stats; }
   const gpu::Buffer& boundLightTiles() const { return hasPointLights() ? lightCull.tiles() : stats; }
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
-  gpu::Buffer visibleList;  // the same set listed (config.h BINDING_VISIBLE_LIST): the early cull's threads
+  gpu::Buffer visibleList;  // the same set listed (config.h VISIBLE_LIST_HEADER): the early cull's threads
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
   gpu::Buffer pyramidReadback;
   gpu::Buffer overdrawReadback;
@@ -183,7 +181,7 @@ struct Renderer::Impl {
   gpu::Buffer attributesReadback;
 
   gpu::Buffer draws;        // DrawCommand[capacity]
-  gpu::BufferView drawTexels;  // the same as R32UI (BINDING_DRAW_TEXELS): the shading's per-pixel fetch
+  gpu::BufferView drawTexels;  // the same as R32UI texels: the shading's per-pixel fetch
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Image ids, depth, color;
   gpu::Buffer coveredTiles;  // covered-tile shading: COVERED_TILES_HEADER uints + one per shading tile
@@ -195,7 +193,7 @@ struct Renderer::Impl {
   passes::VisibilityPass visibilityMs;
   passes::ForwardPass forwardMs;
   uint32_t visibilityMsSamples = 0, forwardMsSamples = 0;
-  bool descriptorsMsaa = false;  // BINDING_VISIBILITY / BINDING_LIGHT_DEPTH hold the multisampled views
+  bool descriptorsMsaa = false;  // the shading's IDs and the light culling's depth are the multisampled views
   std::vector<uint32_t> msaaCounts;  // supportedMsaaSamples(device)
   gpu::Image overdraw;    // r32ui, GENERAL: raster writes per pixel (countOverdraw)
   gpu::Image forwardIds;  // forward path with readIds only (rg32ui: object + 1, triangle); lazily created
@@ -209,7 +207,6 @@ struct Renderer::Impl {
       if (f.cmds[0]) vkFreeCommandBuffers(dev, device.commandPool(), kCommandBuffers, f.cmds.data());
     vkDestroyFence(dev, fence, nullptr);
     vkDestroySampler(dev, sampler, nullptr);
-    vkDestroyPipelineLayout(dev, pipelineLayout, nullptr);
   }
 
   void createLayouts();
@@ -217,7 +214,7 @@ struct Renderer::Impl {
   void createTargets(uint32_t width, uint32_t height);
 
   // An empty visible list (no thread in the next early cull) with its dispatch arguments (0, 1, 1).
-  // Byte offset of the late cull's refinement list in the visibleList buffer (config.h BINDING_VISIBLE_LIST).
+  // Byte offset of the late cull's refinement list in the visibleList buffer (config.h VISIBLE_LIST_HEADER).
   VkDeviceSize refineListOffset() const { return (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) * 4; }
   // Empties the visible list and the refinement list (count 0, dispatch size 0 x 1 x 1).
   void resetVisibleList(VkCommandBuffer cmd) const {
@@ -233,7 +230,6 @@ struct Renderer::Impl {
   // resources and resizes get here, never a steady frame).
   void writeDescriptors();
   void bindPasses();  // each created pass's own set
-  void writePassSet();
 
   // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
   // for them).

@@ -8,30 +8,11 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "visbuf/shared/bindings_lighting.h"
-
 namespace visbuf {
 
 void Renderer::Impl::createLayouts() {
   VkDevice dev = device.device();
   sceneSets.create(device, uint32_t(slots.size()));
-  constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  constexpr VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  constexpr VkDescriptorType image = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-  passSet = gpu::DescriptorLayout(device,
-                                  {{BINDING_DRAWS, storage},
-                                   {BINDING_VISIBILITY, sampled},
-                                   {BINDING_COLOR, image},
-                                   {BINDING_ATTRIBUTES, storage},
-                                   {BINDING_GBUFFER, sampled, GBUFFER_TARGETS},
-                                   {BINDING_GBUFFER_DEPTH, sampled},
-                                   {LIGHTING_BINDING_LIGHTS, storage},
-                                   {LIGHTING_BINDING_LIGHT_TILES, storage},
-                                   {BINDING_MATERIAL_TILES, storage},
-                                   {BINDING_TILE_LIST, storage},
-                                   {BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
-                                  VK_SHADER_STAGE_COMPUTE_BIT);
-  pipelineLayout = gpu::createPipelineLayout(device, {sceneSets.layout(), passSet.layout()});
   for (FrameSlot& f : slots) {
     VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     cai.commandPool = device.commandPool();
@@ -114,7 +95,6 @@ void Renderer::Impl::writeDescriptors() {
   for (uint32_t i = 0; i < slots.size(); ++i)
     sceneSets.write(i, slots[i].frameBuffer, {&gpuScene, &stats, objectSplit, vertexShift});
   bindPasses();
-  writePassSet();
 }
 
 void Renderer::Impl::bindPasses() {
@@ -128,28 +108,15 @@ void Renderer::Impl::bindPasses() {
   if (forwardMs.layout) forwardMs.bind(boundLights(), boundLightTiles(), overdraw);
   if (transparent.created()) transparent.bind(boundLights(), boundLightTiles());
   if (gbuffer.created()) gbuffer.bind(overdraw);
-}
-
-void Renderer::Impl::writePassSet() {
-  const VkImageLayout readOnly = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-  gpu::DescriptorWriter w(passSet);
-  w.buffer(BINDING_DRAWS, draws.handle())
-      .buffer(BINDING_ATTRIBUTES, attributes.handle())
-      .texels(BINDING_DRAW_TEXELS, drawTexels.handle());
-  // MSAA frames: the shading pass reads the multisampled IDs (only its MSAA variants declare multisampled images).
-  w.image(BINDING_VISIBILITY, (descriptorsMsaa ? idsMs : ids).view(), readOnly, sampler)
-      .image(BINDING_COLOR, color.view(), VK_IMAGE_LAYOUT_GENERAL);
-  // G-buffer targets: until a G-buffer frame creates them, the depth stands in (lavapipe reads every descriptor
-  // of a bound set, so none may stay unwritten; only gbuffer_lighting.comp samples these).
-  std::vector<VkDescriptorImageInfo> gbufferInfo;
-  for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
-    gbufferInfo.push_back({sampler, (gbufferTargets[i] ? gbufferTargets[i] : depth).view(), readOnly});
-  w.images(BINDING_GBUFFER, std::move(gbufferInfo)).image(BINDING_GBUFFER_DEPTH, depth.view(), readOnly, sampler);
-  w.buffer(LIGHTING_BINDING_LIGHTS, boundLights().handle()).buffer(LIGHTING_BINDING_LIGHT_TILES, boundLightTiles().handle());
-  // Classification: until a classified frame creates its buffers, the stats buffer stands in (never read).
-  w.buffer(BINDING_MATERIAL_TILES, (classify.created() ? classify.materialTiles() : stats).handle())
-      .buffer(BINDING_TILE_LIST, (classify.created() ? classify.tileList() : stats).handle())
-      .update();
+  // MSAA frames: the shading reads the multisampled IDs.
+  const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
+                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes};
+  shade.bind(shading);
+  if (classify.created()) classify.bind(shading);
+  // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.
+  passes::GBufferLightingInputs lighting{&boundLights(), &boundLightTiles(), {}, &depth, sampler, &color, &attributes};
+  for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) lighting.targets[i] = gbufferTargets[i] ? &gbufferTargets[i] : &depth;
+  if (gbufferLighting.created()) gbufferLighting.bind(lighting);
 }
 
 // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
@@ -157,7 +124,7 @@ void Renderer::Impl::writePassSet() {
 void Renderer::Impl::ensureGBufferTargets() {
   if (!gbuffer.created()) {
     gbuffer = passes::GBufferPass::create(device, sceneSets.layout(), textured, listMask);
-    gbufferLighting = passes::GBufferLightingPass::create(device, pipelineLayout, textured.windowed);
+    gbufferLighting = passes::GBufferLightingPass::create(device, sceneSets.layout(), textured.windowed);
   }
   if (gbufferTargets[0]) return;
   for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
@@ -212,7 +179,7 @@ void Renderer::Impl::prepareMsaa(const FrameOptions& options) {
       visibilityMs.bind(overdraw);
     }
     visibilityMsSamples = options.msaa;
-    shade.createMsaa(device, pipelineLayout, textured);
+    shade.createMsaa(device, textured);
   }
   if (msaa && options.path == RenderPath::Forward) {
     if (forwardMsSamples != options.msaa) {
@@ -235,7 +202,7 @@ void Renderer::Impl::ensureClassify() {
   if (classify.created()) return;
   std::vector<bool> sampling;  // per material: samples a texture
   for (const Material& m : scene.materials) sampling.push_back(packMaterial(m, scene).slotCount > 0);
-  classify.create(device, pipelineLayout, textured, std::move(sampling));
+  classify.create(device, sceneSets.layout(), textured, std::move(sampling));
   classify.resize(device, config.width, config.height);
   writeDescriptors();
 }
@@ -327,7 +294,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
   impl->objectUpload.create(device);
   impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
-  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
+  impl->shade = passes::ShadePass::create(device, impl->sceneSets.layout(), textured);
   if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->sceneSets.layout(), textured);
   impl->forward = passes::ForwardPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
   if (!impl->blendObjects.empty())

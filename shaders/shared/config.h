@@ -142,20 +142,12 @@
 #define SCENE_BINDING_TRIANGLE_PLANES 17  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
 #define SCENE_BINDING_STATS 18            // uint[STAT_COUNT]: the frame-wide counters (then SW_ARGS)
 
-// Set 1 bindings not yet owned by a pass (one layout shared by those passes).
-#define BINDING_DRAWS 5      // DrawCommand[] written by cull
-#define BINDING_VISIBILITY 8 // usampler/uimage visibility target (r32ui or rg32ui)
-#define BINDING_COLOR 9      // rgba16f output image
-#define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
-#define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
-// The same visible set as a list, for the next frame's early cull (one thread per listed object instead of one per
-// object of the scene): VISIBLE_LIST_HEADER uints -- count, then the early cull's indirect dispatch (x, 1, 1) --,
-// then the object IDs in append order. Written by the late cull, reset before it. The late phase's refinement list
-// (CULL_REFINE) follows it in the same buffer, at word VISIBLE_LIST_HEADER + objectCount, in the same layout.
-#define BINDING_VISIBLE_LIST 32
+// The cull pass's visible list: the visible set of its history as a list, for the next frame's early cull (one
+// thread per listed object instead of one per object of the scene): VISIBLE_LIST_HEADER uints -- count, then the
+// early cull's indirect dispatch (x, 1, 1) --, then the object IDs in append order. Written by the late cull, reset
+// before it. The late phase's refinement list (CULL_REFINE) follows it in the same buffer, at word
+// VISIBLE_LIST_HEADER + objectCount, in the same layout.
 #define VISIBLE_LIST_HEADER 4u
-#define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
-#define BINDING_ATTRIBUTES 13  // float[ATTRIBUTE_FLOATS] per pixel: the shading pass's reconstruction (stress only)
 
 // Materials (types.h MaterialData). Flags: the glTF alpha mode and double-sidedness.
 #define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out
@@ -183,11 +175,8 @@
 // dynamic indexing of sampled-image arrays, so shaders index it with constants only (material.glsl).
 #define MAX_TEXTURE_CLASSES 24
 #define EXTRA_NONE 0xffffffffu      // MeshData.extraOffset of a mesh without VertexExtra records
-#define BINDING_DRAW_LISTS 28  // uvec4[DRAW_LISTS]: x first slot (early phase), y first slot (late), z capacity,
-                               // w 1 if the software micro-raster may take this list's draws (opaque, uncapped)
-// uint64 per pixel (software micro-raster): reverse-Z depth bits << 32 | payload, atomicMax'ed; 0 = nothing.
-#define BINDING_SW_VISIBILITY 26
-#define BINDING_DRAW_TEXELS 36      // the draws (DrawCommand, five words each) as R32UI, read by the shading
+// The draw lists' buffer (cull and micro-raster passes): uvec4[DRAW_LISTS], x first slot (early phase), y first slot
+// (late), z capacity, w 1 if the software micro-raster may take this list's draws (opaque, uncapped).
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
 // box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
 #define SW_RASTER_WORKGROUP 64
@@ -203,14 +192,11 @@
 // G-buffer baseline (gbuffer_pass, gbuffer_lighting_pass): the raster's attribute targets, read back by the
 // lighting pass with texelFetch (constant indices only: lavapipe has no dynamic sampled-image indexing).
 #define GBUFFER_TARGETS 4       // base colour + alpha, octahedral normal, metallic/roughness/occlusion, emissive
-#define BINDING_GBUFFER 24      // sampler2D[GBUFFER_TARGETS]
-#define BINDING_GBUFFER_DEPTH 25  // sampler2D: the frame's D32 depth (reverse-Z), after both raster phases
 // Lights: shaders/shared/bindings_lighting.h, light_cull.comp.glsl.
 // PointLightData.type (engine/scene/light.h LightType): KHR_lights_punctual point, spot, directional.
 #define LIGHT_POINT 0u
 #define LIGHT_SPOT 1u
 #define LIGHT_DIRECTIONAL 2u
-#define BINDING_LIGHT_DEPTH 22   // sampler2D: the visibility depth (reverse-Z), per-tile depth bounds
 // Ambient radiance of the uniform environment every surface sees (scaled by occlusion; lighting.glsl).
 #define AMBIENT_RADIANCE 0.15
 // Tiled light culling: 16x16-pixel tiles, each with a fixed-capacity list of the point lights whose sphere of
@@ -228,12 +214,10 @@
 // Material classification (classify_pass, classify.comp.glsl, classify_scan.comp.glsl): the shading tiles
 // (SHADE_TILE_X x SHADE_TILE_Y pixels) are listed per material present in them, and each material is shaded by its
 // own indirect dispatch over its list (a tile with k materials is in k lists; a material without pixels gets 0
-// workgroups). BINDING_MATERIAL_TILES: CLASSIFY_HEADER uints, then MaterialTiles (types.h) per material, whose
-// first three words are the VkDispatchIndirectCommand. BINDING_TILE_LIST: one uint per (tile, material) pair, tile x
+// workgroups). The material tiles: CLASSIFY_HEADER uints, then MaterialTiles (types.h) per material, whose
+// first three words are the VkDispatchIndirectCommand. The tile list: one uint per (tile, material) pair, tile x
 // in the low 16 bits, y in the high 16 (at most 2048 tiles a side at 16384 pixels), grouped by material. Its
 // capacity, tiles x min(materials, tile pixels), can never overflow; 1080p with >= 64 materials: 8.3 MB.
-#define BINDING_MATERIAL_TILES 29
-#define BINDING_TILE_LIST 30
 #define CLASSIFY_HEADER 8              // uints before the first MaterialTiles record:
 #define CLASSIFY_STAT_PAIRS 0          // (tile, material) pairs listed (the scan's total)
 #define CLASSIFY_STAT_MATERIALS 1      // materials with at least one pixel
