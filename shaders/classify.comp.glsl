@@ -8,13 +8,14 @@
 // with no sorting and no per-material storage.
 #extension GL_GOOGLE_include_directive : require
 #include "visibility_id.glsl"
+#include "shared/bindings_classify.h"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
-layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
+layout(std430, set = 1, binding = CLASSIFY_BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
   uint header[CLASSIFY_HEADER];
   MaterialTiles materialTiles[];
 };
-layout(std430, set = 0, binding = BINDING_TILE_LIST) writeonly buffer TileListBlock { uint tileList[]; };
+layout(std430, set = 1, binding = CLASSIFY_BINDING_TILE_LIST) writeonly buffer TileListBlock { uint tileList[]; };
 
 const uint LANES = SHADE_TILE_X * SHADE_TILE_Y;
 shared uint laneMaterial[LANES];

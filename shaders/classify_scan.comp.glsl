@@ -6,10 +6,11 @@
 // the materials present and the (tile, material) pairs.
 #extension GL_GOOGLE_include_directive : require
 #include "shared/types.h"
+#include "shared/bindings_classify.h"
 
 layout(local_size_x = CLASSIFY_SCAN_WORKGROUP) in;
 layout(push_constant) uniform Push { PassConstants pc; };  // material: the scene's material count
-layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
+layout(std430, set = 1, binding = CLASSIFY_BINDING_MATERIAL_TILES) buffer MaterialTileBlock {
   uint header[CLASSIFY_HEADER];
   MaterialTiles materialTiles[];
 };

@@ -8,7 +8,7 @@
 #include "shared/types.h"
 #include "octahedral.glsl"
 
-layout(set = 0, binding = BINDING_FRAME) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = SCENE_BINDING_FRAME) uniform FrameBlock { FrameData frame; };
 // 1: object records and vertices are read through their descriptor windows; 0 (a scene that fits one range
 // each): directly, with no per-fetch branch. Set per renderer (gpu::createComputePipeline).
 layout(constant_id = 0) const uint VB_WINDOWED = 1u;
@@ -17,15 +17,15 @@ layout(constant_id = 0) const uint VB_WINDOWED = 1u;
 // a bounds-checked scalar load per lane and word: the cull, micro-raster and shading passes fetch per object,
 // triangle or pixel. Set per renderer (gpu::Specialization::texels).
 layout(constant_id = 3) const uint VB_TEXELS = 0u;
-layout(set = 0, binding = BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
-layout(set = 0, binding = BINDING_INDEX_TEXELS) uniform usamplerBuffer indexTexels;
-layout(set = 0, binding = BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData
-layout(set = 0, binding = BINDING_MESH_TEXELS) uniform usamplerBuffer meshTexels;  // MESH_TEXELS per MeshData
-layout(std430, set = 0, binding = BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
+layout(set = 0, binding = SCENE_BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
+layout(set = 0, binding = SCENE_BINDING_INDEX_TEXELS) uniform usamplerBuffer indexTexels;
+layout(set = 0, binding = SCENE_BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData
+layout(set = 0, binding = SCENE_BINDING_MESH_TEXELS) uniform usamplerBuffer meshTexels;  // MESH_TEXELS per MeshData
+layout(std430, set = 0, binding = SCENE_BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
 // Index i of the unified index pool.
 uint indexAt(uint i) { return VB_TEXELS != 0u ? texelFetch(indexTexels, int(i)).x : indices[i]; }
-layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
-layout(std430, set = 0, binding = BINDING_OBJECTS_HIGH) readonly buffer ObjectBlockHigh { ObjectData objectsHigh[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_OBJECTS_HIGH) readonly buffer ObjectBlockHigh { ObjectData objectsHigh[]; };
 
 // Object records live in one buffer seen through two descriptor windows (each at most maxStorageBufferRange).
 // (if/else, not ?: -- glslang emits an invalid store for a ternary over two blocks' structs.)
@@ -43,7 +43,7 @@ ObjectData objectAt(uint i) {
   ObjectData o = objectsHigh[i - frame.objectSplit];
   return o;
 }
-layout(std430, set = 0, binding = BINDING_MESHES) readonly buffer MeshBlock { MeshData meshes[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_MESHES) readonly buffer MeshBlock { MeshData meshes[]; };
 #define MESH_TEXELS (3 + MAX_LODS)  // sizeof(MeshData) / 16: boundsSphere, 2 texels of fields, then one per LOD
 
 vec4 meshBoundsSphere(uint mesh) {
@@ -63,10 +63,10 @@ LodData meshLod(uint mesh, uint lod) {
   }
   return meshes[mesh].lods[lod];
 }
-layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer VertexBlock0 { Vertex vertices0[]; };
-layout(std430, set = 0, binding = BINDING_VERTICES_1) readonly buffer VertexBlock1 { Vertex vertices1[]; };
-layout(std430, set = 0, binding = BINDING_VERTICES_2) readonly buffer VertexBlock2 { Vertex vertices2[]; };
-layout(std430, set = 0, binding = BINDING_VERTICES_3) readonly buffer VertexBlock3 { Vertex vertices3[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_VERTICES) readonly buffer VertexBlock0 { Vertex vertices0[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_VERTICES_1) readonly buffer VertexBlock1 { Vertex vertices1[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_VERTICES_2) readonly buffer VertexBlock2 { Vertex vertices2[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_VERTICES_3) readonly buffer VertexBlock3 { Vertex vertices3[]; };
 
 // The vertex pool through its descriptor windows (each at most maxStorageBufferRange; skinned instances'
 // regions make pools larger than one window).
@@ -96,7 +96,7 @@ Vertex vertexAt(uint i) {
   Vertex v = vertices3[j];
   return v;
 }
-layout(std430, set = 0, binding = BINDING_VERTEX_EXTRAS) readonly buffer VertexExtraBlock { VertexExtra vertexExtras[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_VERTEX_EXTRAS) readonly buffer VertexExtraBlock { VertexExtra vertexExtras[]; };
 
 // Skinned instances (gpu::Specialization::skinned; 0 for static scenes removes all of this): a skinned mesh slot
 // keeps its rest mesh's vertexOffset (draws index the rest vertices, whose uv and colour stay) and addresses the
@@ -150,8 +150,8 @@ uint meshTangent(uint mesh, uint local, VertexExtra e) {
   }
   return e.tangent;
 }
-layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
-layout(set = 0, binding = BINDING_MATERIAL_TEXELS) uniform usamplerBuffer materialTexels;  // MATERIAL_TEXELS each
+layout(std430, set = 0, binding = SCENE_BINDING_MATERIALS) readonly buffer MaterialBlock { MaterialData materials[]; };
+layout(set = 0, binding = SCENE_BINDING_MATERIAL_TEXELS) uniform usamplerBuffer materialTexels;  // MATERIAL_TEXELS each
 #define MATERIAL_TEXELS (4 + 3 * TEXTURE_SLOTS)  // sizeof(MaterialData) / 16
 
 // Material record i (only the texels of the fields a shader uses are fetched: the rest is dead code).

@@ -18,14 +18,15 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_vote : require
 #include "common.glsl"
+#include "shared/bindings_cull.h"
 
 layout(local_size_x = CULL_WORKGROUP_SIZE) in;
-layout(std430, set = 0, binding = BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
-layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
-layout(std430, set = 0, binding = BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
-layout(std430, set = 0, binding = BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
-layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
-layout(set = 0, binding = BINDING_PYRAMID) uniform sampler2D pyramid;
+layout(std430, set = 1, binding = CULL_BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatBlock { uint stats[]; };
+layout(std430, set = 1, binding = CULL_BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
+layout(std430, set = 1, binding = CULL_BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
+layout(std430, set = 1, binding = CULL_BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
+layout(set = 1, binding = CULL_BINDING_PYRAMID) uniform sampler2D pyramid;
 layout(push_constant) uniform Push { PassConstants pc; };
 
 bool frustumVisible(vec3 c, float r) {
@@ -112,7 +113,7 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine) {
   return fine < level ? 4u : 0u;
 }
 
-// Appends the IDs of the lanes where `mine` holds to the list at word `base` of BINDING_VISIBLE_LIST (count, indirect
+// Appends the IDs of the lanes where `mine` holds to the list at word `base` of the visible-list buffer (count, indirect
 // dispatch size, then IDs): one atomic per subgroup for the slots, one for the dispatch size.
 void appendToList(uint base, bool mine, uint id) {
   uvec4 ballot = subgroupBallot(mine);

@@ -5,6 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_samplerless_texture_functions : require
 #include "raster_surface.glsl"
+#include "shared/bindings_forward.h"
 #if ALPHA_MASK || TRANSPARENT
 #include "alpha_mask.glsl"
 #endif
@@ -14,7 +15,7 @@ layout(location = 0) out vec4 outColor;
 #if !ALPHA_MASK
 layout(early_fragment_tests) in;  // (not with discard: a cut-out fragment must not write depth)
 #endif
-layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+layout(set = 1, binding = FORWARD_BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
 #endif
 #if WRITE_IDS
 // Test/diagnostic variant: the same (object + 1, triangle) the visibility path decodes, so coverage can be

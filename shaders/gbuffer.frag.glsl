@@ -12,6 +12,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_samplerless_texture_functions : require
 #include "raster_surface.glsl"
+#include "shared/bindings_gbuffer.h"
 #if ALPHA_MASK
 #include "alpha_mask.glsl"
 #endif
@@ -25,7 +26,7 @@ layout(location = 3) out vec4 outEmissive;
 layout(early_fragment_tests) in;  // (not with discard: a cut-out fragment must not write depth)
 #endif
 // Debug/bandwidth variant: count the raster writes per pixel (fragments that pass the depth test when they run).
-layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+layout(set = 1, binding = GBUFFER_BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
 #endif
 
 void main() {

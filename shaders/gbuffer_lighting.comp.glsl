@@ -4,14 +4,15 @@
 // Background pixels (depth 0, reverse-Z) are skipped: the colour image was cleared to the background before.
 #extension GL_GOOGLE_include_directive : require
 #include "lighting.glsl"
+#include "shared/bindings_gbuffer_lighting.h"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
-layout(set = 0, binding = BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_TARGETS];
-layout(set = 0, binding = BINDING_GBUFFER_DEPTH) uniform sampler2D gbufferDepth;
-layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+layout(set = 1, binding = GBUFFER_LIGHTING_BINDING_TARGETS) uniform sampler2D gbuffer[GBUFFER_TARGETS];
+layout(set = 1, binding = GBUFFER_LIGHTING_BINDING_DEPTH) uniform sampler2D gbufferDepth;
+layout(set = 1, binding = GBUFFER_LIGHTING_BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
 #if WRITE_ATTRIBUTES
 // Test variant: the rebuilt position and the depth in the attribute record's slots 0..3 (config.h), slot 7 = 1.
-layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
+layout(std430, set = 1, binding = GBUFFER_LIGHTING_BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
 #endif
 
 // Inverse of the reverse-Z infinite projection (render/frame_math.cpp): depth = near / -z_view,

@@ -14,15 +14,16 @@
 // test the same light at the same time (uniform loads).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
+#include "shared/bindings_light_cull.h"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer PointLightBlock { PointLightData pointLights[]; };
+layout(std430, set = 1, binding = LIGHT_CULL_BINDING_LIGHTS) readonly buffer PointLightBlock { PointLightData pointLights[]; };
 #if MSAA
-layout(set = 0, binding = BINDING_LIGHT_DEPTH) uniform sampler2DMS sceneDepth;  // every sample is shaded: all count
+layout(set = 1, binding = LIGHT_CULL_BINDING_DEPTH) uniform sampler2DMS sceneDepth;  // every sample is shaded: all count
 #else
-layout(set = 0, binding = BINDING_LIGHT_DEPTH) uniform sampler2D sceneDepth;
+layout(set = 1, binding = LIGHT_CULL_BINDING_DEPTH) uniform sampler2D sceneDepth;
 #endif
-layout(std430, set = 0, binding = BINDING_LIGHT_TILES) buffer LightTileOut { uint tilesOut[]; };
+layout(std430, set = 1, binding = LIGHT_CULL_BINDING_TILES) buffer LightTileOut { uint tilesOut[]; };
 
 void main() {
   uvec2 tileId = gl_GlobalInvocationID.xy;

@@ -13,12 +13,13 @@
 #define VISBUF_LIGHTING_GLSL
 
 #include "common.glsl"
+#include "shared/bindings_lighting.h"
 
 // Point lights; none bound are read when FrameData.pointLightCount is 0 (a scene with no point lights binds
 // a placeholder: renderer.cpp).
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer PointLightBlock { PointLightData pointLights[]; };
+layout(std430, set = 1, binding = LIGHTING_BINDING_LIGHTS) readonly buffer PointLightBlock { PointLightData pointLights[]; };
 // Per 16x16 tile: the point lights that can reach a covered pixel of the tile (light_cull.comp.glsl).
-layout(std430, set = 0, binding = BINDING_LIGHT_TILES) readonly buffer LightTileBlock { uint lightTiles[]; };
+layout(std430, set = 1, binding = LIGHTING_BINDING_LIGHT_TILES) readonly buffer LightTileBlock { uint lightTiles[]; };
 
 struct Surface {
   vec3 position;   // camera-relative world position (the camera is at the origin)

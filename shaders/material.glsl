@@ -17,7 +17,7 @@
 #define VB_TEXTURED 1
 #endif
 
-layout(set = 0, binding = BINDING_TEXTURE_CLASSES) uniform texture2DArray textureClasses[MAX_TEXTURE_CLASSES];
+layout(set = 0, binding = SCENE_BINDING_TEXTURE_CLASSES) uniform texture2DArray textureClasses[MAX_TEXTURE_CLASSES];
 // The scene's texture class count (gpu::Specialization): the sampling code of the classes beyond it is removed
 // when the pipeline is compiled (all of it for an untextured scene).
 layout(constant_id = 1) const uint VB_TEXTURE_CLASSES = MAX_TEXTURE_CLASSES;

@@ -4,10 +4,11 @@
 // For FrameOptions::readIds of MSAA frames (tests, the ID views); the attribute buffer holds the copy.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
+#include "shared/bindings_shade.h"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
-layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2DMS visibility;
-layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer SampleIdBlock { uint sampleIds[]; };
+layout(set = 1, binding = SHADE_BINDING_VISIBILITY) uniform usampler2DMS visibility;
+layout(std430, set = 1, binding = SHADE_BINDING_ATTRIBUTES) writeonly buffer SampleIdBlock { uint sampleIds[]; };
 
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);

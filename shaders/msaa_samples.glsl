@@ -10,9 +10,9 @@
 #ifndef VISBUF_MSAA_SAMPLES_GLSL
 #define VISBUF_MSAA_SAMPLES_GLSL
 
-layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2DMS visibility;
-layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform image2D colorOut;  // read back: the cleared background
-layout(std430, set = 0, binding = BINDING_STATS) buffer MsaaStatsBlock { uint stats[]; };
+layout(set = 1, binding = SHADE_BINDING_VISIBILITY) uniform usampler2DMS visibility;
+layout(set = 1, binding = SHADE_BINDING_COLOR, rgba16f) uniform image2D colorOut;  // read back: the cleared background
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer MsaaStatsBlock { uint stats[]; };
 
 // The lit colour of the surface with this raw ID at `at` inside pixel p (pixel units from its top-left corner).
 vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at);

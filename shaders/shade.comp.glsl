@@ -10,29 +10,30 @@
 #include "material.glsl"
 #include "shared/barycentrics.h"
 #include "visibility_id.glsl"
+#include "shared/bindings_classify.h"
 
 layout(local_size_x = SHADE_TILE_X, local_size_y = SHADE_TILE_Y) in;
 #if MSAA
 #include "msaa_samples.glsl"  // multisampled IDs: shadeMultisampledPixel() per pixel, shadeVisible() per ID
 #else
-layout(set = 0, binding = BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
-layout(std430, set = 0, binding = BINDING_STATS) buffer ShadeStatsBlock { uint stats[]; };  // STAT_COVERED_PIXELS
+layout(set = 1, binding = SHADE_BINDING_COLOR, rgba16f) uniform writeonly image2D colorOut;
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer ShadeStatsBlock { uint stats[]; };  // STAT_COVERED_PIXELS
 #endif
 #if CLASSIFIED
 // Classified shading (classify_pass): one indirect dispatch per material, one workgroup per tile of its list; the
 // lanes whose pixel shows another material leave, and the material index is uniform over the dispatch.
 layout(push_constant) uniform Push { PassConstants pc; };
-layout(std430, set = 0, binding = BINDING_MATERIAL_TILES) readonly buffer MaterialTileBlock {
+layout(std430, set = 1, binding = CLASSIFY_BINDING_MATERIAL_TILES) readonly buffer MaterialTileBlock {
   uint header[CLASSIFY_HEADER];
   MaterialTiles materialTiles[];
 };
-layout(std430, set = 0, binding = BINDING_TILE_LIST) readonly buffer TileListBlock { uint tileList[]; };
+layout(std430, set = 1, binding = CLASSIFY_BINDING_TILE_LIST) readonly buffer TileListBlock { uint tileList[]; };
 #endif
 #if COVERED  // (buffer references: common.glsl)
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer CoveredTileList { uint words[]; };
 #endif
 #if WRITE_ATTRIBUTES
-layout(std430, set = 0, binding = BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
+layout(std430, set = 1, binding = SHADE_BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
 
 // The reconstruction itself, for the stress suite's double-precision comparison (config.h: layout).
 void writeAttributes(ivec2 p, ObjectData o, Vertex v0, Vertex v1, Vertex v2, Barycentrics b, vec3 normal) {

@@ -6,8 +6,9 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "common.glsl"
+#include "shared/bindings_sw_raster.h"
 
-layout(std430, set = 0, binding = BINDING_SW_VISIBILITY) readonly buffer SwBlock { uint64_t swVisibility[]; };
+layout(std430, set = 1, binding = SW_RASTER_BINDING_VISIBILITY) readonly buffer SwBlock { uint64_t swVisibility[]; };
 #if WIDE_IDS
 layout(location = 0) out uvec2 outId;
 #else

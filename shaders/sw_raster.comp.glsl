@@ -15,18 +15,19 @@
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #include "common.glsl"
+#include "shared/bindings_sw_raster.h"
 
 layout(local_size_x = SW_RASTER_WORKGROUP) in;
-layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
-layout(std430, set = 0, binding = BINDING_STATS) buffer StatBlock { uint stats[]; };
-layout(std430, set = 0, binding = BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
-layout(std430, set = 0, binding = BINDING_SW_VISIBILITY) buffer SwBlock { uint64_t swVisibility[]; };
+layout(std430, set = 1, binding = SW_RASTER_BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatBlock { uint stats[]; };
+layout(std430, set = 1, binding = SW_RASTER_BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
+layout(std430, set = 1, binding = SW_RASTER_BINDING_VISIBILITY) buffer SwBlock { uint64_t swVisibility[]; };
 layout(push_constant) uniform Push { PassConstants pc; };
 #if SW_CPU
 // Per subgroup: the chunk's front-facing triangles (SW_RASTER_CHUNK each; 4 lanes per subgroup at the least).
 shared uint swQueue[SW_RASTER_WORKGROUP / 4 * SW_RASTER_CHUNK];
 
-layout(set = 0, binding = BINDING_TRIANGLE_PLANES) uniform samplerBuffer trianglePlanes;
+layout(set = 0, binding = SCENE_BINDING_TRIANGLE_PLANES) uniform samplerBuffer trianglePlanes;
 
 // The camera position in the object's space: the inverse of objectToCamera at the camera-relative origin.
 vec3 cameraInObjectSpace(ObjectData o) {

@@ -8,6 +8,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_samplerless_texture_functions : require
 #include "common.glsl"
+#include "shared/bindings_visibility.h"
 #if ALPHA_MASK
 #include "alpha_mask.glsl"
 #endif
@@ -19,7 +20,7 @@
 #if !ALPHA_MASK
 layout(early_fragment_tests) in;
 #endif
-layout(set = 0, binding = BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
+layout(set = 1, binding = VISIBILITY_BINDING_OVERDRAW, r32ui) uniform coherent uimage2D overdraw;
 #endif
 layout(location = 0) flat in uint inDrawSlot;
 #if ALPHA_MASK

@@ -4,12 +4,13 @@
 #define VISBUF_VISIBILITY_ID_GLSL
 
 #include "common.glsl"
+#include "shared/bindings_shade.h"
 #ifndef MSAA
 #define MSAA 0
 #endif
 
-layout(std430, set = 0, binding = BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
-layout(set = 0, binding = BINDING_DRAW_TEXELS) uniform usamplerBuffer drawTexels;  // five words per DrawCommand
+layout(std430, set = 1, binding = SHADE_BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
+layout(set = 1, binding = SHADE_BINDING_DRAW_TEXELS) uniform usamplerBuffer drawTexels;  // five words per DrawCommand
 
 // The object of draw `slot` (its firstInstance), and what the shading needs of it: its LOD's first index and the
 // mesh's vertex offset. Through the texel view where VB_TEXELS (lavapipe loads a storage buffer word by word and
@@ -29,7 +30,7 @@ void drawAt(uint slot, out uint firstIndex, out uint vertexOffset, out uint obje
   vertexOffset = uint(draws[slot].vertexOffset);
 }
 #if !MSAA  // (the MSAA shading variant reads the multisampled target: msaa_samples.glsl)
-layout(set = 0, binding = BINDING_VISIBILITY) uniform usampler2D visibility;
+layout(set = 1, binding = SHADE_BINDING_VISIBILITY) uniform usampler2D visibility;
 #endif
 
 // The draw slot and the triangle in its LOD of a visibility texel; false where nothing was drawn.

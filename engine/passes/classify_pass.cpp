@@ -2,8 +2,9 @@
 
 #include <algorithm>
 
-#include "visbuf/shared/types.h"
+#include "visbuf/shared/bindings_classify.h"
 #include "visbuf/shared/config.h"
+#include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 
@@ -11,8 +12,13 @@ namespace {
 constexpr VkDeviceSize kHeaderBytes = CLASSIFY_HEADER * sizeof(uint32_t);
 }
 
-void ClassifyPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
+void ClassifyPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
                           std::vector<bool> textured) {
+  std::vector<gpu::DescriptorBinding> bindings = shadeBindings();
+  bindings.push_back({CLASSIFY_BINDING_MATERIAL_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
+  bindings.push_back({CLASSIFY_BINDING_TILE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
+  layout_ = gpu::PassLayout(device, sceneLayout, std::move(bindings), VK_SHADER_STAGE_COMPUTE_BIT);
+  const VkPipelineLayout layout = layout_.pipelineLayout();
   textured_ = std::move(textured);
   if (textured_.empty()) textured_.push_back(false);  // (a scene without materials: one unused record)
   count_ = gpu::createComputePipeline(device, layout, "classify_count.comp", spec.windowed);
@@ -39,19 +45,25 @@ void ClassifyPass::resize(gpu::Device& device, uint32_t width, uint32_t height) 
                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::DeviceLocal);
 }
 
-void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const {
+void ClassifyPass::bind(const ShadeInputs& shading) const {
+  gpu::DescriptorWriter w = layout_.writer();
+  writeShadeBindings(w, shading);
+  w.buffer(CLASSIFY_BINDING_MATERIAL_TILES, materialTiles_.handle()).buffer(CLASSIFY_BINDING_TILE_LIST, tileList_.handle());
+  w.update();
+}
+
+void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkDescriptorSet scene) const {
   constexpr VkAccessFlags2 kReadWrite = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
   // The previous frame's shading read the records this frame clears (its fence has passed; ordering only).
   vkCmdFillBuffer(cmd, materialTiles_.handle(), 0, VK_WHOLE_SIZE, 0);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  layout_.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, count_.handle());
   vkCmdDispatch(cmd, tilesX_, tilesY_, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
-  const gpu::PassConstants pc{0, 0, uint32_t(textured_.size()), 0};
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  layout_.push(cmd, {0, 0, uint32_t(textured_.size()), 0});
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scan_.handle());
   vkCmdDispatch(cmd, 1, 1, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
@@ -67,16 +79,15 @@ void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, 
   vkCmdCopyBuffer(cmd, materialTiles_.handle(), readback_.handle(), 1, &c);
 }
 
-void ClassifyPass::recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const {
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+void ClassifyPass::recordShade(VkCommandBuffer cmd, VkDescriptorSet scene) const {
+  layout_.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   for (bool textured : {true, false}) {
     const gpu::Pipeline& p = textured ? shadeTextured_ : shadeUntextured_;
     if (!p.handle()) continue;
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
     for (uint32_t m = 0; m < textured_.size(); ++m) {
       if (textured_[m] != textured) continue;
-      const gpu::PassConstants pc{0, 0, m, 0};
-      vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+      layout_.push(cmd, {0, 0, m, 0});
       vkCmdDispatchIndirect(cmd, materialTiles_.handle(), kHeaderBytes + VkDeviceSize(m) * sizeof(gpu::MaterialTiles));
     }
   }

@@ -1,10 +1,10 @@
 // Material classification and classified shading: the alternative to the single "ubershader" dispatch of the
 // shading pass (shade_pass). Per frame, on the GPU:
 //   classify_count.comp    one workgroup per 8x8 shading tile: the materials present, per material +1 tile and
-//                          its pixel count (MaterialTiles records, BINDING_MATERIAL_TILES);
+//                          its pixel count (the MaterialTiles records);
 //   classify_scan.comp     exclusive prefix sum of the tile counts: each material's first tile-list entry, and
 //                          its VkDispatchIndirectCommand (its tiles in rows of CLASSIFY_DISPATCH_WIDTH);
-//   classify_scatter.comp  each tile appended to the list of every material present in it (BINDING_TILE_LIST);
+//   classify_scatter.comp  each tile appended to the list of every material present in it (the tile list);
 //   shade_classified.comp  one vkCmdDispatchIndirect per material (push constant: the material), one workgroup
 //                          per listed tile; lanes showing another material leave. Materials without a texture
 //                          use the untextured variant (no sampling code); a material with no pixels gets 0
@@ -16,8 +16,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
+#include "visbuf/passes/shade_pass.h"
 
 namespace visbuf::passes {
 
@@ -32,20 +34,22 @@ class ClassifyPass {
  public:
   // textured[m]: material m samples a texture (its dispatch uses the textured shading pipeline; with spec
   // .textureClasses == 0 every material uses the untextured one).
-  void create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, std::vector<bool> textured);
+  void create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
+              std::vector<bool> textured);
   bool created() const { return !textured_.empty(); }
   // (Re)allocates the tile list for a width x height frame: tiles x min(materials, 64) entries.
   void resize(gpu::Device& device, uint32_t width, uint32_t height);
+  // Its set: the shading set (the same inputs as the shading pass) and its own buffers (after resize).
+  void bind(const ShadeInputs& shading) const;
   // Count, scan and scatter, then the barrier to the indirect dispatches and a copy of the records for stats().
-  void recordClassify(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  void recordClassify(VkCommandBuffer cmd, VkDescriptorSet scene) const;
   // The shading dispatches, one per material.
-  void recordShade(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set) const;
+  void recordShade(VkCommandBuffer cmd, VkDescriptorSet scene) const;
   ClassifyStats stats() const;  // after the frame's fence
-  const gpu::Buffer& materialTiles() const { return materialTiles_; }
-  const gpu::Buffer& tileList() const { return tileList_; }
   uint64_t bytes() const { return materialTiles_.size() + tileList_.size(); }
 
  private:
+  gpu::PassLayout layout_;
   gpu::Pipeline count_, scan_, scatter_;
   gpu::Pipeline shadeTextured_, shadeUntextured_;
   std::vector<bool> textured_;   // per material

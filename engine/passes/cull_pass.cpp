@@ -1,28 +1,47 @@
 #include "visbuf/passes/cull_pass.h"
 
+#include "visbuf/shared/bindings_cull.h"
 #include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 
-CullPass CullPass::create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec) {
-  return CullPass{gpu::createComputePipeline(device, layout, "cull.comp", spec)};
+CullPass CullPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec) {
+  constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  CullPass p{gpu::PassLayout(device, sceneLayout,
+                             {{CULL_BINDING_DRAWS, storage},
+                              {CULL_BINDING_HISTORY, storage},
+                              {CULL_BINDING_VISIBLE_LIST, storage},
+                              {CULL_BINDING_DRAW_LISTS, storage},
+                              {CULL_BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}},
+                             VK_SHADER_STAGE_COMPUTE_BIT),
+             {}};
+  p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull.comp", spec);
+  return p;
 }
 
-void CullPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t objectCount,
-                      uint32_t phase) const {
+void CullPass::bind(const gpu::Buffer& draws, const gpu::Buffer& history, const gpu::Buffer& visibleList,
+                    const gpu::Buffer& drawLists, const gpu::Image& pyramid, VkSampler sampler) const {
+  layout.writer()
+      .buffer(CULL_BINDING_DRAWS, draws.handle())
+      .buffer(CULL_BINDING_HISTORY, history.handle())
+      .buffer(CULL_BINDING_VISIBLE_LIST, visibleList.handle())
+      .buffer(CULL_BINDING_DRAW_LISTS, drawLists.handle())
+      .image(CULL_BINDING_PYRAMID, pyramid.view(), VK_IMAGE_LAYOUT_GENERAL, sampler)
+      .update();
+}
+
+void CullPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount, uint32_t phase) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
-  gpu::PassConstants pc{phase, 0, 0, 0};  // (drawBase: the visibility pass's; lists come from BINDING_DRAW_LISTS)
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
+  layout.push(cmd, {phase, 0, 0, 0});  // (drawBase: the visibility pass's; lists come from the draw lists' buffer)
   vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
 }
 
-void CullPass::recordListed(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& lists,
+void CullPass::recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists,
                             VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
-  gpu::PassConstants pc{phase, 0, 0, variant};
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
+  layout.push(cmd, {phase, 0, 0, variant});
   vkCmdDispatchIndirect(cmd, lists.handle(), headerOffset + sizeof(uint32_t));  // header words 1..3
 }
 

@@ -3,12 +3,19 @@
 #include <string>
 
 #include "visbuf/passes/visibility_pass.h"
+#include "visbuf/shared/bindings_forward.h"
 
 namespace visbuf::passes {
 
-ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
-                                VkSampleCountFlagBits samples) {
+ForwardPass ForwardPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
+                                uint32_t listMask, VkSampleCountFlagBits samples) {
   ForwardPass p;
+  p.layout = gpu::PassLayout(device, sceneLayout,
+                             {{LIGHTING_BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                              {LIGHTING_BINDING_LIGHT_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                              {FORWARD_BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
+  const VkPipelineLayout layout = p.layout.pipelineLayout();
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
     const std::string prefix = drawListMasked(list) ? "forward_masked" : "forward";
@@ -28,14 +35,22 @@ ForwardPass ForwardPass::create(gpu::Device& device, VkPipelineLayout layout, gp
   return p;
 }
 
-void ForwardPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+void ForwardPass::bind(const gpu::Buffer& lights, const gpu::Buffer& lightTiles, const gpu::Image& overdraw) const {
+  layout.writer()
+      .buffer(LIGHTING_BINDING_LIGHTS, lights.handle())
+      .buffer(LIGHTING_BINDING_LIGHT_TILES, lightTiles.handle())
+      .image(FORWARD_BINDING_OVERDRAW, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL)
+      .update();
+}
+
+void ForwardPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Image& color,
                          VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
                          const std::vector<ForwardDraw>& draws, const gpu::Image* ids, bool countOverdraw,
                          const gpu::Image* resolve) const {
   if (countOverdraw) ids = nullptr;  // one diagnostic at a time
   beginRendering(cmd, color, background, depth, false, ids, VkClearColorValue{}, resolve);
   const Variant variant = countOverdraw ? Overdraw : ids ? WithIds : Plain;
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene);
   vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   uint32_t bound = DRAW_LIST_NONE;
   for (const ForwardDraw& d : draws) {

@@ -8,6 +8,7 @@
 #include <array>
 #include <vector>
 
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 #include "visbuf/shared/config.h"
@@ -23,16 +24,20 @@ struct ForwardDraw {
 
 struct ForwardPass {
   // Per draw list: plain; also writing (object + 1, triangle) to an rg32ui target (diagnostics, tests); debug,
-  // counting raster writes per pixel into BINDING_OVERDRAW. Created only for the lists in listMask.
+  // counting raster writes per pixel into the overdraw image. Created only for the lists in listMask.
   enum Variant { Plain, WithIds, Overdraw, VariantCount };
+  gpu::PassLayout layout;
   std::array<std::array<gpu::Pipeline, VariantCount>, DRAW_LISTS> pipelines;
   // samples > 1: pipelines for multisampled colour + depth (no ID variant is used then: see record).
-  static ForwardPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
-                            VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
+  static ForwardPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
+                            uint32_t listMask, VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
+  // Its set: the point lights and their tile lists (any buffers where the scene has none: never read then), the
+  // overdraw counter image (r32ui, GENERAL).
+  void bind(const gpu::Buffer& lights, const gpu::Buffer& lightTiles, const gpu::Image& overdraw) const;
   // ids: optional rg32ui target (cleared to 0) written with the same IDs the visibility path decodes.
   // draws: in any order; the pipeline is rebound where the list changes (sort by list to bind each once).
   // resolve: MSAA, the single-sample image the multisampled colour is averaged into (hardware resolve).
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+  void record(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Image& color,
               VkClearColorValue background, const gpu::Image& depth, VkBuffer indexBuffer,
               const std::vector<ForwardDraw>& draws, const gpu::Image* ids = nullptr, bool countOverdraw = false,
               const gpu::Image* resolve = nullptr) const;

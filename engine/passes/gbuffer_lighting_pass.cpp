@@ -1,19 +1,48 @@
 #include "visbuf/passes/gbuffer_lighting_pass.h"
 
-#include "visbuf/shared/config.h"
+#include <vector>
+
+#include "visbuf/shared/bindings_gbuffer_lighting.h"
 
 namespace visbuf::passes {
 
-GBufferLightingPass GBufferLightingPass::create(gpu::Device& device, VkPipelineLayout layout, uint32_t windowed) {
-  return GBufferLightingPass{
-      gpu::createComputePipeline(device, layout, "gbuffer_lighting.comp", windowed),
-      gpu::createComputePipeline(device, layout, "gbuffer_lighting_attributes.comp", windowed)};
+GBufferLightingPass GBufferLightingPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout,
+                                                uint32_t windowed) {
+  constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  constexpr VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  GBufferLightingPass p;
+  p.layout = gpu::PassLayout(device, sceneLayout,
+                             {{LIGHTING_BINDING_LIGHTS, storage},
+                              {LIGHTING_BINDING_LIGHT_TILES, storage},
+                              {GBUFFER_LIGHTING_BINDING_TARGETS, sampled, GBUFFER_TARGETS},
+                              {GBUFFER_LIGHTING_BINDING_DEPTH, sampled},
+                              {GBUFFER_LIGHTING_BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                              {GBUFFER_LIGHTING_BINDING_ATTRIBUTES, storage}},
+                             VK_SHADER_STAGE_COMPUTE_BIT);
+  p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "gbuffer_lighting.comp", windowed);
+  p.attributesPipeline =
+      gpu::createComputePipeline(device, p.layout.pipelineLayout(), "gbuffer_lighting_attributes.comp", windowed);
+  return p;
 }
 
-void GBufferLightingPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
-                                 uint32_t height, bool writeAttributes) const {
+void GBufferLightingPass::bind(const GBufferLightingInputs& in) const {
+  const VkImageLayout readOnly = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  std::vector<VkDescriptorImageInfo> targets;
+  for (const gpu::Image* t : in.targets) targets.push_back({in.sampler, t->view(), readOnly});
+  layout.writer()
+      .buffer(LIGHTING_BINDING_LIGHTS, in.lights->handle())
+      .buffer(LIGHTING_BINDING_LIGHT_TILES, in.lightTiles->handle())
+      .images(GBUFFER_LIGHTING_BINDING_TARGETS, std::move(targets))
+      .image(GBUFFER_LIGHTING_BINDING_DEPTH, in.depth->view(), readOnly, in.sampler)
+      .image(GBUFFER_LIGHTING_BINDING_COLOR, in.color->view(), VK_IMAGE_LAYOUT_GENERAL)
+      .buffer(GBUFFER_LIGHTING_BINDING_ATTRIBUTES, in.attributes->handle())
+      .update();
+}
+
+void GBufferLightingPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height,
+                                 bool writeAttributes) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (writeAttributes ? attributesPipeline : pipeline).handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   vkCmdDispatch(cmd, (width + SHADE_TILE_X - 1) / SHADE_TILE_X, (height + SHADE_TILE_Y - 1) / SHADE_TILE_Y, 1);
 }
 

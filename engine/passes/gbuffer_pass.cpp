@@ -1,5 +1,6 @@
 #include "visbuf/passes/gbuffer_pass.h"
 
+#include "visbuf/shared/bindings_gbuffer.h"
 #include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
@@ -31,9 +32,12 @@ uint32_t GBufferFormats::bytesPerPixel() const {
   return n;
 }
 
-GBufferPass GBufferPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
+GBufferPass GBufferPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
                                 uint32_t listMask) {
   GBufferPass p;
+  p.layout = gpu::PassLayout(device, sceneLayout, {{GBUFFER_BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
+  const VkPipelineLayout layout = p.layout.pipelineLayout();
   p.formats = GBufferFormats::choose(device);
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
@@ -49,8 +53,11 @@ GBufferPass GBufferPass::create(gpu::Device& device, VkPipelineLayout layout, gp
   return p;
 }
 
-void GBufferPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                         const GBufferInputs& in) const {
+void GBufferPass::bind(const gpu::Image& overdraw) const {
+  layout.writer().image(GBUFFER_BINDING_OVERDRAW, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL).update();
+}
+
+void GBufferPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, const GBufferInputs& in) const {
   std::array<VkRenderingAttachmentInfo, GBUFFER_TARGETS> cas{};
   for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) {
     cas[i].sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO;
@@ -78,7 +85,7 @@ void GBufferPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescrip
   VkRect2D sc{{0, 0}, {w, h}};
   vkCmdSetViewport(cmd, 0, 1, &vp);
   vkCmdSetScissor(cmd, 0, 1, &sc);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   for (const VisibilityList& l : in.lists) {
     if (l.maxDraws == 0) continue;

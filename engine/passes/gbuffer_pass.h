@@ -6,6 +6,7 @@
 
 #include <array>
 
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 #include "visbuf/passes/visibility_pass.h"
@@ -30,15 +31,20 @@ struct GBufferInputs {
   VkBuffer drawCount = VK_NULL_HANDLE;
   std::vector<VisibilityList> lists;  // the cull pass's draw lists of this phase (as VisibilityInputs::lists)
   bool clear = true;      // early/only phase clears targets and depth; the late phase loads them
-  bool countOverdraw = false;  // the variant that counts raster writes into BINDING_OVERDRAW
+  bool countOverdraw = false;  // the variant that counts raster writes into the overdraw image
 };
 
 struct GBufferPass {
+  gpu::PassLayout layout;
   GBufferFormats formats;
   // Per draw list (its cull mode; masked lists discard like the visibility raster): plain and overdraw-counting.
   std::array<std::array<gpu::Pipeline, 2>, DRAW_LISTS> pipelines;
-  static GBufferPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const GBufferInputs& in) const;
+  static GBufferPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
+                            uint32_t listMask);
+  bool created() const { return bool(layout); }
+  // Its set: the overdraw counter image (r32ui, GENERAL).
+  void bind(const gpu::Image& overdraw) const;
+  void record(VkCommandBuffer cmd, VkDescriptorSet scene, const GBufferInputs& in) const;
 };
 
 }  // namespace visbuf::passes

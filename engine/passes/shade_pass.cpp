@@ -1,13 +1,37 @@
 #include "visbuf/passes/shade_pass.h"
 
 #include "visbuf/gpu/resources.h"
+#include "visbuf/shared/bindings_shade.h"
 #include "visbuf/shared/config.h"
 #include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 
-ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
+std::vector<gpu::DescriptorBinding> shadeBindings() {
+  constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  return {{LIGHTING_BINDING_LIGHTS, storage},
+          {LIGHTING_BINDING_LIGHT_TILES, storage},
+          {SHADE_BINDING_DRAWS, storage},
+          {SHADE_BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+          {SHADE_BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {SHADE_BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {SHADE_BINDING_ATTRIBUTES, storage}};
+}
+
+void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
+  w.buffer(LIGHTING_BINDING_LIGHTS, in.lights->handle())
+      .buffer(LIGHTING_BINDING_LIGHT_TILES, in.lightTiles->handle())
+      .buffer(SHADE_BINDING_DRAWS, in.draws->handle())
+      .texels(SHADE_BINDING_DRAW_TEXELS, in.drawTexels)
+      .image(SHADE_BINDING_VISIBILITY, in.ids->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler)
+      .image(SHADE_BINDING_COLOR, in.color->view(), VK_IMAGE_LAYOUT_GENERAL)
+      .buffer(SHADE_BINDING_ATTRIBUTES, in.attributes->handle());
+}
+
+ShadePass ShadePass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec) {
   ShadePass p;
+  p.layout = gpu::PassLayout(device, sceneLayout, shadeBindings(), VK_SHADER_STAGE_COMPUTE_BIT);
+  const VkPipelineLayout layout = p.layout.pipelineLayout();
   p.pipeline = gpu::createComputePipeline(device, layout, "shade.comp", spec);
   p.attributesPipeline = gpu::createComputePipeline(device, layout, "shade_attributes.comp", spec);
   p.coveredPipeline = gpu::createComputePipeline(device, layout, "shade_covered.comp", spec);
@@ -15,29 +39,33 @@ ShadePass ShadePass::create(gpu::Device& device, VkPipelineLayout layout, gpu::S
   return p;
 }
 
-void ShadePass::createMsaa(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
+void ShadePass::createMsaa(gpu::Device& device, gpu::Specialization spec) {
   if (msaaPipeline.handle()) return;
-  msaaPipeline = gpu::createComputePipeline(device, layout, "shade_msaa.comp", spec);
-  sampleIdsPipeline = gpu::createComputePipeline(device, layout, "msaa_ids.comp", spec);
+  msaaPipeline = gpu::createComputePipeline(device, layout.pipelineLayout(), "shade_msaa.comp", spec);
+  sampleIdsPipeline = gpu::createComputePipeline(device, layout.pipelineLayout(), "msaa_ids.comp", spec);
 }
 
-namespace {
-void dispatchPixels(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Pipeline& p,
-                    uint32_t width, uint32_t height) {
+void ShadePass::bind(const ShadeInputs& in) const {
+  gpu::DescriptorWriter w = layout.writer();
+  writeShadeBindings(w, in);
+  w.update();
+}
+
+void ShadePass::dispatchPixels(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Pipeline& p, uint32_t width,
+                               uint32_t height) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   vkCmdDispatch(cmd, (width + SHADE_TILE_X - 1) / SHADE_TILE_X, (height + SHADE_TILE_Y - 1) / SHADE_TILE_Y, 1);
 }
-}  // namespace
 
-void ShadePass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
-                       uint32_t height, Variant variant) const {
-  dispatchPixels(cmd, layout, set,
-                 variant == Msaa ? msaaPipeline : variant == Attributes ? attributesPipeline : pipeline, width, height);
+void ShadePass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height,
+                       Variant variant) const {
+  dispatchPixels(cmd, scene, variant == Msaa ? msaaPipeline : variant == Attributes ? attributesPipeline : pipeline,
+                 width, height);
 }
 
-void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                              const gpu::Buffer& tiles, uint32_t width, uint32_t height) const {
+void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& tiles, uint32_t width,
+                              uint32_t height) const {
   const uint32_t tileCount = ((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
   // (The previous frame's reads of the list are behind the frame graph's frame boundary.)
   vkCmdFillBuffer(cmd, tiles.handle(), 0, COVERED_TILES_HEADER * sizeof(uint32_t), 0);
@@ -45,15 +73,15 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDe
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredTilesPipeline.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   gpu::PassConstants pc{};
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  layout.push(cmd, pc);
   vkCmdDispatch(cmd, (tileCount + COVERED_TILES_WORKGROUP - 1) / COVERED_TILES_WORKGROUP, 1, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   pc.variant = 1;  // the indirect dispatch from the count
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  layout.push(cmd, pc);
   vkCmdDispatch(cmd, 1, 1, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
@@ -62,9 +90,8 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDe
   vkCmdDispatchIndirect(cmd, tiles.handle(), 0);
 }
 
-void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
-                                uint32_t height) const {
-  dispatchPixels(cmd, layout, set, sampleIdsPipeline, width, height);
+void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const {
+  dispatchPixels(cmd, scene, sampleIdsPipeline, width, height);
 }
 
 }  // namespace visbuf::passes

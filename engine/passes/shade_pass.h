@@ -1,35 +1,56 @@
 // Shading pass (shaders/shade.comp.glsl): one thread per pixel rebuilds the surface from the IDs.
 // Reads: frame, ID target, draws, objects, meshes, vertices, indices, materials. Writes: colour, and in the
-// attributes variant also the per-pixel reconstruction record (BINDING_ATTRIBUTES, config.h's layout).
+// attributes variant also the per-pixel reconstruction record (the attribute buffer, config.h's layout).
 #pragma once
 
+#include <vector>
+
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 
-// MSAA (multisampled ID target bound at BINDING_VISIBILITY): the msaa variant shades each pixel once where its
-// samples agree and once per distinct ID where they differ (shaders/msaa_samples.glsl), counting those pixels in
-// stats[STAT_PER_SAMPLE_PIXELS]; sampleIds copies every sample's raw ID into BINDING_ATTRIBUTES (readIds).
+// What the shading set holds (shaders/shared/bindings_shade.h): also the classified shading's (classify_pass).
+struct ShadeInputs {
+  const gpu::Buffer* lights = nullptr;      // point lights (any buffer where the scene has none: never read then)
+  const gpu::Buffer* lightTiles = nullptr;  // their tile lists (likewise)
+  const gpu::Buffer* draws = nullptr;       // the cull pass's draws
+  VkBufferView drawTexels = VK_NULL_HANDLE; // the same as R32UI texels
+  const gpu::Image* ids = nullptr;          // the ID target (the multisampled one in MSAA frames), shader-read layout
+  VkSampler sampler = VK_NULL_HANDLE;       // for the IDs (nearest)
+  const gpu::Image* color = nullptr;        // rgba16f, GENERAL
+  const gpu::Buffer* attributes = nullptr;  // the attribute record / sample-ID copy
+};
+std::vector<gpu::DescriptorBinding> shadeBindings();
+void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in);
+
+// MSAA (multisampled ID target bound): the msaa variant shades each pixel once where its samples agree and once per
+// distinct ID where they differ (shaders/msaa_samples.glsl), counting those pixels in
+// stats[STAT_PER_SAMPLE_PIXELS]; sampleIds copies every sample's raw ID into the attribute buffer (readIds).
 struct ShadePass {
   enum Variant { Plain, Attributes, Msaa };
+  gpu::PassLayout layout;
   gpu::Pipeline pipeline;
   gpu::Pipeline attributesPipeline;  // same shading, plus the attribute record (stress suite)
   gpu::Pipeline msaaPipeline;        // created by createMsaa (the first MSAA frame): it compiles the materials again
   gpu::Pipeline sampleIdsPipeline;
   gpu::Pipeline coveredPipeline;       // one workgroup per listed tile (shade.comp COVERED)
   gpu::Pipeline coveredTilesPipeline;  // covered_tiles.comp: the list and its indirect dispatch
-  static ShadePass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
-  void createMsaa(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width, uint32_t height,
-              Variant variant) const;
+  static ShadePass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec);
+  void createMsaa(gpu::Device& device, gpu::Specialization spec);
+  void bind(const ShadeInputs& in) const;
+  void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height, Variant variant) const;
   // The ubershader over the covered tiles only: covered_tiles.comp lists the 8x8 tiles whose IDs show anything
   // into `tiles` (FrameData.coveredTiles* holds its address) and writes the indirect dispatch, then one workgroup
   // per listed tile shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
-  void recordCovered(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Buffer& tiles,
-                     uint32_t width, uint32_t height) const;
-  void recordSampleIds(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t width,
-                       uint32_t height) const;
+  void recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& tiles, uint32_t width,
+                     uint32_t height) const;
+  void recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const;
+
+ private:
+  void dispatchPixels(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Pipeline& p, uint32_t width,
+                      uint32_t height) const;
 };
 
 }  // namespace visbuf::passes

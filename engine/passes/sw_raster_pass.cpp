@@ -3,12 +3,21 @@
 #include <algorithm>
 
 #include "visbuf/passes/visibility_pass.h"
+#include "visbuf/shared/bindings_sw_raster.h"
 #include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
 
-SwRasterPass SwRasterPass::create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec) {
+SwRasterPass SwRasterPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout,
+                                  const gpu::Specialization& spec) {
+  constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   SwRasterPass p;
+  p.layout = gpu::PassLayout(device, sceneLayout,
+                             {{SW_RASTER_BINDING_DRAWS, storage},
+                              {SW_RASTER_BINDING_DRAW_LISTS, storage},
+                              {SW_RASTER_BINDING_VISIBILITY, storage}},
+                             VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
+  const VkPipelineLayout layout = p.layout.pipelineLayout();
   // lavapipe: no load before each atomic, the back-face queue (sw_raster.comp.glsl SW_CPU)
   p.raster = gpu::createComputePipeline(device, layout, device.isCpu() ? "sw_raster_cpu.comp" : "sw_raster.comp", spec);
   for (int wide = 0; wide < 2; ++wide) {
@@ -38,22 +47,28 @@ bool SwRasterPass::ensureBuffer(gpu::Device& device, uint32_t width, uint32_t he
   return true;
 }
 
-void SwRasterPass::recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
+void SwRasterPass::bind(const gpu::Buffer& draws, const gpu::Buffer& drawLists) const {
+  layout.writer()
+      .buffer(SW_RASTER_BINDING_DRAWS, draws.handle())
+      .buffer(SW_RASTER_BINDING_DRAW_LISTS, drawLists.handle())
+      .buffer(SW_RASTER_BINDING_VISIBILITY, buffer.handle())
+      .update();
+}
+
+void SwRasterPass::recordRaster(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t phase,
                                 const gpu::Buffer& stats) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, raster.handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
-  gpu::PassConstants pc{phase, 0, 0, 0};
-  vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
+  layout.push(cmd, {phase, 0, 0, 0});
   vkCmdDispatchIndirect(cmd, stats.handle(), (SW_ARGS + phase * SW_ARGS_UINTS + SW_ARGS_DISPATCH) * sizeof(uint32_t));
 }
 
-void SwRasterPass::recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                               const gpu::Image& ids, const gpu::Image& depth, const gpu::Buffer& stats,
-                               uint32_t phase) const {
+void SwRasterPass::recordMerge(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Image& ids,
+                               const gpu::Image& depth, const gpu::Buffer& stats, uint32_t phase) const {
   beginRendering(cmd, ids, {}, depth, /*load=*/true);
   const bool wide = ids.format() == VK_FORMAT_R32G32_UINT;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, merge[wide ? 1 : 0].handle());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene);
   vkCmdDrawIndirect(cmd, stats.handle(), (SW_ARGS + phase * SW_ARGS_UINTS + SW_ARGS_MERGE) * sizeof(uint32_t), 1,
                     sizeof(VkDrawIndirectCommand));
   vkCmdEndRendering(cmd);

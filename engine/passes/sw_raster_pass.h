@@ -7,28 +7,32 @@
 // (cleared by the early/only phase), ID target, depth.
 #pragma once
 
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 
 namespace visbuf::passes {
 
 struct SwRasterPass {
+  gpu::PassLayout layout;
   gpu::Pipeline raster;
   gpu::Pipeline merge[2];  // narrow (r32ui), wide (rg32ui)
-  // The 64-bit per-pixel buffer (BINDING_SW_VISIBILITY): an 8-byte stand-in after resetBuffer (creation, resize),
-  // the frame's size once ensureBuffer ran; ensureBuffer returns true when it allocated (descriptors to rewrite).
+  // The 64-bit per-pixel buffer: an 8-byte stand-in after resetBuffer (creation, resize), the frame's size once
+  // ensureBuffer ran; ensureBuffer returns true when it allocated (its set to write again: bind).
   gpu::Buffer buffer;
   void resetBuffer(gpu::Device& device);
   bool ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height);
-  static SwRasterPass create(gpu::Device& device, VkPipelineLayout layout, const gpu::Specialization& spec);
+  static SwRasterPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec);
+  bool created() const { return raster.handle() != VK_NULL_HANDLE; }
+  // Its set: the cull pass's draws and the draw lists, and its own buffer.
+  void bind(const gpu::Buffer& draws, const gpu::Buffer& drawLists) const;
   // The raster dispatch and the merge draw take their sizes from the cull pass (config.h SW_ARGS in `stats`): a
   // phase that routed nothing here dispatches no workgroup and draws no triangle. Each workgroup loops over the
   // phase's routed draws.
-  void recordRaster(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, uint32_t phase,
-                    const gpu::Buffer& stats) const;
+  void recordRaster(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t phase, const gpu::Buffer& stats) const;
   // ids / depth: COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL, loaded and stored.
-  void recordMerge(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& ids,
-                   const gpu::Image& depth, const gpu::Buffer& stats, uint32_t phase) const;
+  void recordMerge(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Image& ids, const gpu::Image& depth,
+                   const gpu::Buffer& stats, uint32_t phase) const;
 
  private:
   bool sized_ = false;

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "visbuf/passes/visibility_pass.h"
+#include "visbuf/shared/bindings_lighting.h"
 
 namespace visbuf::passes {
 
@@ -11,8 +12,13 @@ void sortBackToFront(std::vector<TransparentDraw>& draws) {
                    [](const TransparentDraw& a, const TransparentDraw& b) { return a.viewDepth > b.viewDepth; });
 }
 
-TransparentPass TransparentPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec) {
+TransparentPass TransparentPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout,
+                                        gpu::Specialization spec) {
   TransparentPass p;
+  p.layout_ = gpu::PassLayout(device, sceneLayout,
+                              {{LIGHTING_BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                               {LIGHTING_BINDING_LIGHT_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                              VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
   for (uint32_t list = 0; list < p.pipelines_.size(); ++list) {
     gpu::GraphicsPipelineDesc d = drawListPipelineDesc(spec, list);
     d.vertexShader = "forward.vert";
@@ -20,16 +26,22 @@ TransparentPass TransparentPass::create(gpu::Device& device, VkPipelineLayout la
     d.colorFormats = {VK_FORMAT_R16G16B16A16_SFLOAT};
     d.depthWrite = false;
     d.premultipliedBlend = true;
-    p.pipelines_[list] = gpu::createGraphicsPipeline(device, layout, d);
+    p.pipelines_[list] = gpu::createGraphicsPipeline(device, p.layout_.pipelineLayout(), d);
   }
   return p;
 }
 
-void TransparentPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                             const gpu::Image& color, const gpu::Image& depth, VkBuffer indexBuffer,
+void TransparentPass::bind(const gpu::Buffer& lights, const gpu::Buffer& lightTiles) const {
+  layout_.writer()
+      .buffer(LIGHTING_BINDING_LIGHTS, lights.handle())
+      .buffer(LIGHTING_BINDING_LIGHT_TILES, lightTiles.handle())
+      .update();
+}
+
+void TransparentPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Image& color, const gpu::Image& depth, VkBuffer indexBuffer,
                              const std::vector<TransparentDraw>& draws) const {
   beginRendering(cmd, color, VkClearColorValue{}, depth, true);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  layout_.bind(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene);
   vkCmdBindIndexBuffer(cmd, indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   uint32_t bound = DRAW_LIST_NONE;
   for (const TransparentDraw& t : draws) {

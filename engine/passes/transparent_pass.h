@@ -8,6 +8,7 @@
 #include <array>
 #include <vector>
 
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 #include "visbuf/passes/forward_pass.h"
@@ -26,14 +27,17 @@ void sortBackToFront(std::vector<TransparentDraw>& draws);
 
 class TransparentPass {
  public:
-  static TransparentPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec);
+  static TransparentPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec);
+  // Its set: the point lights and their tile lists (any buffers where the scene has none: never read then).
+  void bind(const gpu::Buffer& lights, const gpu::Buffer& lightTiles) const;
   // color: rgba16f in COLOR_ATTACHMENT_OPTIMAL, loaded; depth: D32 in DEPTH_ATTACHMENT_OPTIMAL, loaded, not
   // written. draws: drawn in the given order (sortBackToFront).
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const gpu::Image& color,
+  void record(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Image& color,
               const gpu::Image& depth, VkBuffer indexBuffer, const std::vector<TransparentDraw>& draws) const;
   bool created() const { return pipelines_[0].handle() != VK_NULL_HANDLE; }
 
  private:
+  gpu::PassLayout layout_;
   std::array<gpu::Pipeline, 3> pipelines_;  // per face-culling state: DRAW_LIST_OPAQUE, _FLIPPED, _DOUBLE_SIDED
 };
 

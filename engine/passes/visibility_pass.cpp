@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "visbuf/shared/bindings_visibility.h"
 #include "visbuf/shared/types.h"
 
 namespace visbuf::passes {
@@ -28,9 +29,11 @@ gpu::GraphicsPipelineDesc drawListPipelineDesc(const gpu::Specialization& spec, 
   return d;
 }
 
-VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec,
+VisibilityPass VisibilityPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
                                       uint32_t listMask, VkSampleCountFlagBits samples) {
   VisibilityPass p;
+  p.layout = gpu::PassLayout(device, sceneLayout, {{VISIBILITY_BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
     const bool masked = drawListMasked(list);
@@ -42,7 +45,7 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkPipelineLayout layo
     for (int v = 0; v < VariantCount; ++v) {
       d.fragmentShader = prefix + suffix[v];
       d.colorFormats = {v == Wide || v == WideOverdraw ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32_UINT};
-      p.pipelines[list][size_t(v)] = gpu::createGraphicsPipeline(device, layout, d);
+      p.pipelines[list][size_t(v)] = gpu::createGraphicsPipeline(device, p.layout.pipelineLayout(), d);
     }
   }
   return p;
@@ -83,21 +86,23 @@ void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorVa
   vkCmdSetScissor(cmd, 0, 1, &sc);
 }
 
-void VisibilityPass::record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set,
-                            const VisibilityInputs& in) const {
+void VisibilityPass::bind(const gpu::Image& overdraw) const {
+  layout.writer().image(VISIBILITY_BINDING_OVERDRAW, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL).update();
+}
+
+void VisibilityPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, const VisibilityInputs& in) const {
   VkClearColorValue nothing{};
   nothing.uint32[0] = VIS_NOTHING;
   nothing.uint32[1] = VIS_NOTHING;
   beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear);
   const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
   const Variant variant = in.countOverdraw ? (isWide ? WideOverdraw : NarrowOverdraw) : (isWide ? Wide : Narrow);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, &set, 0, nullptr);
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene);
   vkCmdBindIndexBuffer(cmd, in.indexBuffer, 0, VK_INDEX_TYPE_UINT32);
   for (const VisibilityList& l : in.lists) {
     if (l.maxDraws == 0) continue;
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines[l.list][variant].handle());
-    gpu::PassConstants pc{0, l.drawBase, 0, 0};
-    vkCmdPushConstants(cmd, layout, gpu::kPassConstantStages, 0, sizeof(pc), &pc);
+    layout.push(cmd, {0, l.drawBase, 0, 0});
     vkCmdDrawIndexedIndirectCount(cmd, in.draws, VkDeviceSize(l.drawBase) * sizeof(gpu::DrawCommand), in.drawCount,
                                   VkDeviceSize(l.countIndex) * sizeof(uint32_t), l.maxDraws, sizeof(gpu::DrawCommand));
   }

@@ -8,6 +8,7 @@
 #include <array>
 #include <vector>
 
+#include "visbuf/gpu/descriptors.h"
 #include "visbuf/gpu/pipeline.h"
 #include "visbuf/gpu/resources.h"
 #include "visbuf/shared/config.h"
@@ -38,18 +39,21 @@ struct VisibilityInputs {
   VkBuffer drawCount = VK_NULL_HANDLE;
   std::vector<VisibilityList> lists;  // drawn in this order (opaque first: masked fragments then fail depth early)
   bool clear = true;      // early/only phase clears IDs and depth; the late phase loads them
-  bool countOverdraw = false;  // debug: the variant that counts raster writes into BINDING_OVERDRAW
+  bool countOverdraw = false;  // debug: the variant that counts raster writes into the overdraw image
 };
 
 struct VisibilityPass {
   // Per draw list: r32ui, rg32ui, and the debug variants counting raster writes per pixel (narrow, wide).
   // Created only for the lists in listMask (bit l: list l has objects in the scene).
   enum Variant { Narrow, Wide, NarrowOverdraw, WideOverdraw, VariantCount };
+  gpu::PassLayout layout;
   std::array<std::array<gpu::Pipeline, VariantCount>, DRAW_LISTS> pipelines;
   // samples: rasterisation samples of the targets it will draw into (MSAA: multisampled IDs and depth).
-  static VisibilityPass create(gpu::Device& device, VkPipelineLayout layout, gpu::Specialization spec, uint32_t listMask,
-                               VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
-  void record(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet set, const VisibilityInputs& in) const;
+  static VisibilityPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
+                               uint32_t listMask, VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
+  // Its set: the overdraw counter image (r32ui, GENERAL).
+  void bind(const gpu::Image& overdraw) const;
+  void record(VkCommandBuffer cmd, VkDescriptorSet scene, const VisibilityInputs& in) const;
 };
 
 // Begins dynamic rendering on colour + depth, cleared (depth to 0, reverse-Z) or loaded; shared by the

@@ -210,14 +210,14 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.prepare({Graph::writes(r.history, access::transferWrite)}, [this](VkCommandBuffer cmd) { resetVisibleList(cmd); });
   if (occlusion && !late) {
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
-      cull.recordListed(cmd, pipelineLayout, set, visibleList, 0, CULL_PHASE_EARLY, 0);
+      cull.recordListed(cmd, sceneSet, visibleList, 0, CULL_PHASE_EARLY, 0);
     });
     return;
   }
-  p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, pipelineLayout, set, gpuScene.objectCount, phase); });
+  p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, sceneSet, gpuScene.objectCount, phase); });
   if (occlusion && late && plan.usePyramid)  // the objects the coarse pyramid test left, at a finer level
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
-      cull.recordListed(cmd, pipelineLayout, set, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
+      cull.recordListed(cmd, sceneSet, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
     });
 }
 
@@ -260,12 +260,12 @@ void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const Fram
       passes::GBufferInputs in;
       for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) in.targets[i] = &gbufferTargets[i];
       common(in);
-      gbuffer.record(cmd, pipelineLayout, set, in);
+      gbuffer.record(cmd, sceneSet, in);
     } else {
       passes::VisibilityInputs in;
       in.ids = msaa ? &idsMs : &ids;
       common(in);
-      (msaa ? visibilityMs : visibility).record(cmd, pipelineLayout, set, in);
+      (msaa ? visibilityMs : visibility).record(cmd, sceneSet, in);
     }
   });
 }
@@ -280,12 +280,12 @@ void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint3
                 [this](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, swRaster.buffer.handle(), 0, VK_WHOLE_SIZE, 0); });
   raster.step({Graph::writes(r.sw, access::computeReadWrite), Graph::writes(r.stats, access::computeReadWrite | access::indirect),
                Graph::reads(r.draws, access::computeRead), Graph::reads(r.scene, access::computeRead)},
-              [this, phase](VkCommandBuffer cmd) { swRaster.recordRaster(cmd, pipelineLayout, set, phase, stats); });
+              [this, phase](VkCommandBuffer cmd) { swRaster.recordRaster(cmd, sceneSet, phase, stats); });
   const gpu::Access swRead{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT};
   g.pass(late ? "micro-raster merge late" : "micro-raster merge", late ? "sw merge late" : "sw merge")
       .step({Graph::reads(r.sw, swRead), Graph::reads(r.stats, access::indirect),
              Graph::writes(r.ids, access::colorAttachment), Graph::writes(r.depth, access::depthAttachment)},
-            [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, pipelineLayout, set, ids, depth, stats, phase); });
+            [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, sceneSet, ids, depth, stats, phase); });
 }
 
 void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa) {
@@ -301,7 +301,7 @@ void Renderer::Impl::declareLightCull(Graph& g, const FrameResources& r, bool ms
   g.pass("light cull", "light cull")
       .step({Graph::reads(r.depth, access::computeSampled),
              Graph::overwrites(r.lightTiles, access::transferWrite | access::computeReadWrite)},
-            [this, msaa](VkCommandBuffer cmd) { lightCull.record(cmd, pipelineLayout, set, msaa); });
+            [this, msaa](VkCommandBuffer cmd) { lightCull.record(cmd, sceneSet, msaa); });
 }
 
 void Renderer::Impl::declareClassify(Graph& g, const FrameResources& r) {
@@ -310,7 +310,7 @@ void Renderer::Impl::declareClassify(Graph& g, const FrameResources& r) {
       .step({Graph::reads(r.ids, access::computeSampled), Graph::reads(r.draws, texels),
              Graph::reads(r.scene, access::computeRead),
              Graph::overwrites(r.classification, access::transferWrite | access::computeReadWrite | access::transferRead)},
-            [this](VkCommandBuffer cmd) { classify.recordClassify(cmd, pipelineLayout, set); });
+            [this](VkCommandBuffer cmd) { classify.recordClassify(cmd, sceneSet); });
 }
 
 // The shading pass: the colour cleared to the background, then every covered pixel (or tile, or classified tile)
@@ -344,11 +344,11 @@ void Renderer::Impl::declareShade(Graph& g, const FrameResources& r, const Frame
   p.step(std::move(uses), [this, plan, attributesToo = options.readAttributes](VkCommandBuffer cmd) {
     const uint32_t w = config.width, h = config.height;
     if (plan.shading == ShadingMode::Classified)
-      classify.recordShade(cmd, pipelineLayout, set);
+      classify.recordShade(cmd, sceneSet);
     else if (plan.coveredTiles)
-      shade.recordCovered(cmd, pipelineLayout, set, coveredTiles, w, h);
+      shade.recordCovered(cmd, sceneSet, coveredTiles, w, h);
     else
-      shade.record(cmd, pipelineLayout, set, w, h,
+      shade.record(cmd, sceneSet, w, h,
                    plan.msaa      ? passes::ShadePass::Msaa
                    : attributesToo ? passes::ShadePass::Attributes
                                    : passes::ShadePass::Plain);
@@ -360,7 +360,7 @@ void Renderer::Impl::declareSampleIds(Graph& g, const FrameResources& r) {
   g.pass("sample ids")
       .step({Graph::reads(r.ids, access::computeSampled), Graph::reads(r.draws, access::computeRead),
              Graph::overwrites(r.attributes, access::computeReadWrite)},
-            [this](VkCommandBuffer cmd) { shade.recordSampleIds(cmd, pipelineLayout, set, config.width, config.height); });
+            [this](VkCommandBuffer cmd) { shade.recordSampleIds(cmd, sceneSet, config.width, config.height); });
 }
 
 // G-buffer baseline: the targets and the depth sampled by the lighting pass, which writes the covered pixels of
@@ -379,7 +379,7 @@ void Renderer::Impl::declareGBufferLighting(Graph& g, const FrameResources& r, b
   for (Graph::Resource t : r.gbuffer) uses.push_back(Graph::reads(t, access::computeSampled));
   if (writeAttributes) uses.push_back(Graph::writes(r.attributes, access::computeReadWrite));
   p.step(std::move(uses), [this, writeAttributes](VkCommandBuffer cmd) {
-    gbufferLighting.record(cmd, pipelineLayout, set, config.width, config.height, writeAttributes);
+    gbufferLighting.record(cmd, sceneSet, config.width, config.height, writeAttributes);
   });
 }
 
@@ -408,7 +408,7 @@ void Renderer::Impl::declareForward(Graph& g, const FrameResources& r, const Cam
       .step(std::move(uses), [this, msaa, fdraws = std::move(fdraws), readIds = options.readIds,
                               overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
         (msaa ? forwardMs : forward)
-            .record(cmd, pipelineLayout, set, msaa ? colorMs : color, kBackground, msaa ? depthMs : depth,
+            .record(cmd, sceneSet, msaa ? colorMs : color, kBackground, msaa ? depthMs : depth,
                     gpuScene.indices.handle(), fdraws, readIds ? &forwardIds : nullptr, overdrawCount,
                     msaa ? &color : nullptr);
       });
@@ -425,7 +425,7 @@ void Renderer::Impl::declareTransparent(Graph& g, const FrameResources& r, const
       .step({Graph::reads(r.scene, access::rasterRead), Graph::writes(r.color, access::colorAttachment),
              Graph::reads(r.depth, depthTest)},
             [this, draws = transparentCull(camera, math, options, st)](VkCommandBuffer cmd) {
-              transparent.record(cmd, pipelineLayout, set, color, depth, gpuScene.indices.handle(), draws);
+              transparent.record(cmd, sceneSet, color, depth, gpuScene.indices.handle(), draws);
             });
 }
 

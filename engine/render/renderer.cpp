@@ -150,7 +150,7 @@ FrameSlot& Renderer::Impl::beginFrame() {
     collectStats(f, false);
     completed = f.stats;
   }
-  set = f.set;
+  sceneSet = sceneSets.set(uint32_t(frameCounter % slots.size()));
   cmds = f.cmds.data();
   timestamps = f.timestamps.get();
   return f;

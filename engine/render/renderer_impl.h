@@ -37,6 +37,7 @@
 #include "visbuf/passes/visibility_pass.h"
 #include "visbuf/render/frame_math.h"
 #include "visbuf/render/frame_plan.h"
+#include "visbuf/render/scene_descriptors.h"
 #include "visbuf/scene/gpu_scene.h"
 
 namespace visbuf {
@@ -77,8 +78,7 @@ struct FrameReadback {
 
 // Per-frame resources: a ring of RendererConfig::framesInFlight slots. Frame n uses slot n % framesInFlight.
 struct FrameSlot {
-  VkDescriptorSet set = VK_NULL_HANDLE;  // every binding shared, except BINDING_FRAME: this slot's frameBuffer
-  gpu::Buffer frameBuffer;               // FrameData, host visible
+  gpu::Buffer frameBuffer;               // FrameData, host visible (the slot's scene set: SCENE_BINDING_FRAME)
   gpu::Buffer statsReadback;             // the counters, copied at the end of the frame
   gpu::Buffer staging;                   // object records the frame uploads, host visible (grown on demand)
   std::unique_ptr<gpu::TimestampPool> timestamps;
@@ -89,8 +89,6 @@ struct FrameSlot {
   FrameStats stats;      // what recording knew; completed from the counters (Renderer::Impl::collectStats)
 };
 
-std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift);
-
 struct Renderer::Impl {
   gpu::Device& device;
   const Scene& scene;
@@ -99,7 +97,7 @@ struct Renderer::Impl {
   IdEncoding encoding;
   uint32_t capacity = 0;      // draws per phase (all draw lists together): draws[0, capacity) early, then late
   // Draw lists (config.h DRAW_LIST_*): list l holds slots [listFirst[l], + listCapacity[l]) of each phase's region;
-  // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (BINDING_DRAW_LISTS).
+  // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (read by the cull pass).
   std::array<uint32_t, DRAW_LISTS> listFirst{}, listCapacity{};
   uint32_t listMask = 0;                 // bit l: listCapacity[l] > 0
   uint32_t swListMask = 0;               // bit l: the micro-raster may take list l's draws (opaque, uncapped)
@@ -108,16 +106,14 @@ struct Renderer::Impl {
   uint32_t objectSplit = 0;  // first object of the second descriptor window (objectWindowSplit)
   uint32_t vertexShift = 0;  // vertices per vertex-pool window: 1 << vertexShift (vertexWindowShift)
 
-  VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
-  VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
-  VkDescriptorPool pool = VK_NULL_HANDLE;
+  SceneDescriptors sceneSets;  // set 0 of every pass, one per slot (each pass owns its set 1)
   VkSampler sampler = VK_NULL_HANDLE;
   VkFence fence = VK_NULL_HANDLE;  // renderFrame's own wait
   std::vector<FrameSlot> slots;
   uint64_t frameCounter = 0;             // frames recorded so far (renderFrame and record)
   std::optional<FrameStats> completed;   // the newest collected frame's stats (record())
-  // The frame being recorded: its slot's descriptor set, command buffers and timestamps (beginFrame).
-  VkDescriptorSet set = VK_NULL_HANDLE;
+  // The frame being recorded: its slot's scene set, command buffers and timestamps (beginFrame).
+  VkDescriptorSet sceneSet = VK_NULL_HANDLE;
   VkCommandBuffer* cmds = nullptr;
   gpu::TimestampPool* timestamps = nullptr;
 
@@ -172,8 +168,12 @@ struct Renderer::Impl {
   gpu::Buffer pointLights;
   passes::LightCullPass lightCull;
   bool hasPointLights() const { return !scene.pointLights.empty(); }
+  // The lights and tile lists the passes' sets hold: with no point lights nothing is allocated and the stats buffer
+  // stands in (never read: FrameData.pointLightCount = 0; lavapipe reads every descriptor of a bound set).
+  const gpu::Buffer& boundLights() const { return hasPointLights() ? pointLights : stats; }
+  const gpu::Buffer& boundLightTiles() const { return hasPointLights() ? lightCull.tiles() : stats; }
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
-  gpu::Buffer visibleList;  // the same set listed (config.h BINDING_VISIBLE_LIST): the early cull's threads
+  gpu::Buffer visibleList;  // the same set listed (config.h VISIBLE_LIST_HEADER): the early cull's threads
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
   gpu::Buffer pyramidReadback;
   gpu::Buffer overdrawReadback;
@@ -181,7 +181,7 @@ struct Renderer::Impl {
   gpu::Buffer attributesReadback;
 
   gpu::Buffer draws;        // DrawCommand[capacity]
-  gpu::BufferView drawTexels;  // the same as R32UI (BINDING_DRAW_TEXELS): the shading's per-pixel fetch
+  gpu::BufferView drawTexels;  // the same as R32UI texels: the shading's per-pixel fetch
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Image ids, depth, color;
   gpu::Buffer coveredTiles;  // covered-tile shading: COVERED_TILES_HEADER uints + one per shading tile
@@ -193,7 +193,7 @@ struct Renderer::Impl {
   passes::VisibilityPass visibilityMs;
   passes::ForwardPass forwardMs;
   uint32_t visibilityMsSamples = 0, forwardMsSamples = 0;
-  bool descriptorsMsaa = false;  // BINDING_VISIBILITY / BINDING_LIGHT_DEPTH hold the multisampled views
+  bool descriptorsMsaa = false;  // the shading's IDs and the light culling's depth are the multisampled views
   std::vector<uint32_t> msaaCounts;  // supportedMsaaSamples(device)
   gpu::Image overdraw;    // r32ui, GENERAL: raster writes per pixel (countOverdraw)
   gpu::Image forwardIds;  // forward path with readIds only (rg32ui: object + 1, triangle); lazily created
@@ -207,9 +207,6 @@ struct Renderer::Impl {
       if (f.cmds[0]) vkFreeCommandBuffers(dev, device.commandPool(), kCommandBuffers, f.cmds.data());
     vkDestroyFence(dev, fence, nullptr);
     vkDestroySampler(dev, sampler, nullptr);
-    vkDestroyDescriptorPool(dev, pool, nullptr);
-    vkDestroyPipelineLayout(dev, pipelineLayout, nullptr);
-    vkDestroyDescriptorSetLayout(dev, setLayout, nullptr);
   }
 
   void createLayouts();
@@ -217,7 +214,7 @@ struct Renderer::Impl {
   void createTargets(uint32_t width, uint32_t height);
 
   // An empty visible list (no thread in the next early cull) with its dispatch arguments (0, 1, 1).
-  // Byte offset of the late cull's refinement list in the visibleList buffer (config.h BINDING_VISIBLE_LIST).
+  // Byte offset of the late cull's refinement list in the visibleList buffer (config.h VISIBLE_LIST_HEADER).
   VkDeviceSize refineListOffset() const { return (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) * 4; }
   // Empties the visible list and the refinement list (count 0, dispatch size 0 x 1 x 1).
   void resetVisibleList(VkCommandBuffer cmd) const {
@@ -229,7 +226,10 @@ struct Renderer::Impl {
   // The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
   void resizeAttributes(VkDeviceSize bytes);
 
+  // Every set (scene and pass sets) from the current resources; the device goes idle first (only lazily created
+  // resources and resizes get here, never a steady frame).
   void writeDescriptors();
+  void bindPasses();  // each created pass's own set
 
   // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
   // for them).

@@ -1,99 +1,19 @@
-// Renderer creation and the resources it owns: descriptor layout and set, screen targets, lazily created MSAA,
+// Renderer creation and the resources it owns: descriptor sets, screen targets, lazily created MSAA,
 // G-buffer and classification resources.
 #include "visbuf/render/renderer_impl.h"
 
 #include <algorithm>
 #include <cstring>
-#include <map>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 namespace visbuf {
 
-// The vertex pool's descriptor windows: window k covers vertices [k << shift, (k + 1) << shift); windows past
-// the end of the pool repeat window 0 (bound, never read).
-std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vertexWindows(const gpu::Buffer& pool, uint32_t shift) {
-  const VkDeviceSize window = VkDeviceSize(sizeof(gpu::Vertex)) << shift;
-  std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> w{};
-  for (uint32_t k = 0; k < VERTEX_WINDOWS; ++k) {
-    const VkDeviceSize offset = k * window;
-    w[k] = offset < pool.size() ? VkDescriptorBufferInfo{pool.handle(), offset, std::min(window, pool.size() - offset)}
-                                : VkDescriptorBufferInfo{pool.handle(), 0, std::min(window, pool.size())};
-  }
-  return w;
-}
-
 void Renderer::Impl::createLayouts() {
   VkDevice dev = device.device();
-  const VkShaderStageFlags all = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-  std::vector<VkDescriptorSetLayoutBinding> b = {
-      {BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, all, nullptr},
-      {BINDING_OBJECTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_MESHES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_DRAWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_STATS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_MATERIALS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_HISTORY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_VISIBLE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
-      {BINDING_ATTRIBUTES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_OBJECTS_HIGH, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_VERTICES_1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_VERTICES_2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_VERTICES_3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES, all, nullptr},
-      {BINDING_VERTEX_EXTRAS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_DRAW_LISTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_SW_VISIBILITY, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_GBUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GBUFFER_TARGETS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_GBUFFER_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_LIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_LIGHT_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-      {BINDING_LIGHT_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_MATERIAL_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_TILE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_VERTEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
-      {BINDING_INDEX_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
-      {BINDING_OBJECT_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
-      {BINDING_TRIANGLE_PLANES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {BINDING_MESH_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
-      {BINDING_MATERIAL_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, all, nullptr},
-      {BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-  };
-  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  lci.bindingCount = uint32_t(b.size());
-  lci.pBindings = b.data();
-  VK_CHECK(vkCreateDescriptorSetLayout(dev, &lci, nullptr, &setLayout));
-  VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-  pci.setLayoutCount = 1;
-  pci.pSetLayouts = &setLayout;
-  VkPushConstantRange range{gpu::kPassConstantStages, 0, sizeof(gpu::PassConstants)};
-  pci.pushConstantRangeCount = 1;
-  pci.pPushConstantRanges = &range;
-  VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &pipelineLayout));
-  // One set per frame slot, each the layout's full count of every descriptor type.
-  const uint32_t n = uint32_t(slots.size());
-  std::map<VkDescriptorType, uint32_t> perType;
-  for (const VkDescriptorSetLayoutBinding& x : b) perType[x.descriptorType] += x.descriptorCount;
-  std::vector<VkDescriptorPoolSize> sizes;
-  for (auto [type, count] : perType) sizes.push_back({type, count * n});
-  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  dpci.maxSets = n;
-  dpci.poolSizeCount = uint32_t(sizes.size());
-  dpci.pPoolSizes = sizes.data();
-  VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
+  sceneSets.create(device, uint32_t(slots.size()));
   for (FrameSlot& f : slots) {
-    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    ai.descriptorPool = pool;
-    ai.descriptorSetCount = 1;
-    ai.pSetLayouts = &setLayout;
-    VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &f.set));
     VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     cai.commandPool = device.commandPool();
     cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
@@ -170,163 +90,41 @@ void Renderer::Impl::resizeAttributes(VkDeviceSize bytes) {
   attributesReadback.reset();
 }
 
-// Every slot's set. A set may be in use by a pending frame: the device goes idle first (only lazily created
-// resources and resizes get here, never a steady frame).
 void Renderer::Impl::writeDescriptors() {
   vkDeviceWaitIdle(device.device());
-  for (const FrameSlot& f : slots) writeDescriptorSet(f);
+  for (uint32_t i = 0; i < slots.size(); ++i)
+    sceneSets.write(i, slots[i].frameBuffer, {&gpuScene, &stats, objectSplit, vertexShift});
+  bindPasses();
 }
 
-void Renderer::Impl::writeDescriptorSet(const FrameSlot& slot) {
-  const VkDescriptorSet set = slot.set;
-  // Objects: two windows of one buffer, split where one descriptor range would end (objectWindowSplit).
-  const VkDeviceSize lowBytes = VkDeviceSize(objectSplit) * sizeof(gpu::ObjectData);
-  const bool highUsed = objectSplit < gpuScene.objectCount;
-  const std::array<VkDescriptorBufferInfo, VERTEX_WINDOWS> vw = vertexWindows(gpuScene.vertices, vertexShift);
-  VkDescriptorBufferInfo bufs[17] = {
-      {slot.frameBuffer.handle(), 0, VK_WHOLE_SIZE},
-      {gpuScene.objects.handle(), 0, highUsed ? lowBytes : VK_WHOLE_SIZE},
-      {gpuScene.meshes.handle(), 0, VK_WHOLE_SIZE},    vw[0],
-      {gpuScene.indices.handle(), 0, VK_WHOLE_SIZE},   {draws.handle(), 0, VK_WHOLE_SIZE},
-      {stats.handle(), 0, VK_WHOLE_SIZE},              {gpuScene.materials.handle(), 0, VK_WHOLE_SIZE},
-      {history.handle(), 0, VK_WHOLE_SIZE},            {attributes.handle(), 0, VK_WHOLE_SIZE},
-      {gpuScene.objects.handle(), highUsed ? lowBytes : 0, VK_WHOLE_SIZE},
-      vw[1], vw[2], vw[3], {drawLists.handle(), 0, VK_WHOLE_SIZE}, {swRaster.buffer.handle(), 0, VK_WHOLE_SIZE},
-      {visibleList.handle(), 0, VK_WHOLE_SIZE}};
-  const uint32_t bufBindings[17] = {BINDING_FRAME,      BINDING_OBJECTS,      BINDING_MESHES,     BINDING_VERTICES,
-                                    BINDING_INDICES,    BINDING_DRAWS,        BINDING_STATS,      BINDING_MATERIALS,
-                                    BINDING_HISTORY,    BINDING_ATTRIBUTES,   BINDING_OBJECTS_HIGH,
-                                    BINDING_VERTICES_1, BINDING_VERTICES_2,   BINDING_VERTICES_3,
-                                    BINDING_DRAW_LISTS, BINDING_SW_VISIBILITY, BINDING_VISIBLE_LIST};
-  std::vector<VkWriteDescriptorSet> w;
-  for (int i = 0; i < 17; ++i) {
-    VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    x.dstSet = set;
-    x.dstBinding = bufBindings[i];
-    x.descriptorCount = 1;
-    x.descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    x.pBufferInfo = &bufs[i];
-    w.push_back(x);
-  }
-  // MSAA frames: the shading pass and the light culling read the multisampled targets (only those variants
-  // declare multisampled images; every other shader ignores these bindings).
-  VkDescriptorImageInfo idInfo{sampler, (descriptorsMsaa ? idsMs : ids).view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  VkDescriptorImageInfo colorInfo{VK_NULL_HANDLE, color.view(), VK_IMAGE_LAYOUT_GENERAL};
-  VkWriteDescriptorSet x{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  x.dstSet = set;
-  x.descriptorCount = 1;
-  x.dstBinding = BINDING_VISIBILITY;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  x.pImageInfo = &idInfo;
-  w.push_back(x);
-  x.dstBinding = BINDING_COLOR;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-  x.pImageInfo = &colorInfo;
-  w.push_back(x);
-  VkDescriptorImageInfo overdrawInfo{VK_NULL_HANDLE, overdraw.view(), VK_IMAGE_LAYOUT_GENERAL};
-  x.dstBinding = BINDING_OVERDRAW;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-  x.pImageInfo = &overdrawInfo;
-  w.push_back(x);
-  VkDescriptorImageInfo pyramidInfo{sampler, pyramid.pyramid().view(), VK_IMAGE_LAYOUT_GENERAL};
-  x.dstBinding = BINDING_PYRAMID;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  x.pImageInfo = &pyramidInfo;
-  w.push_back(x);
-  // Texture classes: the scene's, then the placeholder in every unused slot (material.glsl); vertex extras.
-  std::array<VkDescriptorImageInfo, MAX_TEXTURE_CLASSES> textureInfos;
-  for (size_t i = 0; i < textureInfos.size(); ++i) {
-    const gpu::Image& t = i < gpuScene.textureClasses.size() ? gpuScene.textureClasses[i] : gpuScene.placeholderTexture;
-    textureInfos[i] = {VK_NULL_HANDLE, t.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  }
-  x.dstBinding = BINDING_TEXTURE_CLASSES;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE;
-  x.descriptorCount = MAX_TEXTURE_CLASSES;
-  x.pImageInfo = textureInfos.data();
-  w.push_back(x);
-  const VkBufferView texelViews[7] = {gpuScene.vertexTexels.handle(), gpuScene.indexTexels.handle(),
-                                      gpuScene.objectTexels.handle(), gpuScene.planeTexels.handle(),
-                                      gpuScene.meshTexels.handle(),   gpuScene.materialTexels.handle(),
-                                      drawTexels.handle()};
-  const uint32_t texelBindings[7] = {BINDING_VERTEX_TEXELS,   BINDING_INDEX_TEXELS, BINDING_OBJECT_TEXELS,
-                                     BINDING_TRIANGLE_PLANES, BINDING_MESH_TEXELS,  BINDING_MATERIAL_TEXELS,
-                                     BINDING_DRAW_TEXELS};
-  for (int i = 0; i < 7; ++i) {
-    VkWriteDescriptorSet t{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    t.dstSet = set;
-    t.dstBinding = texelBindings[i];
-    t.descriptorCount = 1;
-    t.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-    t.pTexelBufferView = &texelViews[i];
-    w.push_back(t);
-  }
-  VkDescriptorBufferInfo extrasInfo{gpuScene.vertexExtras.handle(), 0, VK_WHOLE_SIZE};
-  x.dstBinding = BINDING_VERTEX_EXTRAS;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  x.descriptorCount = 1;
-  x.pImageInfo = nullptr;
-  x.pBufferInfo = &extrasInfo;
-  w.push_back(x);
-  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  x.pBufferInfo = nullptr;
-  // G-buffer targets: until a G-buffer frame creates them, the depth stands in (lavapipe reads every descriptor
-  // of a bound set, so none may stay unwritten; only gbuffer_lighting.comp samples these).
-  VkDescriptorImageInfo gbufferDepthInfo{sampler, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  std::array<VkDescriptorImageInfo, GBUFFER_TARGETS> gbufferInfo{};
-  for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
-    gbufferInfo[i] = gbufferTargets[i] ? VkDescriptorImageInfo{sampler, gbufferTargets[i].view(),
-                                                               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
-                                       : gbufferDepthInfo;
-  x.dstBinding = BINDING_GBUFFER;
-  x.descriptorCount = GBUFFER_TARGETS;
-  x.pImageInfo = gbufferInfo.data();
-  w.push_back(x);
-  x.dstBinding = BINDING_GBUFFER_DEPTH;
-  x.descriptorCount = 1;
-  x.pImageInfo = &gbufferDepthInfo;
-  w.push_back(x);
-  // Lights: with no point lights nothing is allocated; the shaders never read these bindings then
-  // (FrameData.pointLightCount = 0), which alias the stats buffer only to keep the set complete.
-  VkDescriptorBufferInfo lightInfo = hasPointLights() ? VkDescriptorBufferInfo{pointLights.handle(), 0, VK_WHOLE_SIZE}
-                                                      : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
-  VkDescriptorBufferInfo tileInfo = hasPointLights() ? VkDescriptorBufferInfo{lightCull.tiles().handle(), 0, VK_WHOLE_SIZE}
-                                                     : VkDescriptorBufferInfo{stats.handle(), 0, VK_WHOLE_SIZE};
-  VkDescriptorImageInfo lightDepthInfo{sampler, (descriptorsMsaa ? depthMs : depth).view(),
-                                       VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  x.pImageInfo = nullptr;
-  x.dstBinding = BINDING_LIGHTS;
-  x.pBufferInfo = &lightInfo;
-  w.push_back(x);
-  x.dstBinding = BINDING_LIGHT_TILES;
-  x.pBufferInfo = &tileInfo;
-  w.push_back(x);
-  x.dstBinding = BINDING_LIGHT_DEPTH;
-  x.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  x.pBufferInfo = nullptr;
-  x.pImageInfo = &lightDepthInfo;
-  w.push_back(x);
-  // Classification: until a classified frame creates its buffers, the stats buffer stands in (never read).
-  VkDescriptorBufferInfo classifyInfo[2] = {{stats.handle(), 0, VK_WHOLE_SIZE}, {stats.handle(), 0, VK_WHOLE_SIZE}};
-  if (classify.created())
-    classifyInfo[0].buffer = classify.materialTiles().handle(), classifyInfo[1].buffer = classify.tileList().handle();
-  x.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  x.pImageInfo = nullptr;
-  x.dstBinding = BINDING_MATERIAL_TILES;
-  x.pBufferInfo = &classifyInfo[0];
-  w.push_back(x);
-  x.dstBinding = BINDING_TILE_LIST;
-  x.pBufferInfo = &classifyInfo[1];
-  w.push_back(x);
-  vkUpdateDescriptorSets(device.device(), uint32_t(w.size()), w.data(), 0, nullptr);
+void Renderer::Impl::bindPasses() {
+  cull.bind(draws, history, visibleList, drawLists, pyramid.pyramid(), sampler);
+  visibility.bind(overdraw);
+  if (visibilityMs.layout) visibilityMs.bind(overdraw);
+  if (swRaster.created()) swRaster.bind(draws, drawLists);
+  // MSAA frames: the light culling reads the multisampled depth.
+  if (hasPointLights()) lightCull.bind(pointLights, descriptorsMsaa ? depthMs : depth, sampler);
+  forward.bind(boundLights(), boundLightTiles(), overdraw);
+  if (forwardMs.layout) forwardMs.bind(boundLights(), boundLightTiles(), overdraw);
+  if (transparent.created()) transparent.bind(boundLights(), boundLightTiles());
+  if (gbuffer.created()) gbuffer.bind(overdraw);
+  // MSAA frames: the shading reads the multisampled IDs.
+  const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
+                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes};
+  shade.bind(shading);
+  if (classify.created()) classify.bind(shading);
+  // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.
+  passes::GBufferLightingInputs lighting{&boundLights(), &boundLightTiles(), {}, &depth, sampler, &color, &attributes};
+  for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i) lighting.targets[i] = gbufferTargets[i] ? &gbufferTargets[i] : &depth;
+  if (gbufferLighting.created()) gbufferLighting.bind(lighting);
 }
 
 // The G-buffer pipelines and targets at the current size (only renderers that draw the G-buffer baseline pay
 // for them).
 void Renderer::Impl::ensureGBufferTargets() {
-  if (gbuffer.formats.color[0] == VK_FORMAT_UNDEFINED) {  // not created yet
-    gbuffer = passes::GBufferPass::create(device, pipelineLayout, textured, listMask);
-    gbufferLighting = passes::GBufferLightingPass::create(device, pipelineLayout, textured.windowed);
+  if (!gbuffer.created()) {
+    gbuffer = passes::GBufferPass::create(device, sceneSets.layout(), textured, listMask);
+    gbufferLighting = passes::GBufferLightingPass::create(device, sceneSets.layout(), textured.windowed);
   }
   if (gbufferTargets[0]) return;
   for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
@@ -376,14 +174,18 @@ void Renderer::Impl::prepareMsaa(const FrameOptions& options) {
     descriptorsMsaa = !msaa;  // the pyramid and the ID views changed: rewrite below
   }
   if (msaa && options.path == RenderPath::Visbuf) {
-    if (visibilityMsSamples != options.msaa)
-      visibilityMs = passes::VisibilityPass::create(device, pipelineLayout, textured, listMask, samples);
+    if (visibilityMsSamples != options.msaa) {
+      visibilityMs = passes::VisibilityPass::create(device, sceneSets.layout(), textured, listMask, samples);
+      visibilityMs.bind(overdraw);
+    }
     visibilityMsSamples = options.msaa;
-    shade.createMsaa(device, pipelineLayout, textured);
+    shade.createMsaa(device, textured);
   }
   if (msaa && options.path == RenderPath::Forward) {
-    if (forwardMsSamples != options.msaa)
-      forwardMs = passes::ForwardPass::create(device, pipelineLayout, textured, listMask, samples);
+    if (forwardMsSamples != options.msaa) {
+      forwardMs = passes::ForwardPass::create(device, sceneSets.layout(), textured, listMask, samples);
+      forwardMs.bind(boundLights(), boundLightTiles(), overdraw);
+    }
     forwardMsSamples = options.msaa;
     if (!colorMs)
       colorMs = gpu::Image(device, VK_FORMAT_R16G16B16A16_SFLOAT, config.width, config.height,
@@ -400,7 +202,7 @@ void Renderer::Impl::ensureClassify() {
   if (classify.created()) return;
   std::vector<bool> sampling;  // per material: samples a texture
   for (const Material& m : scene.materials) sampling.push_back(packMaterial(m, scene).slotCount > 0);
-  classify.create(device, pipelineLayout, textured, std::move(sampling));
+  classify.create(device, sceneSets.layout(), textured, std::move(sampling));
   classify.resize(device, config.width, config.height);
   writeDescriptors();
 }
@@ -489,14 +291,14 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
   const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
                                      impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
-  impl->cull = passes::CullPass::create(device, impl->pipelineLayout, textured);
+  impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
   impl->objectUpload.create(device);
-  impl->visibility = passes::VisibilityPass::create(device, impl->pipelineLayout, textured, impl->listMask);
-  impl->shade = passes::ShadePass::create(device, impl->pipelineLayout, textured);
-  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->pipelineLayout, textured);
-  impl->forward = passes::ForwardPass::create(device, impl->pipelineLayout, textured, impl->listMask);
+  impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
+  impl->shade = passes::ShadePass::create(device, impl->sceneSets.layout(), textured);
+  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->sceneSets.layout(), textured);
+  impl->forward = passes::ForwardPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
   if (!impl->blendObjects.empty())
-    impl->transparent = passes::TransparentPass::create(device, impl->pipelineLayout, textured);
+    impl->transparent = passes::TransparentPass::create(device, impl->sceneSets.layout(), textured);
   std::array<glm::uvec4, DRAW_LISTS> lists{};
   for (uint32_t l = 0; l < DRAW_LISTS; ++l)
     lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
@@ -530,7 +332,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                         glm::vec4(l.direction, 0.0f), cone.x, cone.y, uint32_t(l.type), 0u});
     }
     impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
-    impl->lightCull.create(device, impl->pipelineLayout, w);
+    impl->lightCull.create(device, impl->sceneSets.layout(), w);
   }
   impl->createTargets(config.width, config.height);
   const bool gpuBounds = config.skinBounds == SkinBounds::Gpu;

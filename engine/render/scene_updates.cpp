@@ -145,7 +145,10 @@ Result<uint32_t> Renderer::addObject(const Object& object) {
   if (list != DRAW_LIST_NONE) {
     ++r.listLive[list];
   } else {
-    if (!r.transparent.created()) r.transparent = passes::TransparentPass::create(r.device, r.pipelineLayout, r.textured);
+    if (!r.transparent.created()) {
+      r.transparent = passes::TransparentPass::create(r.device, r.sceneSets.layout(), r.textured);
+      r.transparent.bind(r.boundLights(), r.boundLightTiles());
+    }
     r.blendObjects.push_back(id);
   }
   r.markDirty(id);

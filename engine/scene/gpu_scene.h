@@ -74,7 +74,7 @@ struct GpuScene {
   uint64_t uploadHostBytes = 0;
 };
 
-// The first object of the second descriptor window (BINDING_OBJECTS_HIGH): as many objects as one window of
+// The first object of the second descriptor window (SCENE_BINDING_OBJECTS_HIGH): as many objects as one window of
 // at most `maxRange` bytes holds, rounded down to a multiple of 4 (so the second window's offset is 256-byte
 // aligned, the largest minStorageBufferOffsetAlignment Vulkan allows); `objectCount` when they all fit.
 uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount);

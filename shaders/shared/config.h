@@ -95,7 +95,7 @@
 #define SKIN_BINDING_SKIN_VERTICES 2 // SkinVertex[] (joints, weights)
 #define SKIN_BINDING_JOINTS 3        // vec4[3 * joints]: joint matrix rows, skin space, per instance
 #define SKIN_BINDING_INSTANCES 4     // SkinInstance[]
-#define SKIN_BINDING_VERTICES_1 5    // vertex windows 1..3 (as BINDING_VERTICES_1..3)
+#define SKIN_BINDING_VERTICES_1 5    // vertex windows 1..3 (as SCENE_BINDING_VERTICES_1..3)
 #define SKIN_BINDING_VERTICES_2 6
 #define SKIN_BINDING_VERTICES_3 7
 #define SKIN_BINDING_EXTRAS 8        // VertexExtra[] (rest tangents)
@@ -113,35 +113,41 @@
 // the sphere), clear = the CPU's joint-reach sphere (SkinInstance.bounds) goes to the mesh slot.
 #define SKIN_MODE_GPU_BOUNDS 1u
 
-// Descriptor bindings (set 0) used by every pass; one layout keeps the frame script simple.
-#define BINDING_FRAME 0      // uniform FrameData
-#define BINDING_OBJECTS 1    // ObjectData[]
-#define BINDING_MESHES 2     // MeshData[]
-#define BINDING_VERTICES 3   // Vertex[] (unified vertex pool)
-#define BINDING_INDICES 4    // uint[] (unified index pool)
-#define BINDING_DRAWS 5      // DrawCommand[] written by cull
-#define BINDING_STATS 6      // uint[STAT_COUNT]
-#define BINDING_MATERIALS 7  // MaterialData[]
-#define BINDING_VISIBILITY 8 // usampler/uimage visibility target (r32ui or rg32ui)
-#define BINDING_COLOR 9      // rgba16f output image
-#define BINDING_PYRAMID 10   // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
-#define BINDING_HISTORY 11   // uint[] per object: 1 if visible at the end of the last frame
-// The same visible set as a list, for the next frame's early cull (one thread per listed object instead of one per
-// object of the scene): VISIBLE_LIST_HEADER uints -- count, then the early cull's indirect dispatch (x, 1, 1) --,
-// then the object IDs in append order. Written by the late cull, reset before it. The late phase's refinement list
-// (CULL_REFINE) follows it in the same buffer, at word VISIBLE_LIST_HEADER + objectCount, in the same layout.
-#define BINDING_VISIBLE_LIST 32
-#define VISIBLE_LIST_HEADER 4u
-#define BINDING_OVERDRAW 12  // r32ui image: depth-test-passing fragments per pixel (debug view only)
+// Set 0 of every frame pass: the scene set (engine/render/scene_descriptors.cpp), one per frame slot, with the
+// frame's uniforms and the scene data nearly every pass reads. Set 1 is each pass's own (its shaders/shared/
+// bindings_*.h).
+#define SCENE_BINDING_FRAME 0         // uniform FrameData (the frame slot's)
+#define SCENE_BINDING_OBJECTS 1       // ObjectData[]
+#define SCENE_BINDING_OBJECTS_HIGH 2  // ObjectData[] from FrameData.objectSplit on (one descriptor range is capped by
+                                      // maxStorageBufferRange: 2M objects on lavapipe)
+#define SCENE_BINDING_MESHES 3        // MeshData[]
 // The vertex pool is read through VERTEX_WINDOWS descriptor windows of 2^FrameData.vertexWindowShift vertices
-// (each window at most maxStorageBufferRange): BINDING_VERTICES, then these.
+// (each window at most maxStorageBufferRange): SCENE_BINDING_VERTICES, then _1.._3.
 #define VERTEX_WINDOWS 4
-#define BINDING_VERTICES_1 15
-#define BINDING_VERTICES_2 16
-#define BINDING_VERTICES_3 17
-#define BINDING_OBJECTS_HIGH 14  // ObjectData[] from FrameData.objectSplit on (one descriptor range is capped by
-                                 // maxStorageBufferRange: 2M objects on lavapipe)
-#define BINDING_ATTRIBUTES 13  // float[ATTRIBUTE_FLOATS] per pixel: the shading pass's reconstruction (stress only)
+#define SCENE_BINDING_VERTICES 4      // Vertex[] (unified vertex pool)
+#define SCENE_BINDING_VERTICES_1 5
+#define SCENE_BINDING_VERTICES_2 6
+#define SCENE_BINDING_VERTICES_3 7
+#define SCENE_BINDING_INDICES 8       // uint[] (unified index pool)
+#define SCENE_BINDING_MATERIALS 9     // MaterialData[]
+#define SCENE_BINDING_VERTEX_EXTRAS 10  // VertexExtra[] (tangent, TEXCOORD_1) of meshes that have them
+#define SCENE_BINDING_TEXTURE_CLASSES 11  // texture2DArray[MAX_TEXTURE_CLASSES]
+// Uniform texel buffer views of the vertex pool (RGBA32UI: two texels per Vertex), the index pool (R32UI) and the
+// object records (RGBA32UI: four texels per ObjectData), read where VB_TEXELS is 1 (GpuScene::texels).
+#define SCENE_BINDING_VERTEX_TEXELS 12
+#define SCENE_BINDING_INDEX_TEXELS 13
+#define SCENE_BINDING_OBJECT_TEXELS 14
+#define SCENE_BINDING_MESH_TEXELS 15      // the MeshData records, RGBA32UI (3 + MAX_LODS texels each)
+#define SCENE_BINDING_MATERIAL_TEXELS 16  // the MaterialData records, RGBA32UI
+#define SCENE_BINDING_TRIANGLE_PLANES 17  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
+#define SCENE_BINDING_STATS 18            // uint[STAT_COUNT]: the frame-wide counters (then SW_ARGS)
+
+// The cull pass's visible list: the visible set of its history as a list, for the next frame's early cull (one
+// thread per listed object instead of one per object of the scene): VISIBLE_LIST_HEADER uints -- count, then the
+// early cull's indirect dispatch (x, 1, 1) --, then the object IDs in append order. Written by the late cull, reset
+// before it. The late phase's refinement list (CULL_REFINE) follows it in the same buffer, at word
+// VISIBLE_LIST_HEADER + objectCount, in the same layout.
+#define VISIBLE_LIST_HEADER 4u
 
 // Materials (types.h MaterialData). Flags: the glTF alpha mode and double-sidedness.
 #define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out
@@ -168,22 +174,9 @@
 // MAX_TEXTURE_CLASSES (12 sizes x 2 colour spaces); unused entries hold a 1x1 placeholder. Lavapipe has no
 // dynamic indexing of sampled-image arrays, so shaders index it with constants only (material.glsl).
 #define MAX_TEXTURE_CLASSES 24
-#define BINDING_TEXTURE_CLASSES 18  // texture2DArray[MAX_TEXTURE_CLASSES]
-#define BINDING_VERTEX_EXTRAS 19    // VertexExtra[] (tangent, TEXCOORD_1) of meshes that have them
 #define EXTRA_NONE 0xffffffffu      // MeshData.extraOffset of a mesh without VertexExtra records
-#define BINDING_DRAW_LISTS 28  // uvec4[DRAW_LISTS]: x first slot (early phase), y first slot (late), z capacity,
-                               // w 1 if the software micro-raster may take this list's draws (opaque, uncapped)
-// uint64 per pixel (software micro-raster): reverse-Z depth bits << 32 | payload, atomicMax'ed; 0 = nothing.
-#define BINDING_SW_VISIBILITY 26
-// Uniform texel buffer views of the vertex pool (RGBA32UI: two texels per Vertex), the index pool (R32UI) and the
-// object records (RGBA32UI: four texels per ObjectData), read where VB_TEXELS is 1 (GpuScene::texels).
-#define BINDING_VERTEX_TEXELS 23
-#define BINDING_INDEX_TEXELS 27
-#define BINDING_OBJECT_TEXELS 31
-#define BINDING_MATERIAL_TEXELS 35  // the MaterialData records, RGBA32UI
-#define BINDING_MESH_TEXELS 34      // the MeshData records, RGBA32UI (3 + MAX_LODS texels each)
-#define BINDING_DRAW_TEXELS 36      // the draws (DrawCommand, five words each) as R32UI, read by the shading
-#define BINDING_TRIANGLE_PLANES 33  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
+// The draw lists' buffer (cull and micro-raster passes): uvec4[DRAW_LISTS], x first slot (early phase), y first slot
+// (late), z capacity, w 1 if the software micro-raster may take this list's draws (opaque, uncapped).
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
 // box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
 #define SW_RASTER_WORKGROUP 64
@@ -199,16 +192,11 @@
 // G-buffer baseline (gbuffer_pass, gbuffer_lighting_pass): the raster's attribute targets, read back by the
 // lighting pass with texelFetch (constant indices only: lavapipe has no dynamic sampled-image indexing).
 #define GBUFFER_TARGETS 4       // base colour + alpha, octahedral normal, metallic/roughness/occlusion, emissive
-#define BINDING_GBUFFER 24      // sampler2D[GBUFFER_TARGETS]
-#define BINDING_GBUFFER_DEPTH 25  // sampler2D: the frame's D32 depth (reverse-Z), after both raster phases
-// Bindings 20..23: lights (shaders/lighting.glsl, light_cull.comp.glsl).
-#define BINDING_LIGHTS 20        // PointLightData[FrameData.pointLightCount]
+// Lights: shaders/shared/bindings_lighting.h, light_cull.comp.glsl.
 // PointLightData.type (engine/scene/light.h LightType): KHR_lights_punctual point, spot, directional.
 #define LIGHT_POINT 0u
 #define LIGHT_SPOT 1u
 #define LIGHT_DIRECTIONAL 2u
-#define BINDING_LIGHT_TILES 21   // uint[]: LIGHT_TILE_HEADER counters, then per tile a count + LIGHTS_PER_TILE indices
-#define BINDING_LIGHT_DEPTH 22   // sampler2D: the visibility depth (reverse-Z), per-tile depth bounds
 // Ambient radiance of the uniform environment every surface sees (scaled by occlusion; lighting.glsl).
 #define AMBIENT_RADIANCE 0.15
 // Tiled light culling: 16x16-pixel tiles, each with a fixed-capacity list of the point lights whose sphere of
@@ -226,12 +214,10 @@
 // Material classification (classify_pass, classify.comp.glsl, classify_scan.comp.glsl): the shading tiles
 // (SHADE_TILE_X x SHADE_TILE_Y pixels) are listed per material present in them, and each material is shaded by its
 // own indirect dispatch over its list (a tile with k materials is in k lists; a material without pixels gets 0
-// workgroups). BINDING_MATERIAL_TILES: CLASSIFY_HEADER uints, then MaterialTiles (types.h) per material, whose
-// first three words are the VkDispatchIndirectCommand. BINDING_TILE_LIST: one uint per (tile, material) pair, tile x
+// workgroups). The material tiles: CLASSIFY_HEADER uints, then MaterialTiles (types.h) per material, whose
+// first three words are the VkDispatchIndirectCommand. The tile list: one uint per (tile, material) pair, tile x
 // in the low 16 bits, y in the high 16 (at most 2048 tiles a side at 16384 pixels), grouped by material. Its
 // capacity, tiles x min(materials, tile pixels), can never overflow; 1080p with >= 64 materials: 8.3 MB.
-#define BINDING_MATERIAL_TILES 29
-#define BINDING_TILE_LIST 30
 #define CLASSIFY_HEADER 8              // uints before the first MaterialTiles record:
 #define CLASSIFY_STAT_PAIRS 0          // (tile, material) pairs listed (the scan's total)
 #define CLASSIFY_STAT_MATERIALS 1      // materials with at least one pixel

@@ -158,10 +158,10 @@ struct FrameData {
   float projX;          // proj[0][0]: ndc.x = projX * x / -z
   float projY;          // proj[1][1] (negative: Vulkan y down): ndc.y = projY * y / -z
   uint pyramidLevels;   // valid levels of the depth pyramid (0 when occlusion is off)
-  uint objectSplit;     // objects [0, objectSplit) are in BINDING_OBJECTS, the rest in BINDING_OBJECTS_HIGH
-  uint vertexWindowShift;  // vertex i is in window i >> shift (BINDING_VERTICES, BINDING_VERTICES_1..3)
-  uint pointLightCount;    // PointLightData records in BINDING_LIGHTS (0: none bound, none read)
-  uint lightTilesX;        // tiles per row of BINDING_LIGHT_TILES when this frame built them; 0: every light
+  uint objectSplit;     // objects [0, objectSplit) are in SCENE_BINDING_OBJECTS, the rest in SCENE_BINDING_OBJECTS_HIGH
+  uint vertexWindowShift;  // vertex i is in window i >> shift (SCENE_BINDING_VERTICES, SCENE_BINDING_VERTICES_1..3)
+  uint pointLightCount;    // PointLightData records in the lights binding (0: none bound, none read)
+  uint lightTilesX;        // tiles per row of the light tile lists when this frame built them; 0: every light
   uint msaaSamples;        // raster samples per pixel of the visibility/forward targets: 1 (no MSAA), 2, 4
   // Software micro-raster (sw_raster_pass): 0 off; else the cull pass routes a draw of a list whose drawLists.w is
   // set to it when the object's screen box is at most swMaxPixels per side, it lies wholly beyond the near plane
@@ -212,9 +212,9 @@ struct SkinInstance {
   uint morphPad;
 };
 
-// Material classification: one record per material (32 bytes; config.h BINDING_MATERIAL_TILES). The first three
-// words are the VkDispatchIndirectCommand of the material's shading dispatch: one workgroup per listed tile, in rows
-// of CLASSIFY_DISPATCH_WIDTH (written by the scan).
+// Material classification: one record per material (32 bytes; the material tiles buffer, config.h CLASSIFY_HEADER).
+// The first three words are the VkDispatchIndirectCommand of the material's shading dispatch: one workgroup per
+// listed tile, in rows of CLASSIFY_DISPATCH_WIDTH (written by the scan).
 struct MaterialTiles {
   uint groupsX;  // min(tiles, CLASSIFY_DISPATCH_WIDTH)
   uint groupsY;  // ceil(tiles / CLASSIFY_DISPATCH_WIDTH)

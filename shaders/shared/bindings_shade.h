@@ -1,0 +1,16 @@
+// Set 1 of the shading pass (shade.comp.glsl, covered_tiles.comp.glsl, msaa_ids.comp.glsl, visibility_id.glsl,
+// msaa_samples.glsl; engine/passes/shade_pass.cpp): lighting.glsl's, then its own. The classified shading
+// (bindings_classify.h) is the same shader: it has these numbers too.
+#ifndef VISBUF_BINDINGS_SHADE_H
+#define VISBUF_BINDINGS_SHADE_H
+
+#include "bindings_lighting.h"
+
+#define SHADE_BINDING_DRAWS (LIGHTING_BINDINGS + 0)       // DrawCommand[] (the cull pass's)
+#define SHADE_BINDING_DRAW_TEXELS (LIGHTING_BINDINGS + 1) // the same as R32UI texels (five words per DrawCommand)
+#define SHADE_BINDING_VISIBILITY (LIGHTING_BINDINGS + 2)  // usampler2D (usampler2DMS with MSAA): the ID target
+#define SHADE_BINDING_COLOR (LIGHTING_BINDINGS + 3)       // rgba16f output image
+// float[ATTRIBUTE_FLOATS] per pixel: the attributes variant's reconstruction; the sample-ID copy (msaa_ids.comp).
+#define SHADE_BINDING_ATTRIBUTES (LIGHTING_BINDINGS + 4)
+
+#endif
