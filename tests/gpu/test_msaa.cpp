@@ -115,6 +115,8 @@ struct Bounds {
   double maxAbs;          // largest difference, at most this or the single-sampled paths' own largest difference
   double extraDiffering;  // share of pixels > 1/255 apart, at most the single-sampled paths' share + this
   double exactMean;       // visbuf's mean difference from the exact resolve, at most
+  bool visbufCloser;      // visbuf closer to the exact resolve than forward at more pixels (where shading varies
+                          // across a pixel; on flat faces both are within rgba16f rounding of it)
 };
 
 // visbuf N x against forward N x (hardware resolve of per-pixel shading: the reference). MSAA must add little to
@@ -153,8 +155,10 @@ void expectMatchesForwardResolve(const Scene& scene, const char* name, uint32_t 
               j->differing, j->visbufCloser, j->forwardCloser, j->ties);
   EXPECT_EQ(j->judged, j->covered);
   EXPECT_LE(j->visbuf.meanAbs, bound.exactMean);
-  EXPECT_LE(j->visbuf.meanAbs, j->forward.meanAbs) << "visbuf's resolve must be at least as close as the hardware's";
-  EXPECT_GT(j->visbufCloser, j->forwardCloser);
+  EXPECT_LE(j->visbuf.meanAbs, j->forward.meanAbs + 2e-5) << "visbuf's resolve must be as close as the hardware's";
+  if (bound.visbufCloser) {
+    EXPECT_GT(j->visbufCloser, j->forwardCloser);
+  }
   EXPECT_GE(e.psnr, bound.psnr);
   EXPECT_LE(e.maxAbs, std::max(bound.maxAbs, e11.maxAbs));
   EXPECT_LE(e.differingFraction, e11.differingFraction + bound.extraDiffering);
@@ -179,26 +183,28 @@ void expectMatchesForwardResolve(const Scene& scene, const char* name, uint32_t 
 // and the extrapolated edge normals of forward give PSNR 40.9 dB, max 0.81, 4.3 % of the pixels > 1/255 (lavapipe),
 // while visbuf 1x is at 30.6 dB from forward 4x.
 // Against the exact resolve (the mean of the exact colours at the 4 sample locations: what supersampling gives;
-// both paths shade a triangle once per pixel, so a sample's specular highlight is missed by both), measured on
-// lavapipe: visbuf mean 9.2e-4 / 5.4e-4 / 1.1e-4 / 9.4e-5 (textured grid / Avocado / boxes / foliage), forward
-// 2.5e-3 / 1.3e-3 / 1.2e-4 / 1.0e-4, visbuf closer at 77 % / 68 % / 82 % / 71 % of the pixels where they differ.
-// Bounds: visbuf's mean at most forward's and at most about twice the measured one; closer at more pixels.
+// both paths shade a triangle once per pixel, so a sample's specular highlight is missed by both), visbuf mean /
+// forward mean (textured grid, Avocado, boxes, foliage): lavapipe 9.2e-4 / 2.5e-3, 5.4e-4 / 1.3e-3, 1.1e-4 /
+// 1.2e-4, 9.4e-5 / 1.0e-4; H100 1.1e-3 / 2.6e-3, 5.2e-4 / 1.3e-3, 1.06e-4 / 1.03e-4, 9.4e-5 / 9.2e-5. On the
+// textured grids visbuf is closer at 3-5 times as many of the pixels where the two differ; on flat faces both lie
+// within rgba16f rounding of the exact resolve, and which one is closer is the device's rounding. Bounds: visbuf's
+// mean at most forward's + 2e-5 and at most about twice the measured one; closer at more pixels where textured.
 TEST(Msaa, VisbufMatchesForwardResolveOnTexturedAsset) {
   REQUIRE_IMAGE_DECODING();
   Scene s = texturedGrid(test::assetPath("NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf"));
   ASSERT_FALSE(s.objects.empty());
-  expectMatchesForwardResolve(s, "textured_grid", 320, 200, {39.0, 0.85, 0.05, 2e-3});
+  expectMatchesForwardResolve(s, "textured_grid", 320, 200, {39.0, 0.85, 0.05, 2.5e-3, true});
 }
 
 EXTRA_ASSET_TEST(Msaa, VisbufMatchesForwardResolveOnAvocadoGrid, "Avocado/glTF/Avocado.gltf") {
   REQUIRE_IMAGE_DECODING();
   Scene s = texturedGrid(asset);
   ASSERT_FALSE(s.objects.empty());
-  expectMatchesForwardResolve(s, "avocado_grid", 320, 200, {45.0, 0.75, 0.045, 1.2e-3});
+  expectMatchesForwardResolve(s, "avocado_grid", 320, 200, {45.0, 0.75, 0.045, 1.2e-3, true});
 }
 
 TEST(Msaa, VisbufMatchesForwardResolveOnManySilhouettes) {
-  expectMatchesForwardResolve(boxField(), "box_field", 320, 200, {80.0, 0.002, 0.0005, 2.5e-4});
+  expectMatchesForwardResolve(boxField(), "box_field", 320, 200, {80.0, 0.002, 0.0005, 2.5e-4, false});
 }
 
 // Alpha-masked, double-sided cards (the masked visibility pipelines under MSAA): the cut-out is decided per
@@ -210,7 +216,7 @@ TEST(Msaa, VisbufMatchesForwardResolveOnMaskedFoliage) {
   Scene s = makeFoliageScene(p).value();
   s.defaultCamera.position = {0.0, 6.0, 18.0};
   s.defaultCamera.target = {0.0, 1.5, 0.0};
-  expectMatchesForwardResolve(s, "masked_foliage", 320, 200, {80.0, 0.002, 0.0005, 2.5e-4});
+  expectMatchesForwardResolve(s, "masked_foliage", 320, 200, {80.0, 0.002, 0.0005, 2.5e-4, false});
 }
 
 // The per-sample path is taken exactly where the samples' IDs differ: the shading pass's count against a CPU count
