@@ -1,5 +1,6 @@
 #include "visbuf/passes/depth_pyramid_pass.h"
 
+#include <algorithm>
 #include <bit>
 
 #include "visbuf/gpu/check.h"
@@ -38,7 +39,7 @@ void DepthPyramidPass::create(gpu::Device& device) {
   VkDevice dev = device.device();
   VkDescriptorSetLayoutBinding b[2] = {
       {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, PYRAMID_DISPATCH_LEVELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
   VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   lci.bindingCount = 2;
   lci.pBindings = b;
@@ -50,12 +51,13 @@ void DepthPyramidPass::create(gpu::Device& device) {
   pci.pushConstantRangeCount = 1;
   pci.pPushConstantRanges = &range;
   VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &layout_));
-  // One set per level, plus the multisampled level 0's.
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, MAX_PYRAMID_LEVELS + 1},
-                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, MAX_PYRAMID_LEVELS + 1}};
+  // One set per dispatch, plus the multisampled first dispatch's.
+  constexpr uint32_t maxSets = MAX_PYRAMID_LEVELS / PYRAMID_REDUCTIONS + 2;
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, maxSets},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, maxSets * PYRAMID_DISPATCH_LEVELS}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
-  dpci.maxSets = MAX_PYRAMID_LEVELS + 1;
+  dpci.maxSets = maxSets;
   dpci.poolSizeCount = 2;
   dpci.pPoolSizes = sizes;
   VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
@@ -66,6 +68,26 @@ void DepthPyramidPass::create(gpu::Device& device) {
   VK_CHECK(vkCreateSampler(dev, &sci, nullptr, &sampler_));
   pipeline_ = gpu::createComputePipeline(device, layout_, "depth_pyramid.comp");
   msaaPipeline_ = gpu::createComputePipeline(device, layout_, "depth_pyramid_msaa.comp");
+}
+
+std::vector<DepthPyramidPass::Dispatch> pyramidDispatches(uint32_t width, uint32_t height) {
+  std::vector<DepthPyramidPass::Dispatch> dispatches;
+  const uint32_t levels = pyramidLevelCount(width, height);
+  uint32_t source = 0;  // the level the dispatch reads (0: the depth image, which it copies to level 0)
+  do {
+    DepthPyramidPass::Dispatch d;
+    d.source = source;
+    d.width = width;
+    d.height = height;
+    d.reductions = std::min<uint32_t>(PYRAMID_REDUCTIONS, levels - 1 - source);
+    dispatches.push_back(d);
+    for (uint32_t k = 0; k < d.reductions; ++k) {
+      width = (width + 1) / 2;
+      height = (height + 1) / 2;
+    }
+    source += d.reductions;
+  } while (source + 1 < levels);
+  return dispatches;
 }
 
 void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisampledDepth) {
@@ -79,17 +101,21 @@ void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisa
   width_ = depth.width();
   height_ = depth.height();
   levels_ = pyramidLevelCount(width_, height_);
+  dispatches_ = pyramidDispatches(width_, height_);
   const uint32_t pw = std::bit_ceil(width_), ph = std::bit_ceil(height_);
   pyramid_ = gpu::Image(*device_, VK_FORMAT_R32_SFLOAT, pw, ph, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
                             VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                         VK_IMAGE_ASPECT_COLOR_BIT, levels_);
-  std::vector<VkDescriptorSetLayout> layouts(levels_, setLayout_);
-  sets_.resize(levels_);
+  const uint32_t setCount = uint32_t(dispatches_.size()) + (multisampledDepth ? 1 : 0);
+  std::vector<VkDescriptorSetLayout> layouts(setCount, setLayout_);
+  std::vector<VkDescriptorSet> sets(setCount);
   VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   ai.descriptorPool = pool_;
-  ai.descriptorSetCount = levels_;
+  ai.descriptorSetCount = setCount;
   ai.pSetLayouts = layouts.data();
-  VK_CHECK(vkAllocateDescriptorSets(dev, &ai, sets_.data()));
+  VK_CHECK(vkAllocateDescriptorSets(dev, &ai, sets.data()));
+  sets_.assign(sets.begin(), sets.begin() + ptrdiff_t(dispatches_.size()));
+  if (multisampledDepth) msaaSet_ = sets.back();
   for (uint32_t k = 0; k < levels_; ++k) levelViews_.push_back(pyramid_.createLevelView(k));
   // The pyramid lives in GENERAL from here on (written as storage, read with texelFetch); it is
   // zero-filled (depth 0 = infinitely far = occludes nothing) so that a pass reading it before the
@@ -101,47 +127,47 @@ void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisa
   VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, levels_, 0, 1};
   vkCmdClearColorImage(cmd, pyramid_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
   device_->submitOneShot(cmd);
-  if (multisampledDepth) {
-    ai.descriptorSetCount = 1;
-    VK_CHECK(vkAllocateDescriptorSets(dev, &ai, &msaaSet_));
-  }
-  for (uint32_t k = 0; k < levels_ + (msaaSet_ ? 1 : 0); ++k) {
-    const bool msaa = k == levels_;  // the extra set: level 0 from the multisampled depth
+  for (uint32_t i = 0; i < setCount; ++i) {
+    const bool msaa = i == dispatches_.size();  // the extra set: the first dispatch over the multisampled depth
+    const Dispatch& d = dispatches_[msaa ? 0 : i];
     VkDescriptorImageInfo src =
-        msaa     ? VkDescriptorImageInfo{sampler_, multisampledDepth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
-        : k == 0 ? VkDescriptorImageInfo{sampler_, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
-                 : VkDescriptorImageInfo{sampler_, levelViews_[k - 1], VK_IMAGE_LAYOUT_GENERAL};
-    VkDescriptorImageInfo dst{VK_NULL_HANDLE, levelViews_[msaa ? 0 : k], VK_IMAGE_LAYOUT_GENERAL};
+        msaa        ? VkDescriptorImageInfo{sampler_, multisampledDepth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+        : i == 0    ? VkDescriptorImageInfo{sampler_, depth.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}
+                    : VkDescriptorImageInfo{sampler_, levelViews_[d.source], VK_IMAGE_LAYOUT_GENERAL};
+    // Slot j: the level d.source + j (slot 0 is written by the copying dispatch only); slots past the last level take
+    // the last level's view (never written: the dispatch's reduction count stops before them).
+    VkDescriptorImageInfo dst[PYRAMID_DISPATCH_LEVELS];
+    for (uint32_t j = 0; j < PYRAMID_DISPATCH_LEVELS; ++j)
+      dst[j] = {VK_NULL_HANDLE, levelViews_[std::min(d.source + j, levels_ - 1)], VK_IMAGE_LAYOUT_GENERAL};
     VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
-    w[0].dstSet = w[1].dstSet = msaa ? msaaSet_ : sets_[k];
+    w[0].dstSet = w[1].dstSet = msaa ? msaaSet_ : sets_[i];
     w[0].dstBinding = 0;
     w[0].descriptorCount = 1;
     w[0].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     w[0].pImageInfo = &src;
     w[1].dstBinding = 1;
-    w[1].descriptorCount = 1;
+    w[1].descriptorCount = PYRAMID_DISPATCH_LEVELS;
     w[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-    w[1].pImageInfo = &dst;
+    w[1].pImageInfo = dst;
     vkUpdateDescriptorSets(dev, 2, w, 0, nullptr);
   }
 }
 
 void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled) const {
-  uint32_t sw = width_, sh = height_;
-  for (uint32_t k = 0; k < levels_; ++k) {
-    const uint32_t dw = k == 0 ? width_ : (sw + 1) / 2, dh = k == 0 ? height_ : (sh + 1) / 2;
-    gpu::PyramidConstants pc{sw, sh, dw, dh, k, 0, 0, 0};
-    const bool msaa = multisampled && k == 0;
-    if (k <= 1) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (msaa ? msaaPipeline_ : pipeline_).handle());
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, msaa ? &msaaSet_ : &sets_[k], 0,
+  for (size_t i = 0; i < dispatches_.size(); ++i) {
+    const Dispatch& d = dispatches_[i];
+    gpu::PyramidConstants pc{d.width, d.height, d.source == 0 ? 1u : 0u, d.reductions, 0, 0, 0, 0};
+    const bool msaa = multisampled && i == 0;
+    if (i <= 1) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (msaa ? msaaPipeline_ : pipeline_).handle());
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, msaa ? &msaaSet_ : &sets_[i], 0,
                             nullptr);
     vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
-    vkCmdDispatch(cmd, (dw + PYRAMID_TILE - 1) / PYRAMID_TILE, (dh + PYRAMID_TILE - 1) / PYRAMID_TILE, 1);
-    // The next level reads this one.
+    // One thread per 2^PYRAMID_REDUCTIONS square of the source, in PYRAMID_TILE squares of threads.
+    const uint32_t tile = PYRAMID_TILE << PYRAMID_REDUCTIONS;
+    vkCmdDispatch(cmd, (d.width + tile - 1) / tile, (d.height + tile - 1) / tile, 1);
+    // The next dispatch reads this one's last level.
     gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    sw = dw;
-    sh = dh;
   }
 }
 

@@ -1,5 +1,5 @@
 // Depth pyramid pass (shaders/depth_pyramid.comp.glsl): a conservative farthest-depth (reverse-Z
-// minimum) reduction of the visibility depth over every level, one dispatch per level.
+// minimum) reduction of the visibility depth over every level, up to PYRAMID_REDUCTIONS levels per dispatch.
 // Reads: depth (SHADER_READ_ONLY_OPTIMAL). Writes: pyramid (r32f, GENERAL, all levels).
 // Level 0 is full resolution; level k's valid size is ceil(size / 2^k). The image is allocated with
 // power-of-two extents >= the valid sizes so every valid texel exists at every level.
@@ -17,6 +17,11 @@ uint32_t pyramidLevelCount(uint32_t width, uint32_t height);
 
 class DepthPyramidPass {
  public:
+  // One dispatch: it reads level `source` (valid size width x height; 0: the depth image, copied to level 0) and
+  // writes the next `reductions` levels.
+  struct Dispatch {
+    uint32_t source = 0, width = 0, height = 0, reductions = 0;
+  };
   DepthPyramidPass() = default;
   ~DepthPyramidPass();
   DepthPyramidPass(const DepthPyramidPass&) = delete;
@@ -29,6 +34,7 @@ class DepthPyramidPass {
   void record(VkCommandBuffer cmd, bool multisampled = false) const;
   const gpu::Image& pyramid() const { return pyramid_; }
   uint32_t levels() const { return levels_; }
+  size_t dispatchCount() const { return dispatches_.size(); }
 
  private:
   void releaseViews();
@@ -42,8 +48,13 @@ class DepthPyramidPass {
   VkDescriptorSet msaaSet_ = VK_NULL_HANDLE;
   gpu::Image pyramid_;
   std::vector<VkImageView> levelViews_;
-  std::vector<VkDescriptorSet> sets_;
+  std::vector<VkDescriptorSet> sets_;  // one per dispatch
+  std::vector<Dispatch> dispatches_;
   uint32_t width_ = 0, height_ = 0, levels_ = 0;
 };
+
+// The dispatches that build the pyramid of a depth image of this size: each reduces up to PYRAMID_REDUCTIONS levels
+// from where the one before stopped; together they write every level once.
+std::vector<DepthPyramidPass::Dispatch> pyramidDispatches(uint32_t width, uint32_t height);
 
 }  // namespace visbuf::passes

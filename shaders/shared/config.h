@@ -34,7 +34,11 @@
 
 // Depth pyramid: at most 2^15 pixels per side (16 levels incl. the full-resolution level 0).
 #define MAX_PYRAMID_LEVELS 16
+// The pyramid is built in few dispatches (depth_pyramid.comp.glsl): each thread reduces a 2^PYRAMID_REDUCTIONS square
+// of its dispatch's source level through PYRAMID_REDUCTIONS levels on its own (8x8 -> 4x4 -> 2x2 -> 1).
 #define PYRAMID_TILE 8
+#define PYRAMID_REDUCTIONS 3
+#define PYRAMID_DISPATCH_LEVELS (PYRAMID_REDUCTIONS + 1)  // storage images per dispatch: slot j = source level + j
 
 // Counter indices in the cull statistics buffer (uint each, read back every frame).
 #define STAT_DRAW_COUNT 0          // draws appended (may exceed capacity: then overflow)

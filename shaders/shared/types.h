@@ -235,13 +235,14 @@ struct PassConstants {
   uint variant;   // cull: CULL_REFINE in the late phase's refinement dispatch; skin bounds: the step (SKIN_BOUNDS_*)
 };
 
-// Push constants of the depth pyramid pass (32 bytes): valid sizes of the source and destination
-// levels (ceil(size / 2^k)), and the destination level (0: copy of the depth image).
+// Push constants of one depth pyramid dispatch (32 bytes): the valid size of its source level (ceil(size / 2^k)),
+// whether it copies the source into level 0 first (the dispatch that reads the depth image), and how many levels it
+// reduces (at most PYRAMID_REDUCTIONS).
 struct PyramidConstants {
   uint srcWidth, srcHeight;
-  uint dstWidth, dstHeight;
-  uint level;
-  uint pad0, pad1, pad2;
+  uint copySource;
+  uint reductions;
+  uint pad0, pad1, pad2, pad3;
 };
 
 #ifdef __cplusplus

@@ -2,7 +2,9 @@
 // finished frames leave for later plans (skip a pyramid or micro-raster that did nothing, redraw frozen lists).
 #include <gtest/gtest.h>
 
+#include "visbuf/passes/depth_pyramid_pass.h"
 #include "visbuf/render/frame_plan.h"
+#include "visbuf/shared/config.h"
 
 using namespace visbuf;
 
@@ -138,4 +140,24 @@ TEST(FramePlan, FrozenFramesRedrawTheListsTheyFroze) {
   EXPECT_FALSE(p.usePyramid);
   h.recorded(p);
   EXPECT_EQ(h.lastCull, CullMode::Frustum);
+}
+
+// The pyramid's dispatches write every level after 0 exactly once, each reading the level the one before stopped
+// at, with that level's valid size (ceil(size / 2^k)).
+TEST(DepthPyramid, DispatchesWriteEveryLevelOnce) {
+  for (auto [w, h] : {std::pair{1024u, 768u}, {1920u, 1080u}, {1u, 1u}, {3u, 5u}, {37u, 11u}, {32768u, 1u}}) {
+    const uint32_t levels = passes::pyramidLevelCount(w, h);
+    const auto dispatches = passes::pyramidDispatches(w, h);
+    ASSERT_FALSE(dispatches.empty());
+    uint32_t next = 0;
+    for (const auto& d : dispatches) {
+      EXPECT_EQ(d.source, next) << w << "x" << h;
+      EXPECT_EQ(d.width, (w + (1u << d.source) - 1) >> d.source);
+      EXPECT_EQ(d.height, (h + (1u << d.source) - 1) >> d.source);
+      EXPECT_LE(d.reductions, uint32_t(PYRAMID_REDUCTIONS));
+      next = d.source + d.reductions;
+    }
+    EXPECT_EQ(next + 1, levels) << w << "x" << h << ": the last level written";
+    EXPECT_EQ(dispatches.size(), levels == 1 ? 1u : (levels - 1 + PYRAMID_REDUCTIONS - 1) / PYRAMID_REDUCTIONS);
+  }
 }
