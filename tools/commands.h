@@ -1,6 +1,7 @@
 // Subcommand declarations: each adds its options to the CLI and runs with the parsed values.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -40,7 +41,7 @@ struct RenderCommand {
   bool freezeCulling = false;   // cull from the scene's default camera, then render --camera-pos with it
   uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
   std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
-  float swRasterPixels = 64.0f;  // its object size bound in pixels (FrameOptions::swRasterPixels)
+  std::optional<float> swRasterPixels;  // its object size bound in pixels (FrameOptions::swRasterPixels)
   double moving = 0.0;  // fraction of the movable objects moved every frame (SceneMotion)
   double churn = 0.0;   // fraction of the objects removed, added and hidden every frame (SceneMotion)
 };

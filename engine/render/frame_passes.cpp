@@ -34,7 +34,7 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.vertexWindowShift = vertexShift;
   f.msaaSamples = options.msaa;
   f.swRaster = plan.swOn ? 1u : 0u;
-  f.swMaxPixels = options.swRasterPixels;
+  f.swMaxPixels = options.swRasterPixels.value_or(defaultSwRasterPixels(facts().cpuDevice));
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
   if (plan.coveredTiles) {

@@ -49,6 +49,7 @@ ShadingMode parseShadingMode(const std::string& name) {
 // (an empty 1024x768 frame shaded in 30.4 ms, with covered tiles 1.2 ms), and lose a little on the H200, where a
 // background pixel's early exit is free and the listing adds ~15 us (0.127 -> 0.144 ms at 10k kittens).
 ShadingMode defaultShadingFor(bool cpuDevice) { return cpuDevice ? ShadingMode::Covered : ShadingMode::Uber; }
+float defaultSwRasterPixels(bool cpuDevice) { return cpuDevice ? float(SW_RASTER_MAX_EXTENT - 2) : 64.0f; }
 ShadingMode defaultShading(const gpu::Device& device) { return defaultShadingFor(device.isCpu()); }
 
 const char* swRasterModeName(SwRasterMode mode) {
@@ -118,9 +119,10 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
     return makeError(ErrorCode::InvalidArgument, "the G-buffer path writes no IDs (readIds: visbuf or forward)");
   if (options.path == RenderPath::GBuffer) ensureGBufferTargets();
   if (Status s = checkMsaa(options); !s.ok()) return s;
-  if (options.swRaster != SwRasterMode::Off && !(options.swRasterPixels > 0.0f && options.swRasterPixels <= SW_RASTER_MAX_EXTENT - 2))
+  if (options.swRaster != SwRasterMode::Off && options.swRasterPixels &&
+      !(*options.swRasterPixels > 0.0f && *options.swRasterPixels <= SW_RASTER_MAX_EXTENT - 2))
     return makeError(ErrorCode::InvalidArgument, fmt::format("micro-raster size bound {} px outside (0, {}]",
-                                                             options.swRasterPixels, SW_RASTER_MAX_EXTENT - 2));
+                                                             *options.swRasterPixels, SW_RASTER_MAX_EXTENT - 2));
   prepareMsaa(options);  // once per sample count (and size)
   if (resolveShading(options, facts()) == ShadingMode::Classified) ensureClassify();
   if (microRasterAllowed(options, facts()) && swRaster.ensureBuffer(device, config.width, config.height))

@@ -47,6 +47,9 @@ ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified",
 // What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs).
 ShadingMode defaultShading(const gpu::Device& device);
 ShadingMode defaultShadingFor(bool cpuDevice);  // the same, by device type
+// The micro-raster's object size bound (pixels per side) when FrameOptions::swRasterPixels is unset: 94 on a CPU
+// device, 64 on a GPU.
+float defaultSwRasterPixels(bool cpuDevice);
 
 // Culling bounds of skinned instances: Joints = a sphere from the joints' reach (CPU, double precision,
 // provably containing every skinned vertex: animation.h); Gpu = from the skinned vertices themselves, reduced
@@ -119,7 +122,10 @@ struct FrameOptions {
   // Auto: on, and on a GPU only while it takes enough triangles to pay for its merges (renderer.cpp,
   // defaultSwRaster); On: whenever it takes anything. A frame in which it did not pay skips it for 16 frames.
   SwRasterMode swRaster = SwRasterMode::Auto;
-  float swRasterPixels = 64.0f;  // (0, SW_RASTER_MAX_EXTENT - 2]
+  // (0, SW_RASTER_MAX_EXTENT - 2]; unset: the device's (defaultSwRasterPixels): on lavapipe its hardware raster
+  // costs about 4x the micro-raster per triangle, so the largest bound pays there (the peer view, 1024x768: 10k
+  // kittens 37-39 ms against 40-41 at 64 px, 100k 123 against 133, 1M 247 against 262-274).
+  std::optional<float> swRasterPixels;
   ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
                                             // ubershader over every pixel (its attributes / MSAA variant)
 };
