@@ -34,7 +34,6 @@ class DepthPyramidPass {
   void record(VkCommandBuffer cmd, bool multisampled = false) const;
   const gpu::Image& pyramid() const { return pyramid_; }
   uint32_t levels() const { return levels_; }
-  size_t dispatchCount() const { return dispatches_.size(); }
 
  private:
   void releaseViews();
