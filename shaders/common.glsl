@@ -185,6 +185,14 @@ vec3 objectToCamera(ObjectData o, vec3 p) {
   return w;
 }
 
+// The camera position in the object's space: the inverse of objectToCamera at the camera-relative origin (the
+// micro-raster's back-face pre-pass and the clusters' cone test).
+vec3 cameraInObjectSpace(ObjectData o) {
+  mat3 m = transpose(mat3(o.row0.xyz, o.row1.xyz, o.row2.xyz));  // columns: objectToCamera's linear part
+  vec3 t = vec3(o.row0.w, o.row1.w, o.row2.w) + frame.cameraOffset.xyz;
+  return inverse(m) * -t;
+}
+
 // The clip position, computed identically by the visibility vertex shader, the shading pass and the
 // forward vertex shader.
 vec4 clipPosition(ObjectData o, vec3 p) {

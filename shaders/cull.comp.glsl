@@ -13,6 +13,10 @@
 //          (CULL_REFINE), which decides them as above.
 // The early depth is a subset of the final depth, so the late test never hides a visible object,
 // whatever the history holds: a stale or cleared history only costs time.
+// Clusters (FrameData.clusterCull): an object it would draw whole with the hardware raster, whose LOD has clusters,
+// is listed instead (object, LOD), and the phase's cluster dispatch (CULL_CLUSTERS, one workgroup per listed
+// object) tests each cluster against the frustum, its back-face cone and, late, the pyramid; a small surviving
+// cluster goes to the micro-raster, the others are drawn as one draw per run of consecutive survivors.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -27,6 +31,7 @@ layout(std430, set = 1, binding = CULL_BINDING_HISTORY) buffer HistoryBlock { ui
 layout(std430, set = 1, binding = CULL_BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
 layout(std430, set = 1, binding = CULL_BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
 layout(set = 1, binding = CULL_BINDING_PYRAMID) uniform sampler2D pyramid;
+layout(std430, set = 1, binding = CULL_BINDING_CLUSTERS) readonly buffer ClusterBlock { ClusterData clusters[]; };
 layout(push_constant) uniform Push { PassConstants pc; };
 
 bool frustumVisible(vec3 c, float r) {
@@ -80,7 +85,7 @@ float farthestDepth(ivec2 a, ivec2 b, int level) {
 // 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre, 4: not proved occluded at the coarse level
 // where a finer one exists (to the refinement list; `refine`: the refinement dispatch's test, 0 or 1). rect, v,
 // rr, lo, hi: screenRect's.
-uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine) {
+uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, bool usePyramid) {
   if (!rect) return 0u;  // touches the near plane: always visible
   vec2 size = frame.viewport.xy;
   // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding. MSAA: a
@@ -94,7 +99,7 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine) {
   a = max(a, ivec2(0));
   b = min(b, ivec2(size) - 1);
   if (a.x > b.x || a.y > b.y) return 2u;  // no pixel centre can be covered
-  if (frame.pyramidLevels == 0u) return 0u;  // pyramid skipped this frame (it occluded nothing lately)
+  if (!usePyramid || frame.pyramidLevels == 0u) return 0u;  // (pyramid skipped this frame: it occluded nothing lately)
   // Level whose texels span the rectangle in at most 2x2 texels: 2^k >= extent (never floor(log2)).
   int extent = max(b.x - a.x + 1, b.y - a.y + 1);
   int level = min(int(ceil(log2(float(extent)))), int(frame.pyramidLevels) - 1);
@@ -128,6 +133,152 @@ void appendToList(uint base, bool mine, uint id) {
   if (mine) visibleList[base + VISIBLE_LIST_HEADER + first + subgroupBallotExclusiveBitCount(ballot)] = id;
 }
 
+// Lists the lanes where `mine` holds for this phase's cluster dispatch: (object ID, LOD) entries after the
+// refinement list, the early phase's from the start, the late phase's from the end; the dispatch size grows with
+// the count (at most CLUSTER_MAX_WORKGROUPS workgroups, which stride over the list).
+void appendToClusterList(bool mine, uint id, uint lod) {
+  uvec4 ballot = subgroupBallot(mine);
+  uint count = subgroupBallotBitCount(ballot);
+  if (count == 0u) return;
+  uint first = 0u;
+  uint args = CLUSTER_ARGS + pc.phase * CLUSTER_ARGS_UINTS;
+  if (subgroupElect()) {
+    first = atomicAdd(stats[args], count);
+    atomicMax(stats[args + 1u], min(first + count, CLUSTER_MAX_WORKGROUPS));
+  }
+  first = subgroupBroadcastFirst(first);
+  uint e = first + subgroupBallotExclusiveBitCount(ballot);
+  if (mine && e < frame.objectCount) {
+    uint at = pc.phase == CULL_PHASE_LATE ? frame.objectCount - 1u - e : e;
+    uint word = 2u * (VISIBLE_LIST_HEADER + frame.objectCount) + 2u * at;
+    visibleList[word] = id;
+    visibleList[word + 1u] = lod;
+  }
+}
+
+#if CULL_CLUSTER_PASS
+shared uint hwClusters[CULL_WORKGROUP_SIZE / 32];  // bit i: the cluster of invocation i goes to the hardware raster
+
+// CULL_CLUSTERS (its own pipeline, cull_clusters.comp: in one shader with the object cull, lavapipe's late cull over
+// 1M objects took 90 ms instead of 50): one workgroup per listed object at a time, a thread per cluster.
+void main() {
+  const uint args = CLUSTER_ARGS + pc.phase * CLUSTER_ARGS_UINTS;
+  const uint count = min(stats[args], frame.objectCount);
+  const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
+  if (gl_LocalInvocationIndex < CULL_WORKGROUP_SIZE / 32u) hwClusters[gl_LocalInvocationIndex] = 0u;
+  barrier();
+  for (uint e = gl_WorkGroupID.x; e < count; e += gl_NumWorkGroups.x) {
+    uint at = pc.phase == CULL_PHASE_LATE ? frame.objectCount - 1u - e : e;
+    uint word = 2u * (VISIBLE_LIST_HEADER + frame.objectCount) + 2u * at;
+    uint id = visibleList[word], lod = visibleList[word + 1u];
+    ObjectData o = objectAt(id);
+    uint list = objectDrawList(o.flags);
+    LodData ld = meshLod(o.meshIndex, lod);
+    int vertexOffset = int(meshes[o.meshIndex].vertexOffset);
+    uint triangles = ld.indexCount / 3u;
+    uint n = (triangles + CLUSTER_TRIANGLES - 1u) / CLUSTER_TRIANGLES;
+    vec3 eye = cameraInObjectSpace(o);
+    bool coneTest = list != DRAW_LIST_OPAQUE_DOUBLE_SIDED && list != DRAW_LIST_MASKED_DOUBLE_SIDED;
+    bool swList = frame.swRaster != 0u && drawLists[list].w != 0u && CLUSTER_TRIANGLES <= frame.swMaxTriangles;
+    bool pyramidTest = frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE;
+    uvec4 region = drawLists[list];
+    uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
+    for (uint b = 0u; b < n; b += CULL_WORKGROUP_SIZE) {
+      uint c = b + gl_LocalInvocationIndex;
+      bool valid = c < n;
+      uint culledFrustum = 0u, culledBack = 0u, culledOccluded = 0u;
+      bool keep = false, sw = false;
+      uint clusterTriangles = valid ? min(triangles - c * CLUSTER_TRIANGLES, CLUSTER_TRIANGLES) : 0u;
+      if (valid) {
+        ClusterData cd = clusters[ld.firstCluster + c];
+        vec3 centre = objectToCamera(o, cd.sphere.xyz);
+        float r = cd.sphere.w * o.maxScale;
+        // Back-face cone in object space (an affine map keeps which side of a plane the camera is on; a mirroring
+        // one is drawn by a FLIPPED list, which keeps the object-space front faces), from its apex, with a margin of
+        // 1e-3 on the cosine, where snapping could turn an edge-on triangle's projected winding.
+        vec3 toApex = cd.apex.xyz - eye;
+        bool back = coneTest && dot(toApex, cd.cone.xyz) >= (cd.cone.w + 1e-3) * length(toApex);
+        vec3 v;
+        float rr;
+        vec2 lo, hi;
+        bool rect = screenRect(centre, r, v, rr, lo, hi);
+        if (!frustumVisible(centre, r)) {
+          culledFrustum = 1u;
+        } else if (back) {
+          culledBack = 1u;
+        } else if (occlusionTest(rect, v, rr, lo, hi, false, pyramidTest) % 4u != 0u) {  // 1, 2: occluded, no pixel
+          culledOccluded = 1u;
+        } else {
+          keep = true;
+          sw = swList && smallOnScreen(rect, lo, hi, clusterTriangles);
+        }
+      }
+      // Hardware draws: one per run of consecutive surviving clusters among the workgroup's (a mask of them in shared
+      // memory; on lavapipe a draw costs about as much as 50 triangles, so runs matter more than the clusters culled
+      // between them).
+      bool hw = keep && !sw;
+      uint i = gl_LocalInvocationIndex;
+      if (hw) atomicOr(hwClusters[i >> 5u], 1u << (i & 31u));
+      barrier();
+      bool previous = i > 0u && ((hwClusters[(i - 1u) >> 5u] >> ((i - 1u) & 31u)) & 1u) != 0u;
+      bool startsRun = hw && !previous;
+      // The run ends at the first cluster after this one that is not drawn by the hardware raster.
+      uint end = CULL_WORKGROUP_SIZE;
+      for (uint k = (i + 1u) >> 5u; k < CULL_WORKGROUP_SIZE / 32u && end == CULL_WORKGROUP_SIZE; ++k) {
+        uint after = ~hwClusters[k] & (k == (i + 1u) >> 5u ? ~0u << ((i + 1u) & 31u) : ~0u);
+        if (i + 1u < CULL_WORKGROUP_SIZE && after != 0u) end = 32u * k + uint(findLSB(after));
+      }
+      uint runClusters = end - i;
+      barrier();  // every lane has read the mask: cleared for the next clusters
+      if (i < CULL_WORKGROUP_SIZE / 32u) hwClusters[i] = 0u;
+      barrier();
+      uint runTriangles = startsRun ? min(triangles - c * CLUSTER_TRIANGLES, runClusters * CLUSTER_TRIANGLES) : 0u;
+      uvec4 drawBallot = subgroupBallot(startsRun), swBallot = subgroupBallot(sw);
+      uint hwCount = subgroupBallotBitCount(drawBallot), swCount = subgroupBallotBitCount(swBallot);
+      uint tested = subgroupAdd(valid ? 1u : 0u);
+      uint frustumSum = subgroupAdd(culledFrustum), backSum = subgroupAdd(culledBack);
+      uint occludedSum = subgroupAdd(culledOccluded);
+      uint triangleSum = subgroupAdd(runTriangles + (sw ? clusterTriangles : 0u));
+      uint swTriangleSum = subgroupAdd(sw ? clusterTriangles : 0u);
+      uint hwBase = 0u, swBase = 0u;
+      if (subgroupElect()) {
+        if (tested > 0u) atomicAdd(stats[STAT_CLUSTERS_TESTED], tested);
+        if (frustumSum > 0u) atomicAdd(stats[STAT_CLUSTERS_FRUSTUM], frustumSum);
+        if (backSum > 0u) atomicAdd(stats[STAT_CLUSTERS_BACKFACING], backSum);
+        if (occludedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_OCCLUDED], occludedSum);
+        if (hwCount + swCount > 0u) {
+          atomicAdd(stats[counter], hwCount + swCount);
+          atomicAdd(stats[STAT_CLUSTER_DRAWS], hwCount + swCount);
+          atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangleSum);
+        }
+        if (hwCount > 0u) hwBase = atomicAdd(stats[STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + list], hwCount);
+        if (swCount > 0u) {
+          swBase = atomicAdd(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + list], swCount);
+          atomicAdd(stats[STAT_SW_TRIANGLES], swTriangleSum);
+          uint swArgs = SW_ARGS + pc.phase * SW_ARGS_UINTS;
+          atomicMax(stats[swArgs + SW_ARGS_DISPATCH], min((swBase + swCount + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
+          atomicMax(stats[swArgs + SW_ARGS_MERGE], 3u);
+        }
+      }
+      hwBase = subgroupBroadcastFirst(hwBase);
+      swBase = subgroupBroadcastFirst(swBase);
+      uint slot = startsRun ? hwBase + subgroupBallotExclusiveBitCount(drawBallot)
+                            : swBase + subgroupBallotExclusiveBitCount(swBallot);
+      if (startsRun || sw) {
+        if (slot >= region.z) {  // (the cull pass reserved room for every cluster: never, but counted)
+          atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
+        } else {
+          if (sw) slot = region.z - 1u - slot;
+          uint drawTriangles = sw ? clusterTriangles : runTriangles;
+          draws[first + slot] = DrawCommand(3u * drawTriangles, 1u, ld.firstIndex + 3u * CLUSTER_TRIANGLES * c,
+                                            vertexOffset, id);
+        }
+      }
+    }
+  }
+}
+
+#else
 void main() {
   // The early phase of occlusion culling runs over last frame's visible list (indirect dispatch, one thread per
   // listed object): a heavily occluded scene pays for the few it drew, not for every object it holds.
@@ -153,6 +304,8 @@ void main() {
   uint list = DRAW_LIST_NONE;
   uint frustumCulled = 0, occluded = 0, subpixel = 0;
   bool sw = false;  // routed to the software micro-raster
+  bool clustered = false;  // listed for the cluster dispatch
+  uint clusterCount = 0u;
   bool visibleNow = false;  // late phase: listed for the next frame's early phase
   bool deferred = false;  // late phase, first dispatch: listed for the refinement dispatch, decided there
   if (valid) {
@@ -176,7 +329,7 @@ void main() {
       draw = inFrustum && history[id] != 0u && list != DRAW_LIST_NONE;  // culled ones: counted late
     } else {
       bool drawnEarly = inFrustum && history[id] != 0u;  // exactly the early phase's decision
-      uint test = inFrustum ? occlusionTest(rect, v, rr, lo, hi, refine) : 3u;
+      uint test = inFrustum ? occlusionTest(rect, v, rr, lo, hi, refine, true) : 3u;
       deferred = test == 4u;
       if (deferred) test = 5u;  // nothing counted, written or drawn here
       frustumCulled = test == 3u ? 1u : 0u;
@@ -204,7 +357,38 @@ void main() {
       uint lodTriangles = meshLod(meshIndex, lod).indexCount / 3u;
       sw = lodTriangles <= frame.swMaxTriangles && smallOnScreen(rect, lo, hi, lodTriangles);
     }
+    // The hardware raster's objects whose LOD has clusters: to the cluster dispatch.
+    vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
+    if (draw && !sw && frame.clusterCull != 0u && frame.cullMode != CULL_NONE &&
+        (!rect || max(extent.x, extent.y) > CLUSTER_MIN_PIXELS)) {
+      LodData ld = meshLod(meshIndex, lod);
+      if (ld.firstCluster != CLUSTER_NONE) {
+        clustered = true;
+        clusterCount = (ld.indexCount / 3u + CLUSTER_TRIANGLES - 1u) / CLUSTER_TRIANGLES;
+      }
+    }
   }
+  // Cluster draws are reserved per list and phase (one atomic per subgroup and list present): an object whose clusters
+  // do not fit the list's reserve is drawn whole, so that its region never overflows. (Only in subgroups that have a
+  // clustered object: on lavapipe the atomics would cost every other subgroup a loop over its lanes.)
+  if (subgroupAny(clustered)) {
+    bool claiming = clustered;
+    while (subgroupAny(claiming)) {
+      uint current = subgroupMin(claiming ? list : DRAW_LIST_NONE);
+      bool mine = claiming && list == current;
+      uint want = mine ? clusterCount : 0u;
+      uint total = subgroupAdd(want), before = subgroupExclusiveAdd(want);
+      uint reserved = 0u;
+      if (subgroupElect()) reserved = atomicAdd(stats[STAT_CLUSTER_RESERVED + pc.phase * DRAW_LISTS + current], total);
+      reserved = subgroupBroadcastFirst(reserved);
+      if (mine && reserved + before + clusterCount > drawLists[DRAW_LISTS + list].x) clustered = false;
+      claiming = claiming && !mine;
+    }
+    appendToClusterList(clustered, id, lod);
+    uint clusteredSum = subgroupAdd(clustered ? 1u : 0u);
+    if (clusteredSum > 0u && subgroupElect()) atomicAdd(stats[STAT_CLUSTER_OBJECTS], clusteredSum);
+  }
+  bool whole = draw && !clustered;  // a draw command of its own
   // The next frame's visible list, and the refinement dispatch's.
   appendToList(0u, visibleNow, id);
   if (pc.phase == CULL_PHASE_LATE && !refine) appendToList(refineList, deferred, id);
@@ -222,7 +406,7 @@ void main() {
     if (subpixelSum > 0) atomicAdd(stats[STAT_SUBPIXEL_CULLED], subpixelSum);
   }
   uint slot = 0;
-  bool pending = draw;
+  bool pending = whole;
   uint key = sw ? list + DRAW_LISTS : list;  // hardware draws of list l: l; micro-raster draws: DRAW_LISTS + l
   while (subgroupAny(pending)) {
     uint current = subgroupMin(pending ? key : DRAW_LIST_NONE);
@@ -246,22 +430,24 @@ void main() {
     pending = pending && !mine;
   }
   if (!draw) return;
-  uvec4 region = drawLists[list];  // x: early first slot, y: late first slot, z: capacity
-  if (slot >= region.z) {
-    atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
-    return;
-  }
-  LodData l = meshLod(meshIndex, lod);
-  uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
-  if (sw) slot = region.z - 1u - slot;
-  draws[first + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
-  // Counters: one atomic per subgroup (and LOD level present), not per object: on lavapipe every lane's atomic on
-  // the same word is a locked operation bouncing between the cores.
-  uint triangles = subgroupAdd(l.indexCount / 3u);
-  uint swTriangles = subgroupAdd(sw ? l.indexCount / 3u : 0u);
-  if (subgroupElect()) {
-    atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangles);
-    if (swTriangles > 0u) atomicAdd(stats[STAT_SW_TRIANGLES], swTriangles);
+  if (whole) {
+    uvec4 region = drawLists[list];  // x: early first slot, y: late first slot, z: capacity
+    if (slot >= region.z) {
+      atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
+      return;
+    }
+    LodData l = meshLod(meshIndex, lod);
+    uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
+    if (sw) slot = region.z - 1u - slot;
+    draws[first + slot] = DrawCommand(l.indexCount, 1u, l.firstIndex, int(meshes[meshIndex].vertexOffset), id);
+    // Counters: one atomic per subgroup (and LOD level present), not per object: on lavapipe every lane's atomic on
+    // the same word is a locked operation bouncing between the cores.
+    uint triangles = subgroupAdd(l.indexCount / 3u);
+    uint swTriangles = subgroupAdd(sw ? l.indexCount / 3u : 0u);
+    if (subgroupElect()) {
+      atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangles);
+      if (swTriangles > 0u) atomicAdd(stats[STAT_SW_TRIANGLES], swTriangles);
+    }
   }
   bool counting = true;
   while (subgroupAny(counting)) {
@@ -271,3 +457,4 @@ void main() {
     counting = counting && lod != current;
   }
 }
+#endif

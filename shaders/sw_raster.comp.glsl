@@ -29,13 +29,6 @@ shared uint swQueue[SW_RASTER_WORKGROUP / 4 * SW_RASTER_CHUNK];
 
 layout(set = 0, binding = SCENE_BINDING_TRIANGLE_PLANES) uniform samplerBuffer trianglePlanes;
 
-// The camera position in the object's space: the inverse of objectToCamera at the camera-relative origin.
-vec3 cameraInObjectSpace(ObjectData o) {
-  mat3 m = transpose(mat3(o.row0.xyz, o.row1.xyz, o.row2.xyz));  // columns: objectToCamera's linear part
-  vec3 t = vec3(o.row0.w, o.row1.w, o.row2.w) + frame.cameraOffset.xyz;
-  return inverse(m) * -t;
-}
-
 // True where triangle t of the draw faces away from the camera by more than rounding could hide: the camera lies
 // behind its object-space plane by more than 1e-3 of its distance (`reach` bounds that distance: the distance to
 // the mesh's bounding sphere centre plus its radius), i.e. the cosine between the normal and the direction to the

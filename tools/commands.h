@@ -42,6 +42,7 @@ struct RenderCommand {
   uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
   std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
   std::optional<float> swRasterPixels;  // its object size bound in pixels (FrameOptions::swRasterPixels)
+  bool noClusters = false;  // FrameOptions::clusters off
   double moving = 0.0;  // fraction of the movable objects moved every frame (SceneMotion)
   double churn = 0.0;   // fraction of the objects removed, added and hidden every frame (SceneMotion)
 };

@@ -109,6 +109,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--sw-raster-px", c.swRasterPixels, "--sw-raster: the object size bound in pixels (0, 94]; default 94 on a CPU device, 64 on a GPU")
       ->check(finiteNumber(0.0, 94.0, true, false))
       ->capture_default_str();
+  sub->add_flag("--no-clusters", c.noClusters,
+                "draw every hardware-raster object whole (default: as its clusters that survive the frustum, their "
+                "back-face cone and the depth pyramid)");
   sub->add_option("--moving", c.moving,
                   "every frame, move this fraction of the objects (not skinned or node-animated) along deterministic "
                   "closed paths through the renderer's scene-update API; the JSON gets per-frame uploaded bytes and "
@@ -336,6 +339,7 @@ int runRender(const RenderCommand& c) {
   fo.shading = parseShadingMode(c.shading);
   fo.swRaster = parseSwRasterMode(c.swRaster);
   fo.swRasterPixels = c.swRasterPixels;
+  fo.clusters = !c.noClusters;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   // --moving / --churn: the scene changes before every frame; perFrame gets each frame's changes and counters.
   nlohmann::json perFrame = nlohmann::json::array();

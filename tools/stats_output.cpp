@@ -25,6 +25,11 @@ std::string formatStats(const FrameStats& s) {
                            s.trianglesDrawn, s.coveredPixels, 100.0 * s.coveredPixels / (double(s.width) * s.height),
                            double(s.trianglesDrawn) / s.coveredPixels)
              : fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
+  if (s.cull.clusters.objects)
+    out += fmt::format("clusters      {} objects drawn as clusters: {} clusters tested, {} outside the frustum, {} "
+                       "back-facing, {} occluded or between pixel centres; {} draws\n",
+                       s.cull.clusters.objects, s.cull.clusters.tested, s.cull.clusters.frustumCulled,
+                       s.cull.clusters.backfacing, s.cull.clusters.occluded, s.cull.clusters.draws);
   if (s.sw.on)
     out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.sw.draws,
                        s.sw.triangles, s.sw.oversize);

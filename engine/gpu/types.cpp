@@ -9,6 +9,7 @@ namespace visbuf::gpu {
 
 static_assert(sizeof(Vertex) == 32);
 static_assert(sizeof(LodData) == 16);
+static_assert(sizeof(ClusterData) == 48);
 static_assert(sizeof(VertexExtra) == 16);
 static_assert(sizeof(MeshData) == 48 + 16 * MAX_LODS);
 static_assert(sizeof(SkinnedVertex) == 16);

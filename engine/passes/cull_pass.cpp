@@ -12,21 +12,25 @@ CullPass CullPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout
                               {CULL_BINDING_HISTORY, storage},
                               {CULL_BINDING_VISIBLE_LIST, storage},
                               {CULL_BINDING_DRAW_LISTS, storage},
-                              {CULL_BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}},
+                              {CULL_BINDING_PYRAMID, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                              {CULL_BINDING_CLUSTERS, storage}},
                              VK_SHADER_STAGE_COMPUTE_BIT),
              {}};
   p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull.comp", spec);
+  p.clusterPipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_clusters.comp", spec);
   return p;
 }
 
 void CullPass::bind(const gpu::Buffer& draws, const gpu::Buffer& history, const gpu::Buffer& visibleList,
-                    const gpu::Buffer& drawLists, const gpu::Image& pyramid, VkSampler sampler) const {
+                    const gpu::Buffer& drawLists, const gpu::Image& pyramid, VkSampler sampler,
+                    const gpu::Buffer& clusters) const {
   layout.writer()
       .buffer(CULL_BINDING_DRAWS, draws.handle())
       .buffer(CULL_BINDING_HISTORY, history.handle())
       .buffer(CULL_BINDING_VISIBLE_LIST, visibleList.handle())
       .buffer(CULL_BINDING_DRAW_LISTS, drawLists.handle())
       .image(CULL_BINDING_PYRAMID, pyramid.view(), VK_IMAGE_LAYOUT_GENERAL, sampler)
+      .buffer(CULL_BINDING_CLUSTERS, clusters.handle())
       .update();
 }
 
@@ -39,7 +43,8 @@ void CullPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objec
 
 void CullPass::recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists,
                             VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const {
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE,
+                    (variant == CULL_CLUSTERS ? clusterPipeline : pipeline).handle());
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   layout.push(cmd, {phase, 0, 0, variant});
   vkCmdDispatchIndirect(cmd, lists.handle(), headerOffset + sizeof(uint32_t));  // header words 1..3

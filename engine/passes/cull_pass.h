@@ -12,17 +12,20 @@ namespace visbuf::passes {
 struct CullPass {
   gpu::PassLayout layout;
   gpu::Pipeline pipeline;
+  gpu::Pipeline clusterPipeline;  // the cluster dispatch (CULL_CLUSTERS): cull.comp.glsl built with CULL_CLUSTER_PASS
   static CullPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec);
-  // Its set: the draws it writes, the per-object history and visible lists (config.h VISIBLE_LIST_HEADER), the
-  // draw lists and the depth pyramid (GENERAL, all levels).
+  // Its set: the draws it writes, the per-object history and visible lists (config.h VISIBLE_LIST_HEADER, then the
+  // cluster lists' entries), the draw lists, the depth pyramid (GENERAL, all levels) and the scene's clusters.
   void bind(const gpu::Buffer& draws, const gpu::Buffer& history, const gpu::Buffer& visibleList,
-            const gpu::Buffer& drawLists, const gpu::Image& pyramid, VkSampler sampler) const;
+            const gpu::Buffer& drawLists, const gpu::Image& pyramid, VkSampler sampler,
+            const gpu::Buffer& clusters) const;
   // phase: CULL_PHASE_EARLY/LATE. Occlusion mode also reads the depth pyramid and reads/writes the per-object
   // history.
   void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount, uint32_t phase) const;
-  // One thread per object of a list in the visible-list buffer, whose header (at byte `headerOffset`) holds the
-  // dispatch size: the early phase of occlusion culling over last frame's visible list, and the late phase's
-  // refinement dispatch (variant CULL_REFINE) over the objects its first dispatch listed (config.h).
+  // An indirect dispatch over a list whose header (at byte `headerOffset` of `lists`) holds the dispatch size: one
+  // thread per object of the early phase of occlusion culling over last frame's visible list and of the late phase's
+  // refinement dispatch (variant CULL_REFINE) over the objects its first dispatch listed; one workgroup per object
+  // of the cluster dispatch (variant CULL_CLUSTERS, its header in the stats buffer) (config.h).
   void recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists, VkDeviceSize headerOffset,
                     uint32_t phase, uint32_t variant) const;
 };

@@ -37,6 +37,7 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.swMaxPixels = options.swRasterPixels.value_or(defaultSwRasterPixels(facts().cpuDevice));
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
+  f.clusterCull = plan.clusters ? 1u : 0u;
   if (plan.coveredTiles) {
     const VkDeviceAddress a = coveredTiles.address();
     f.coveredTilesLow = uint32_t(a);
@@ -168,7 +169,11 @@ void Renderer::Impl::declareSetup(Graph& g, const FrameResources& r, const Frame
   p.step(std::move(uses), [this, frozen = plan.frozen, clearHistory, overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
     if (!frozen) {  // frozen: keep the counts (and the micro-raster's arguments)
       vkCmdFillBuffer(cmd, stats.handle(), 0, STAT_COUNT * sizeof(uint32_t), 0);
-      const uint32_t args[2 * SW_ARGS_UINTS] = {0, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1, 0, 0, 0};
+      // Per phase: the micro-raster's dispatch (0 x 1 x 1) and merge draw (0, 1, 0, 0), then the cluster list's
+      // count and dispatch (0 x 1 x 1).
+      const uint32_t args[STAT_BUFFER_UINTS - SW_ARGS] = {0, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1, 0, 0, 0,
+                                                          0, 0, 1, 1, 0, 0, 1, 1};
+      static_assert(STAT_BUFFER_UINTS - SW_ARGS == 2 * SW_ARGS_UINTS + 2 * CLUSTER_ARGS_UINTS);
       vkCmdUpdateBuffer(cmd, stats.handle(), SW_ARGS * sizeof(uint32_t), sizeof(args), args);
     }
     if (overdrawCount) {
@@ -198,8 +203,10 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
                                  const char* name) {
   const bool occlusion = plan.cull == CullMode::Occlusion, late = phase == CULL_PHASE_LATE;
   const gpu::Access lists = access::computeReadWrite | access::indirect;
+  // (the stats buffer also holds the cluster dispatch's indirect arguments)
   auto cullUses = [&] {
-    std::vector<Graph::Use> u = {Graph::reads(r.scene, access::computeRead), Graph::writes(r.stats, access::computeReadWrite),
+    std::vector<Graph::Use> u = {Graph::reads(r.scene, access::computeRead),
+                                 Graph::writes(r.stats, access::computeReadWrite | access::indirect),
                                  Graph::writes(r.draws, access::computeReadWrite), Graph::writes(r.history, lists)};
     if (late && plan.usePyramid)
       u.push_back(Graph::reads(r.pyramid, access::inLayout(access::computeSampled, VK_IMAGE_LAYOUT_GENERAL)));
@@ -212,12 +219,17 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, visibleList, 0, CULL_PHASE_EARLY, 0);
     });
-    return;
+  } else {
+    p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, sceneSet, gpuScene.objectCount, phase); });
   }
-  p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, sceneSet, gpuScene.objectCount, phase); });
   if (occlusion && late && plan.usePyramid)  // the objects the coarse pyramid test left, at a finer level
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
+    });
+  if (plan.clusters)  // the clusters of the objects this phase listed for them
+    p.step(cullUses(), [this, phase](VkCommandBuffer cmd) {
+      cull.recordListed(cmd, sceneSet, stats, (CLUSTER_ARGS + phase * CLUSTER_ARGS_UINTS) * sizeof(uint32_t), phase,
+                        CULL_CLUSTERS);
     });
 }
 

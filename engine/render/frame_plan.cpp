@@ -34,6 +34,7 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.msaa = options.msaa > 1;
   p.shading = resolveShading(options, facts);
   p.coveredTiles = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
+  p.clusters = p.gpuCulled && !p.frozen && options.clusters && facts.clusters && p.cull != CullMode::None;
   return p;
 }
 

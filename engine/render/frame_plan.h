@@ -24,6 +24,8 @@ struct FramePlan {
   // The ubershader over the covered tiles only (covered_tiles.comp lists them): single-sampled visbuf frames
   // without the attribute record.
   bool coveredTiles = false;
+  // Objects drawn by the hardware raster are expanded into clusters (the cull pass's CULL_CLUSTERS dispatch).
+  bool clusters = false;
 };
 
 // What the renderer's scene and device are, as far as a plan depends on them.
@@ -32,6 +34,7 @@ struct SceneFacts {
   bool microRasterLists = false;  // some draw list the micro-raster may take (opaque, uncapped)
   bool microRasterFits = false;   // its 64-bit per-pixel buffer fits one storage-buffer range at this size
   bool pointLights = false;       // the scene has punctual lights
+  bool clusters = false;          // some LOD level has clusters and some draw list a cluster reserve
 };
 
 // A pyramid or micro-raster that did nothing is skipped for this many frames, then probed again.

@@ -129,6 +129,8 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
     st.cull.drawOverflow = s[STAT_DRAW_OVERFLOW];
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
     st.cull.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
+    st.cull.clusters = {s[STAT_CLUSTER_OBJECTS],  s[STAT_CLUSTERS_TESTED],   s[STAT_CLUSTERS_FRUSTUM],
+                        s[STAT_CLUSTERS_BACKFACING], s[STAT_CLUSTERS_OCCLUDED], s[STAT_CLUSTER_DRAWS]};
     frameHistory.finished(slot.plan, options, device.isCpu(), st.sw.triangles, st.cull.drawsEarly, st.cull.occlusionCulled);
   }
   while (!st.cull.lodHistogram.empty() && st.cull.lodHistogram.back() == 0) st.cull.lodHistogram.pop_back();
@@ -151,12 +153,12 @@ void Renderer::Impl::decodeReadback(const FrameOptions& options, const FramePlan
   }
   if (rb.draws) {
     const auto* dr = static_cast<const gpu::DrawCommand*>(drawsReadback.mapped());
+    std::vector<char> seen(gpuScene.objectCount, 0);  // an object drawn as clusters has several draws
     auto add = [&](const gpu::DrawCommand& d) {
+      if (d.firstInstance >= seen.size() || seen[d.firstInstance]) return;
+      seen[d.firstInstance] = 1;
       result.drawnObjects.push_back(d.firstInstance);
-      const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[d.firstInstance]];
-      uint32_t lod = 0;
-      while (lod + 1 < md.lodCount && md.lods[lod].firstIndex != d.firstIndex) ++lod;
-      result.drawnLods.push_back(lod);
+      result.drawnLods.push_back(drawLod(d));
     };
     const uint32_t* s = static_cast<const uint32_t*>(frame.statsReadback.mapped());
     for (uint32_t phase : {CULL_PHASE_EARLY, CULL_PHASE_LATE})
@@ -229,8 +231,10 @@ void Renderer::Impl::decodeReadback(const FrameOptions& options, const FramePlan
         result.ids[2 * i] = 0xFFFFFFFFu;
         continue;
       }
-      result.ids[2 * i] = dr[slot].firstInstance + 1;
-      result.ids[2 * i + 1] = tri;
+      // The triangle within the draw's LOD level (a cluster draw starts inside it).
+      const gpu::DrawCommand& d = dr[slot];
+      result.ids[2 * i] = d.firstInstance + 1;
+      result.ids[2 * i + 1] = tri + (d.firstIndex - gpuScene.meshTable[gpuScene.objectMesh[d.firstInstance]].lods[drawLod(d)].firstIndex) / 3;
     }
   }
 

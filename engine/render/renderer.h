@@ -126,6 +126,11 @@ struct FrameOptions {
   // costs about 4x the micro-raster per triangle, so the largest bound pays there (the peer view, 1024x768: 10k
   // kittens 37-39 ms against 40-41 at 64 px, 100k 123 against 133, 1M 247 against 262-274).
   std::optional<float> swRasterPixels;
+  // Cluster culling (visbuf and G-buffer paths, culled frames): an object the hardware raster would draw whole, whose
+  // LOD level has more than CLUSTER_TRIANGLES triangles, is drawn as its clusters that survive the frustum, their
+  // back-face cone and (late phase) the depth pyramid; the small ones go to the micro-raster. Skinned instances are
+  // always drawn whole.
+  bool clusters = true;
   ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
                                             // ubershader over every pixel (its attributes / MSAA variant)
 };
@@ -155,8 +160,14 @@ struct CullStats {
   uint32_t drawsRendered = 0;    // min(appended, capacity)
   uint32_t drawCapacity = 0;     // per phase, all draw lists together
   uint32_t drawOverflow = 0;     // visible objects dropped for lack of capacity (reported, never silent)
-  std::vector<uint32_t> lodHistogram;  // draws per LOD level
+  std::vector<uint32_t> lodHistogram;  // objects drawn per LOD level (whole or as clusters)
   bool cullingFrozen = false;    // this frame reused an earlier frame's draw lists
+  // Cluster culling (FrameOptions::clusters): objects drawn as clusters, their clusters tested, culled by the
+  // frustum, by their back-face cone, by the depth pyramid (or covering no pixel centre), and the draws made of
+  // the rest (part of drawsRendered: one per run of consecutive hardware clusters, one per micro-raster cluster).
+  struct Clusters {
+    uint32_t objects = 0, tested = 0, frustumCulled = 0, backfacing = 0, occluded = 0, draws = 0;
+  } clusters;
 };
 
 // sw_raster_pass: the software micro-raster and its merges.

@@ -99,6 +99,10 @@ struct Renderer::Impl {
   // Draw lists (config.h DRAW_LIST_*): list l holds slots [listFirst[l], + listCapacity[l]) of each phase's region;
   // capacity 0 for a list no object of the scene is in. Mirrored in drawLists (read by the cull pass).
   std::array<uint32_t, DRAW_LISTS> listFirst{}, listCapacity{};
+  // The part of list l's capacity reserved for cluster draws (config.h CULL_CLUSTERS); the rest holds one draw per
+  // object (listObjectCapacity).
+  std::array<uint32_t, DRAW_LISTS> listClusterReserve{};
+  uint32_t listObjectCapacity(uint32_t l) const { return listCapacity[l] - listClusterReserve[l]; }
   uint32_t listMask = 0;                 // bit l: listCapacity[l] > 0
   uint32_t swListMask = 0;               // bit l: the micro-raster may take list l's draws (opaque, uncapped)
   std::vector<uint32_t> blendObjects;    // objects with BLEND materials (the transparency pass), scene order
@@ -223,6 +227,16 @@ struct Renderer::Impl {
     vkCmdUpdateBuffer(cmd, visibleList.handle(), refineListOffset(), sizeof(header), header);
   }
 
+  // The LOD level a draw command of the cull pass draws (whole, or a cluster run within it).
+  uint32_t drawLod(const gpu::DrawCommand& d) const {
+    const gpu::MeshData& md = gpuScene.meshTable[gpuScene.objectMesh[d.firstInstance]];
+    uint32_t lod = 0;
+    while (lod + 1 < md.lodCount &&
+           !(d.firstIndex >= md.lods[lod].firstIndex && d.firstIndex < md.lods[lod].firstIndex + md.lods[lod].indexCount))
+      ++lod;
+    return lod;
+  }
+
   // The attribute buffer is only as large as asked for (a full-screen one is 64 bytes per pixel).
   void resizeAttributes(VkDeviceSize bytes);
 
@@ -248,7 +262,8 @@ struct Renderer::Impl {
   SceneFacts facts() const {
     return {device.isCpu(), swListMask != 0,
             VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange,
-            hasPointLights()};
+            hasPointLights(),
+            std::any_of(listClusterReserve.begin(), listClusterReserve.end(), [](uint32_t r) { return r > 0; })};
   }
   FrameHistory frameHistory;  // what earlier frames left that later plans depend on
 

@@ -3,6 +3,7 @@
 #include "visbuf/render/renderer_impl.h"
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 
 #include <fmt/format.h>
@@ -98,7 +99,7 @@ void Renderer::Impl::writeDescriptors() {
 }
 
 void Renderer::Impl::bindPasses() {
-  cull.bind(draws, history, visibleList, drawLists, pyramid.pyramid(), sampler);
+  cull.bind(draws, history, visibleList, drawLists, pyramid.pyramid(), sampler, gpuScene.clusters);
   visibility.bind(overdraw);
   if (visibilityMs.layout) visibilityMs.bind(overdraw);
   if (swRaster.created()) swRaster.bind(draws, drawLists);
@@ -259,15 +260,35 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   for (const RigidObject& ro : impl->scene.rigidObjects) impl->rigidObject[ro.object] = 1;
   for (const SkinnedObject& so : scene.skinnedObjects) impl->skinnedObject[so.object] = 1;
   const uint64_t rangeSlots = maxRange / (2 * sizeof(gpu::DrawCommand));
+  // Cluster draws (config.h CULL_CLUSTERS) get a reserve beyond one draw per object, shared out among the lists by
+  // their objects: as many as fit without costing the ID encoding anything -- the narrow 32-bit IDs where the objects'
+  // slots allow them, else the micro-raster's full triangle cap (2^21 slots), else the power of two the objects'
+  // slots need --, at least 4,096, at most 2^18 and at most every object's largest level in clusters. Only lists
+  // whose region holds every object get one; an object whose clusters do not fit is drawn whole.
+  constexpr uint64_t kMinClusterReserve = 4096, kMaxClusterReserve = uint64_t{1} << 18;
+  const uint32_t triangleBits = chooseIdEncoding(1, impl->gpuScene.maxTrianglesPerDraw, false).triangleBits;
+  const uint64_t objectSlots = 2 * listed;
+  const uint64_t narrowSlots = (uint64_t{1} << (32 - std::min(triangleBits, 31u))) - 1;
+  const uint64_t swSlots = uint64_t{1} << (32 - std::bit_width(SW_RASTER_MAX_TRIANGLES - 1));
+  const uint64_t slotLimit = objectSlots <= narrowSlots ? narrowSlots
+                             : objectSlots <= swSlots   ? swSlots
+                                                        : std::bit_ceil(objectSlots);
+  const uint64_t reserveTotal =
+      config.drawCapacity || listed > rangeSlots || impl->gpuScene.clusterCount == 0
+          ? 0
+          : std::min<uint64_t>({std::max(slotLimit / 2 - listed, kMinClusterReserve), kMaxClusterReserve,
+                                listed * impl->gpuScene.maxClustersPerLod, rangeSlots - listed});
   for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
     uint64_t c = listObjects[l];
     if (config.drawCapacity)
       c = std::min<uint64_t>(c, config.drawCapacity);
     else if (listed > rangeSlots)
       c = std::max<uint64_t>(c ? 1 : 0, c * rangeSlots / listed);
+    const uint64_t reserve = c == listObjects[l] && listed ? reserveTotal * c / listed : 0;
     impl->listFirst[l] = impl->capacity;
-    impl->listCapacity[l] = uint32_t(c);
-    impl->capacity += uint32_t(c);
+    impl->listCapacity[l] = uint32_t(c + reserve);
+    impl->listClusterReserve[l] = uint32_t(reserve);
+    impl->capacity += uint32_t(c + reserve);
     if (c) impl->listMask |= 1u << l;
     // The micro-raster fills a list's region from its end, so only where the region holds every object of the list.
     if (c && c == listObjects[l] && !passes::drawListMasked(l)) impl->swListMask |= 1u << l;
@@ -299,10 +320,12 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   impl->forward = passes::ForwardPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
   if (!impl->blendObjects.empty())
     impl->transparent = passes::TransparentPass::create(device, impl->sceneSets.layout(), textured);
-  std::array<glm::uvec4, DRAW_LISTS> lists{};
-  for (uint32_t l = 0; l < DRAW_LISTS; ++l)
+  std::array<glm::uvec4, 2 * DRAW_LISTS> lists{};
+  for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
     lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
                 impl->swListMask >> l & 1u};
+    lists[DRAW_LISTS + l] = {impl->listClusterReserve[l], 0, 0, 0};
+  }
   impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
   std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
   impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
@@ -312,14 +335,16 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                             gpu::MemoryUse::DeviceLocal);
   impl->drawTexels = gpu::BufferView(device, impl->draws, VK_FORMAT_R32_UINT, 0,
                                      std::min<VkDeviceSize>(drawBytes / 4, maxTexels) * 4);
-  impl->stats = gpu::Buffer(device, (SW_ARGS + 2 * SW_ARGS_UINTS) * sizeof(uint32_t),
+  impl->stats = gpu::Buffer(device, STAT_BUFFER_UINTS * sizeof(uint32_t),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             gpu::MemoryUse::DeviceLocal);
   impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::DeviceLocal);
-  impl->visibleList = gpu::Buffer(device, 2 * (VISIBLE_LIST_HEADER + uint64_t(impl->gpuScene.objectCount)) * 4,
+  // The visible list, the refinement list, then the cluster lists' (object, LOD) entries (config.h CLUSTER_ARGS).
+  impl->visibleList = gpu::Buffer(device, (2 * (VISIBLE_LIST_HEADER + uint64_t(impl->gpuScene.objectCount)) +
+                                           2 * uint64_t(impl->gpuScene.objectCount)) * 4,
                                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                                       VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                                   gpu::MemoryUse::DeviceLocal);

@@ -86,11 +86,11 @@ Status Renderer::setTransforms(std::span<const ObjectTransform> moves) {
     const uint32_t from = r.gpuScene.objectList[m.object];
     if (list == from) continue;
     // The winding flipped: the object changes draw list; a list the micro-raster fills from its end must have room.
-    if (list != DRAW_LIST_NONE && (r.swListMask >> list & 1u) && live[list] >= r.listCapacity[list])
+    if (list != DRAW_LIST_NONE && (r.swListMask >> list & 1u) && live[list] >= r.listObjectCapacity(list))
       return makeError(ErrorCode::CapacityExceeded,
                        fmt::format("setTransforms: object {} flips its winding into draw list {}, which is full "
                                    "(capacity {}); reserve RendererConfig::spareObjects",
-                                   m.object, list, r.listCapacity[list]));
+                                   m.object, list, r.listObjectCapacity(list)));
     if (from != DRAW_LIST_NONE) --live[from];
     if (list != DRAW_LIST_NONE) ++live[list];
   }
@@ -131,9 +131,9 @@ Result<uint32_t> Renderer::addObject(const Object& object) {
   r.slotState[id] = Impl::SlotLive;  // (for checkTransform; undone below on refusal)
   Status s = r.checkTransform(id, object.transform, "addObject");
   const uint32_t list = gpu::objectDrawList(packObject(object, r.scene).flags);
-  if (s.ok() && list != DRAW_LIST_NONE && r.listLive[list] >= r.listCapacity[list])
+  if (s.ok() && list != DRAW_LIST_NONE && r.listLive[list] >= r.listObjectCapacity(list))
     s = makeError(ErrorCode::CapacityExceeded, fmt::format("addObject: draw list {} is full (capacity {})", list,
-                                                            r.listCapacity[list]));
+                                                            r.listObjectCapacity(list)));
   if (!s.ok()) {
     r.slotState[id] = Impl::SlotFree;
     return s.error();
@@ -195,7 +195,7 @@ void Renderer::Impl::poseRigidObjects(double time) {
     const uint32_t list = gpu::objectDrawList(packObject(moved, scene).flags);
     const uint32_t from = gpuScene.objectList[id];
     if (list != from) {
-      if (list != DRAW_LIST_NONE && (swListMask >> list & 1u) && listLive[list] >= listCapacity[list]) continue;
+      if (list != DRAW_LIST_NONE && (swListMask >> list & 1u) && listLive[list] >= listObjectCapacity(list)) continue;
       if (from != DRAW_LIST_NONE) --listLive[from];
       if (list != DRAW_LIST_NONE) ++listLive[list];
       gpuScene.objectList[id] = list;

@@ -1,4 +1,6 @@
 #include "visbuf/scene/gpu_scene.h"
+#include "visbuf/scene/clusters.h"
+
 
 #include <algorithm>
 #include <cstring>
@@ -166,6 +168,18 @@ uint32_t objectWindowSplit(uint64_t maxRange, uint32_t objectCount) {
   return uint32_t(std::min<uint64_t>(objectCount, perWindow));
 }
 
+// The bounds of every cluster of the scene's meshes, in LodData::firstCluster order (scene/clusters.h).
+static std::vector<gpu::ClusterData> clusterBounds(const Scene& scene, const std::vector<gpu::MeshData>& meshTable) {
+  std::vector<gpu::ClusterData> out;
+  for (size_t m = 0; m < scene.meshes.size(); ++m)
+    for (size_t l = 0; l < scene.meshes[m].lods.size(); ++l) {
+      if (meshTable[m].lods[l].firstCluster == CLUSTER_NONE) continue;
+      std::vector<gpu::ClusterData> c = lodClusters(scene.meshes[m], l);
+      out.insert(out.end(), c.begin(), c.end());
+    }
+  return out;
+}
+
 Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t spareObjects) {
   Status valid = validateScene(scene);
   if (!valid) return valid.error();
@@ -192,8 +206,17 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
       md.extraOffset = uint32_t(extraCount);
       extraCount += mesh.vertices.size();
     }
-    for (size_t l = 0; l < mesh.lods.size(); ++l)
-      md.lods[l] = {uint32_t(indexCount) + mesh.lods[l].firstIndex, mesh.lods[l].indexCount, mesh.lods[l].error, 0};
+    for (size_t l = 0; l < mesh.lods.size(); ++l) {
+      uint32_t firstCluster = CLUSTER_NONE;
+      if (lodHasClusters(mesh.lods[l])) {
+        const uint32_t clusters = lodClusterCount(mesh.lods[l]);
+        firstCluster = g.clusterCount;
+        g.clusterCount += clusters;
+        g.maxClustersPerLod = std::max(g.maxClustersPerLod, clusters);
+      }
+      md.lods[l] = {uint32_t(indexCount) + mesh.lods[l].firstIndex, mesh.lods[l].indexCount, mesh.lods[l].error,
+                    firstCluster};
+    }
     g.maxTrianglesPerDraw = std::max(g.maxTrianglesPerDraw, mesh.triangleCount(0));
     vertexCount += mesh.vertices.size();
     indexCount += mesh.indices.size();
@@ -247,6 +270,8 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
       r.firstMorphDelta = uint32_t(morphDeltaStart[o.mesh]);
     }
     g.meshTable.push_back(g.meshTable[o.mesh]);  // addresses once the buffers exist
+    // The clusters' bounds and cones are the rest pose's: a skinned or morphed instance is drawn whole.
+    for (gpu::LodData& l : g.meshTable.back().lods) l.firstCluster = CLUSTER_NONE;
     objects[so.object] = packSkinnedObject(o, so.placement, scene);
     objects[so.object].meshIndex = r.meshSlot;
     g.objectMesh[so.object] = r.meshSlot;
@@ -399,6 +424,11 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
     md.skinnedTangentHigh = uint32_t(t >> 32);
   }
   g.meshes = staging.upload(g.meshTable, ssbo | texel | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+  {
+    std::vector<gpu::ClusterData> clusters = clusterBounds(scene, g.meshTable);
+    if (clusters.empty()) clusters.push_back({});
+    g.clusters = staging.upload(clusters, ssbo | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+  }
   // Device address: frames scatter changed records into it (passes/object_upload_pass.h).
   g.objects = staging.upload(objects, ssbo | texel | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT);
   g.materials = staging.upload(materials, ssbo | texel);

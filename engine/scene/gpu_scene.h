@@ -65,6 +65,11 @@ struct GpuScene {
   // one buffer's size (maxBufferSize, maxMemoryAllocationSize: 2 GiB on lavapipe, about 89,000 Foxes each).
   std::vector<gpu::Buffer> skinnedVertices;
   uint32_t objectCount = 0;
+  // gpu::ClusterData[] of the LOD levels with more than CLUSTER_TRIANGLES triangles (LodData::firstCluster), at least
+  // one record (always bindable); clusterCount of them are real, maxClustersPerLod the most one level has.
+  gpu::Buffer clusters;
+  uint32_t clusterCount = 0;
+  uint32_t maxClustersPerLod = 0;
   uint32_t maxTrianglesPerDraw = 0;  // largest LOD0 triangle count: sets the triangle ID bits
   uint64_t bytes = 0;                // GPU memory of the mirror
   // Host memory of the geometry and table upload: its staging buffer (reused, at most 8 MiB) and the transient

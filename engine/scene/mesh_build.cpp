@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <meshoptimizer.h>
 
+#include "visbuf/scene/clusters.h"
 #include "visbuf/scene/mesh_error.h"
 #include "visbuf/scene/scene.h"
 
@@ -341,6 +342,10 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     previous = count;
     previousError = error;
   }
+
+  // Each level's triangles in meshlet order: the clusters of the cull pass (scene/clusters.h).
+  for (const Lod& l : mesh.lods)
+    clusterOrder(mesh.indices.data() + l.firstIndex, l.indexCount, pos, unique, stride);
 
   // Bounding sphere: AABB centre, radius to the farthest vertex, padded by a relative epsilon so the
   // float sphere contains every vertex after rounding.

@@ -7,5 +7,6 @@
 #define CULL_BINDING_VISIBLE_LIST 2  // the visible set listed (config.h VISIBLE_LIST_HEADER)
 #define CULL_BINDING_DRAW_LISTS 3    // uvec4[DRAW_LISTS] (config.h DRAW_LIST_*)
 #define CULL_BINDING_PYRAMID 4       // sampler2D depth pyramid (r32f, all levels; reverse-Z: min = farthest)
+#define CULL_BINDING_CLUSTERS 5      // ClusterData[] (LodData.firstCluster)
 
 #endif

@@ -31,6 +31,17 @@
 // rectangle in 2x2; those it does not prove occluded, where a finer level exists, are listed and tested again by
 // the second dispatch (PassConstants.variant = CULL_REFINE), one thread per listed object, three levels finer.
 #define CULL_REFINE 1u
+// Cluster culling: the cull pass lists the objects it would draw whole with the hardware raster whose LOD has
+// clusters (LodData.firstCluster), and a dispatch over that list (PassConstants.variant = CULL_CLUSTERS, one
+// workgroup per listed object) tests each cluster -- CLUSTER_TRIANGLES consecutive triangles of the LOD -- against
+// the frustum, its back-face cone and, in the late phase, the depth pyramid, and appends one draw per run of
+// consecutive surviving clusters (to the micro-raster: one per small cluster).
+#define CULL_CLUSTERS 2u
+#define CLUSTER_TRIANGLES 64u
+// Only objects whose screen box exceeds this many pixels per side (or that reach the near plane) are drawn as
+// clusters: a smaller one would pay a draw per cluster for the few triangles its cones and pyramid could remove.
+#define CLUSTER_MIN_PIXELS 64.0
+#define CLUSTER_NONE 0xffffffffu
 
 // Depth pyramid: at most 2^15 pixels per side (16 levels incl. the full-resolution level 0).
 #define MAX_PYRAMID_LEVELS 16
@@ -68,7 +79,18 @@
 #define STAT_REFINE_OCCLUDED (STAT_REFINE_TESTED + 1)
 // Visbuf shading, single-sampled: the pixels it shaded (pixels whose ID shows something), reset by the shading pass.
 #define STAT_COVERED_PIXELS (STAT_REFINE_OCCLUDED + 1)
-#define STAT_COUNT (STAT_COVERED_PIXELS + 1)
+// Cluster culling (CULL_CLUSTERS): objects expanded into clusters, clusters tested, culled by the frustum, by their
+// back-face cone and by the depth pyramid (or covering no pixel centre), the draws appended for them (also in
+// STAT_LIST_DRAWS / STAT_SW_DRAWS) and, per phase and draw list at [p * DRAW_LISTS + l], the cluster draws
+// reserved (objects whose reservation does not fit the list's cluster reserve are drawn whole).
+#define STAT_CLUSTER_OBJECTS (STAT_COVERED_PIXELS + 1)
+#define STAT_CLUSTERS_TESTED (STAT_CLUSTER_OBJECTS + 1)
+#define STAT_CLUSTERS_FRUSTUM (STAT_CLUSTERS_TESTED + 1)
+#define STAT_CLUSTERS_BACKFACING (STAT_CLUSTERS_FRUSTUM + 1)
+#define STAT_CLUSTERS_OCCLUDED (STAT_CLUSTERS_BACKFACING + 1)
+#define STAT_CLUSTER_DRAWS (STAT_CLUSTERS_OCCLUDED + 1)
+#define STAT_CLUSTER_RESERVED (STAT_CLUSTER_DRAWS + 1)
+#define STAT_COUNT (STAT_CLUSTER_RESERVED + 2 * DRAW_LISTS)
 // After the counters (same buffer, not read back): per cull phase, the micro-raster's indirect dispatch (x, 1, 1)
 // and its merge's indirect draw (vertexCount, 1, 0, 0), written by the cull pass where it routes a draw there and
 // left at 0 otherwise: a phase without micro-raster draws runs neither (SW_ARGS_UINTS per phase).
@@ -77,6 +99,14 @@
 #define SW_ARGS_DISPATCH 0u
 #define SW_ARGS_MERGE 3u
 #define SW_RASTER_MAX_WORKGROUPS 1024u
+// Then, per cull phase, the cluster list's header: its entry count and the cluster dispatch's indirect arguments
+// (x, 1, 1; x at most CLUSTER_MAX_WORKGROUPS, the workgroups stride over the list). The entries (object ID, LOD)
+// are in the visible-list buffer after the refinement list: the early phase's from its start, the late phase's
+// from its end (an object is drawn in one phase at most, so objectCount entries hold both).
+#define CLUSTER_ARGS (SW_ARGS + 2 * SW_ARGS_UINTS)
+#define CLUSTER_ARGS_UINTS 4u
+#define CLUSTER_MAX_WORKGROUPS 4096u
+#define STAT_BUFFER_UINTS (CLUSTER_ARGS + 2 * CLUSTER_ARGS_UINTS)
 
 // Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
 // state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and
@@ -179,8 +209,9 @@
 // dynamic indexing of sampled-image arrays, so shaders index it with constants only (material.glsl).
 #define MAX_TEXTURE_CLASSES 24
 #define EXTRA_NONE 0xffffffffu      // MeshData.extraOffset of a mesh without VertexExtra records
-// The draw lists' buffer (cull and micro-raster passes): uvec4[DRAW_LISTS], x first slot (early phase), y first slot
-// (late), z capacity, w 1 if the software micro-raster may take this list's draws (opaque, uncapped).
+// The draw lists' buffer (cull and micro-raster passes): uvec4[2 * DRAW_LISTS]; [l]: x first slot (early phase),
+// y first slot (late), z capacity, w 1 if the software micro-raster may take this list's draws (opaque, uncapped);
+// [DRAW_LISTS + l]: x the draws of its region reserved for clusters (the capacity beyond one draw per object).
 // Software micro-raster (sw_raster_pass): workgroup size (one workgroup per draw at a time), the largest triangle
 // box it rasterises (pixels per side; its fixed-point edge functions stay within 32 bits up to there).
 #define SW_RASTER_WORKGROUP 64

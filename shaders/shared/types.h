@@ -35,7 +35,18 @@ struct LodData {
   uint firstIndex;  // into the unified index buffer
   uint indexCount;  // 3 per triangle
   float error;      // object-space simplification error (units of the mesh), 0 for the full mesh
-  uint pad;
+  // Its first ClusterData (one per CLUSTER_TRIANGLES triangles), CLUSTER_NONE: drawn whole (a level of at most
+  // CLUSTER_TRIANGLES triangles, a skinned instance's slot)
+  uint firstCluster;
+};
+
+// A cluster: CLUSTER_TRIANGLES consecutive triangles of a LOD level (the last one of a level may have fewer),
+// object space (meshopt_computeClusterBounds). 48 bytes.
+struct ClusterData {
+  vec4 sphere;  // xyz centre, w radius: contains the cluster's triangles
+  vec4 cone;    // xyz unit axis, w cutoff: seen from a point p with dot(normalize(apex - p), axis) >= cutoff, every
+                // triangle faces away (cutoff 1: never)
+  vec4 apex;    // xyz the cone's apex, w unused
 };
 
 // A mesh of the pool. 48 + 16 * MAX_LODS bytes.
@@ -176,7 +187,7 @@ struct FrameData {
   uint coveredTilesLow;
   uint coveredTilesHigh;
   uint coveredTilesX;
-  uint coveredTilesPad;
+  uint clusterCull;        // 1: the cull pass expands hardware-raster objects into clusters (CULL_CLUSTERS)
 };
 
 // A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;

@@ -72,7 +72,14 @@ void compareGBuffer(Renderer& r, const Camera& cam, CullMode cull, const std::st
   Frames f = renderAll(r, cam, cull);
   ASSERT_EQ(f.gbuffer.color.size(), f.visbuf.color.size());
   ASSERT_EQ(f.visbuf.ids.size() * 2, f.visbuf.color.size());
-  EXPECT_EQ(f.gbuffer.stats.trianglesDrawn, f.visbuf.stats.trianglesDrawn) << "same culling, same draw lists";
+  // Same culling, same draw lists -- but for clusters: the micro-raster takes small clusters in the visbuf path only,
+  // which ends runs of hardware clusters there, and either path may run out of its cluster reserve where the other
+  // does not (an object then drawn whole).
+  if (f.gbuffer.stats.cull.clusters.objects == 0 && f.visbuf.stats.cull.clusters.objects == 0) {
+    EXPECT_EQ(f.gbuffer.stats.trianglesDrawn, f.visbuf.stats.trianglesDrawn) << "same culling, same draw lists";
+  }
+  EXPECT_LE(f.gbuffer.stats.trianglesDrawn, f.forward.stats.trianglesDrawn);
+  EXPECT_LE(f.visbuf.stats.trianglesDrawn, f.forward.stats.trianglesDrawn);
   EXPECT_GT(f.gbuffer.stats.cull.drawsEarly, 0u) << "the steady state has an early phase";
   // Where visbuf and forward show the same triangle, compare colours; pixels with nothing must be background in
   // the G-buffer image exactly as in visbuf's.

@@ -49,7 +49,12 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
   auto [vis, fwd] = test::renderBothPaths(**renderer, cam);
   ASSERT_TRUE(vis.ok() && fwd.ok());
-  EXPECT_EQ(vis->stats.trianglesDrawn, fwd->stats.trianglesDrawn) << "both paths draw the same triangles";
+  // Both paths draw the same triangles, less those of the clusters visbuf culled.
+  if (vis->stats.cull.clusters.objects == 0) {
+    EXPECT_EQ(vis->stats.trianglesDrawn, fwd->stats.trianglesDrawn) << "both paths draw the same triangles";
+  } else {
+    EXPECT_LE(vis->stats.trianglesDrawn, fwd->stats.trianglesDrawn);
+  }
   // Coverage: which (object, triangle) each pixel shows, in both paths. The two pipelines share the
   // vertex math, so the rasteriser must make the same decisions; colour is then compared where it did.
   size_t coverageMismatch = 0, covered = 0;
@@ -66,11 +71,24 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
   std::printf("%s: %zu of %zu covered pixels show a different triangle in the two paths; all pixels: max %.5f, "
               "PSNR %.1f dB\n", name.c_str(), coverageMismatch, covered, all.maxAbs, all.psnr);
   // Lavapipe rasterises both pipelines identically (0 mismatches measured). A GPU may resolve depth
-  // ties between the differently compiled pipelines differently at a handful of pixels: allowed up to
-  // 0.1% of the covered pixels, never more.
+  // ties between the differently compiled pipelines differently at a handful of pixels, and the micro-raster may
+  // break an edge tie the other way (SwRaster.MatchesHardwareRaster): allowed up to 0.1% of the covered pixels,
+  // never more; on lavapipe the hardware raster alone must match exactly.
   EXPECT_LE(double(coverageMismatch), 1e-3 * double(covered));
   if (dev.isCpu()) {
-    EXPECT_EQ(coverageMismatch, 0u);
+    size_t hwMismatch = coverageMismatch;
+    if (vis->stats.sw.draws > 0) {
+      FrameOptions hw;
+      hw.lodErrorPixels = 0.0f;
+      hw.readIds = true;
+      hw.swRaster = SwRasterMode::Off;
+      auto hwFrame = (*renderer)->renderFrame(cam, hw);
+      ASSERT_TRUE(hwFrame.ok());
+      hwMismatch = 0;
+      for (size_t p = 0; p < hwFrame->ids.size(); p += 2)
+        hwMismatch += hwFrame->ids[p] != fwd->ids[p] || hwFrame->ids[p + 1] != fwd->ids[p + 1];
+    }
+    EXPECT_EQ(hwMismatch, 0u);
   }
   size_t background = 0;
   for (size_t p = 0; p < vis->color.size(); p += 4)

@@ -69,6 +69,7 @@ TEST(SwRaster, MatchesHardwareRaster) {
   hw.swRaster = SwRasterMode::Off;
   sw.swRasterPixels = 48.0f;
   sw.cull = hw.cull = CullMode::Frustum;  // the same draws in both (occlusion's history would differ frame to frame)
+  sw.clusters = hw.clusters = false;      // (the micro-raster's clusters: Clusters.MicroRasterClustersMatchHardwareRaster)
   size_t routed = 0, drawn = 0;
   IdDiff total;
   double worstPsnr = 1e9;

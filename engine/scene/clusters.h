@@ -1,0 +1,29 @@
+// Clusters of a LOD level (config.h CULL_CLUSTERS): runs of CLUSTER_TRIANGLES consecutive triangles, ordered by
+// buildMesh so that each run is a tight meshlet, with the bounds the cull pass tests (gpu::ClusterData).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "visbuf/scene/scene.h"
+
+namespace visbuf {
+
+// Reorders the triangles indices[0, indexCount) (one LOD level) into meshlet order (meshopt_buildMeshlets,
+// CLUSTER_TRIANGLES triangles each, with a weight on their normal cones). Every meshlet but the last has exactly
+// CLUSTER_TRIANGLES triangles (its vertex limit, 3 per triangle, is never the one reached), so the runs the cull
+// pass takes are the meshlets. Only the order changes: the same triangles, each with its winding. A level of at most
+// CLUSTER_TRIANGLES triangles is left as it is.
+void clusterOrder(uint32_t* indices, size_t indexCount, const float* positions, size_t vertexCount, size_t stride);
+
+// Whether a LOD level is drawn as clusters (more than one cluster's triangles) and how many it has.
+inline bool lodHasClusters(const Lod& lod) { return lod.indexCount / 3 > CLUSTER_TRIANGLES; }
+inline uint32_t lodClusterCount(const Lod& lod) { return (lod.indexCount / 3 + CLUSTER_TRIANGLES - 1) / CLUSTER_TRIANGLES; }
+
+// The bounds of each cluster of mesh level `lod` (lodHasClusters), in order: a sphere that contains the cluster's
+// triangles (meshoptimizer's centre, the radius measured in double and padded so that the float sphere holds every
+// vertex after rounding) and meshoptimizer's back-face cone (apex, axis, cutoff; cutoff 1: never back-facing).
+std::vector<gpu::ClusterData> lodClusters(const Mesh& mesh, size_t lod);
+
+}  // namespace visbuf
