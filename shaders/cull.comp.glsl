@@ -21,102 +21,7 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_vote : require
-#include "common.glsl"
-#include "shared/bindings_cull.h"
-
-layout(local_size_x = CULL_WORKGROUP_SIZE) in;
-layout(std430, set = 1, binding = CULL_BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
-layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatBlock { uint stats[]; };
-layout(std430, set = 1, binding = CULL_BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
-layout(std430, set = 1, binding = CULL_BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
-layout(std430, set = 1, binding = CULL_BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
-layout(set = 1, binding = CULL_BINDING_PYRAMID) uniform sampler2D pyramid;
-layout(std430, set = 1, binding = CULL_BINDING_CLUSTERS) readonly buffer ClusterBlock { ClusterData clusters[]; };
-layout(push_constant) uniform Push { PassConstants pc; };
-
-bool frustumVisible(vec3 c, float r) {
-  // Conservative margin: covers float rounding of the plane distance (a few ulps of the magnitudes
-  // involved), so the GPU never culls what a double-precision test keeps.
-  float margin = 1e-5 * (abs(c.x) + abs(c.y) + abs(c.z) + r) + 1e-6;
-  bool visible = true;
-  for (int i = 0; i < 5; ++i)
-    if (dot(frame.frustum[i].xyz, c) + frame.frustum[i].w < -(r + margin)) visible = false;
-  return visible;
-}
-
-// Screen rectangle (NDC) of the sphere's bounding cube; false if the sphere touches the near plane. v: the centre in
-// view space, rr: the radius widened for rounding. Every corner is then in front of the camera, so the hull of the
-// projected corners contains the projected sphere. The corners have two depths and two x (y) values: the hull's
-// bounds are among their four quotients each (two reciprocals instead of eight divisions; the occlusion test's
-// 0.01-pixel margin covers the ulp this rounds differently).
-bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2 hi) {
-  v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
-  rr = r * (1.0 + 1e-5) + 1e-6;
-  lo = vec2(1e30);
-  hi = vec2(-1e30);
-  if (-(v.z + rr) <= frame.nearPlane * 1.001) return false;
-  float nearInv = 1.0 / -(v.z + rr), farInv = 1.0 / -(v.z - rr);
-  vec2 proj = vec2(frame.projX, frame.projY);
-  vec2 a = proj * (v.xy - rr), b = proj * (v.xy + rr);
-  lo = min(min(a * nearInv, a * farInv), min(b * nearInv, b * farInv));
-  hi = max(max(a * nearInv, a * farInv), max(b * nearInv, b * farInv));
-  return true;
-}
-
-// Software micro-raster routing: the object's screen box (rect: screenRect's) is at most frame.swMaxPixels per
-// side, its triangles are small (SW_RASTER_MAX_AREA_PER_TRIANGLE) and it lies wholly beyond the near plane
-// (sw_raster.comp needs no clipping and keeps its edge functions within 32 bits).
-bool smallOnScreen(bool rect, vec2 lo, vec2 hi, uint triangles) {
-  vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
-  return rect && max(extent.x, extent.y) <= frame.swMaxPixels &&
-         extent.x * extent.y <= SW_RASTER_MAX_AREA_PER_TRIANGLE * float(triangles);
-}
-
-// The farthest depth the pyramid holds over the pixels [a, b] (reverse-Z: the minimum of the level's texels over
-// them; every level is a conservative reduction of the ones below).
-float farthestDepth(ivec2 a, ivec2 b, int level) {
-  ivec2 ta = a >> level, tb = b >> level;
-  float farthest = 1.0;
-  for (int y = ta.y; y <= tb.y; ++y)
-    for (int x = ta.x; x <= tb.x; ++x) farthest = min(farthest, texelFetch(pyramid, ivec2(x, y), level).r);
-  return farthest;
-}
-
-// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre, 4: not proved occluded at the coarse level
-// where a finer one exists (to the refinement list; `refine`: the refinement dispatch's test, 0 or 1). rect, v,
-// rr, lo, hi: screenRect's.
-uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, bool usePyramid) {
-  if (!rect) return 0u;  // touches the near plane: always visible
-  vec2 size = frame.viewport.xy;
-  // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding. MSAA: a
-  // triangle can cover a sample and no centre; every sample lies within 0.5 px of its pixel's centre (per axis),
-  // so widening by 0.5 keeps every pixel with a covered sample (and the pyramid texels over it).
-  float margin = frame.msaaSamples > 1u ? 0.51 : 0.01;
-  vec2 pxLo = (lo * 0.5 + 0.5) * size - 0.5 - margin;
-  vec2 pxHi = (hi * 0.5 + 0.5) * size - 0.5 + margin;
-  ivec2 a = ivec2(ceil(pxLo));
-  ivec2 b = ivec2(floor(pxHi));
-  a = max(a, ivec2(0));
-  b = min(b, ivec2(size) - 1);
-  if (a.x > b.x || a.y > b.y) return 2u;  // no pixel centre can be covered
-  if (!usePyramid || frame.pyramidLevels == 0u) return 0u;  // (pyramid skipped this frame: it occluded nothing lately)
-  // Level whose texels span the rectangle in at most 2x2 texels: 2^k >= extent (never floor(log2)).
-  int extent = max(b.x - a.x + 1, b.y - a.y + 1);
-  int level = min(int(ceil(log2(float(extent)))), int(frame.pyramidLevels) - 1);
-  if ((1 << level) < extent) level = min(level + 1, int(frame.pyramidLevels) - 1);  // guard log2 rounding
-  // The object's nearest possible depth, rounded towards nearer.
-  float nearest = frame.nearPlane / -(v.z + rr) * (1.0 + 1e-5);
-  // That level's texels may reach past the rectangle by up to their own size per axis (up to 4x its area): what it
-  // does not prove occluded is tested again three levels finer, in at most 9x9 texels that reach past it by at most
-  // 1/4 of its extent per axis. The peer field (1M kittens): 61,487 objects drawn with the coarse level alone,
-  // 45,049 two levels finer, 41,297 three levels finer, 38,110 at full resolution. That runs in the refinement
-  // dispatch, dense over the few objects concerned (on lavapipe a loop here would run in every SIMD batch that
-  // holds one of them).
-  int fine = max(level - 3, 0);
-  if (refine) return nearest < farthestDepth(a, b, fine) ? 1u : 0u;
-  if (nearest < farthestDepth(a, b, level)) return 1u;
-  return fine < level ? 4u : 0u;
-}
+#include "cull_tests.glsl"
 
 // Appends the IDs of the lanes where `mine` holds to the list at word `base` of the visible-list buffer (count, indirect
 // dispatch size, then IDs): one atomic per subgroup for the slots, one for the dispatch size.
@@ -156,129 +61,6 @@ void appendToClusterList(bool mine, uint id, uint lod) {
   }
 }
 
-#if CULL_CLUSTER_PASS
-shared uint hwClusters[CULL_WORKGROUP_SIZE / 32];  // bit i: the cluster of invocation i goes to the hardware raster
-
-// CULL_CLUSTERS (its own pipeline, cull_clusters.comp: in one shader with the object cull, lavapipe's late cull over
-// 1M objects took 90 ms instead of 50): one workgroup per listed object at a time, a thread per cluster.
-void main() {
-  const uint args = CLUSTER_ARGS + pc.phase * CLUSTER_ARGS_UINTS;
-  const uint count = min(stats[args], frame.objectCount);
-  const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
-  if (gl_LocalInvocationIndex < CULL_WORKGROUP_SIZE / 32u) hwClusters[gl_LocalInvocationIndex] = 0u;
-  barrier();
-  for (uint e = gl_WorkGroupID.x; e < count; e += gl_NumWorkGroups.x) {
-    uint at = pc.phase == CULL_PHASE_LATE ? frame.objectCount - 1u - e : e;
-    uint word = 2u * (VISIBLE_LIST_HEADER + frame.objectCount) + 2u * at;
-    uint id = visibleList[word], lod = visibleList[word + 1u];
-    ObjectData o = objectAt(id);
-    uint list = objectDrawList(o.flags);
-    LodData ld = meshLod(o.meshIndex, lod);
-    int vertexOffset = int(meshes[o.meshIndex].vertexOffset);
-    uint triangles = ld.indexCount / 3u;
-    uint n = (triangles + CLUSTER_TRIANGLES - 1u) / CLUSTER_TRIANGLES;
-    vec3 eye = cameraInObjectSpace(o);
-    bool coneTest = list != DRAW_LIST_OPAQUE_DOUBLE_SIDED && list != DRAW_LIST_MASKED_DOUBLE_SIDED;
-    bool swList = frame.swRaster != 0u && drawLists[list].w != 0u && CLUSTER_TRIANGLES <= frame.swMaxTriangles;
-    bool pyramidTest = frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE;
-    uvec4 region = drawLists[list];
-    uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
-    for (uint b = 0u; b < n; b += CULL_WORKGROUP_SIZE) {
-      uint c = b + gl_LocalInvocationIndex;
-      bool valid = c < n;
-      uint culledFrustum = 0u, culledBack = 0u, culledOccluded = 0u;
-      bool keep = false, sw = false;
-      uint clusterTriangles = valid ? min(triangles - c * CLUSTER_TRIANGLES, CLUSTER_TRIANGLES) : 0u;
-      if (valid) {
-        ClusterData cd = clusters[ld.firstCluster + c];
-        vec3 centre = objectToCamera(o, cd.sphere.xyz);
-        float r = cd.sphere.w * o.maxScale;
-        // Back-face cone in object space (an affine map keeps which side of a plane the camera is on; a mirroring
-        // one is drawn by a FLIPPED list, which keeps the object-space front faces), from its apex, with a margin of
-        // 1e-3 on the cosine, where snapping could turn an edge-on triangle's projected winding.
-        vec3 toApex = cd.apex.xyz - eye;
-        bool back = coneTest && dot(toApex, cd.cone.xyz) >= (cd.cone.w + 1e-3) * length(toApex);
-        vec3 v;
-        float rr;
-        vec2 lo, hi;
-        bool rect = screenRect(centre, r, v, rr, lo, hi);
-        if (!frustumVisible(centre, r)) {
-          culledFrustum = 1u;
-        } else if (back) {
-          culledBack = 1u;
-        } else if (occlusionTest(rect, v, rr, lo, hi, false, pyramidTest) % 4u != 0u) {  // 1, 2: occluded, no pixel
-          culledOccluded = 1u;
-        } else {
-          keep = true;
-          sw = swList && smallOnScreen(rect, lo, hi, clusterTriangles);
-        }
-      }
-      // Hardware draws: one per run of consecutive surviving clusters among the workgroup's (a mask of them in shared
-      // memory; on lavapipe a draw costs about as much as 50 triangles, so runs matter more than the clusters culled
-      // between them).
-      bool hw = keep && !sw;
-      uint i = gl_LocalInvocationIndex;
-      if (hw) atomicOr(hwClusters[i >> 5u], 1u << (i & 31u));
-      barrier();
-      bool previous = i > 0u && ((hwClusters[(i - 1u) >> 5u] >> ((i - 1u) & 31u)) & 1u) != 0u;
-      bool startsRun = hw && !previous;
-      // The run ends at the first cluster after this one that is not drawn by the hardware raster.
-      uint end = CULL_WORKGROUP_SIZE;
-      for (uint k = (i + 1u) >> 5u; k < CULL_WORKGROUP_SIZE / 32u && end == CULL_WORKGROUP_SIZE; ++k) {
-        uint after = ~hwClusters[k] & (k == (i + 1u) >> 5u ? ~0u << ((i + 1u) & 31u) : ~0u);
-        if (i + 1u < CULL_WORKGROUP_SIZE && after != 0u) end = 32u * k + uint(findLSB(after));
-      }
-      uint runClusters = end - i;
-      barrier();  // every lane has read the mask: cleared for the next clusters
-      if (i < CULL_WORKGROUP_SIZE / 32u) hwClusters[i] = 0u;
-      barrier();
-      uint runTriangles = startsRun ? min(triangles - c * CLUSTER_TRIANGLES, runClusters * CLUSTER_TRIANGLES) : 0u;
-      uvec4 drawBallot = subgroupBallot(startsRun), swBallot = subgroupBallot(sw);
-      uint hwCount = subgroupBallotBitCount(drawBallot), swCount = subgroupBallotBitCount(swBallot);
-      uint tested = subgroupAdd(valid ? 1u : 0u);
-      uint frustumSum = subgroupAdd(culledFrustum), backSum = subgroupAdd(culledBack);
-      uint occludedSum = subgroupAdd(culledOccluded);
-      uint triangleSum = subgroupAdd(runTriangles + (sw ? clusterTriangles : 0u));
-      uint swTriangleSum = subgroupAdd(sw ? clusterTriangles : 0u);
-      uint hwBase = 0u, swBase = 0u;
-      if (subgroupElect()) {
-        if (tested > 0u) atomicAdd(stats[STAT_CLUSTERS_TESTED], tested);
-        if (frustumSum > 0u) atomicAdd(stats[STAT_CLUSTERS_FRUSTUM], frustumSum);
-        if (backSum > 0u) atomicAdd(stats[STAT_CLUSTERS_BACKFACING], backSum);
-        if (occludedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_OCCLUDED], occludedSum);
-        if (hwCount + swCount > 0u) {
-          atomicAdd(stats[counter], hwCount + swCount);
-          atomicAdd(stats[STAT_CLUSTER_DRAWS], hwCount + swCount);
-          atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangleSum);
-        }
-        if (hwCount > 0u) hwBase = atomicAdd(stats[STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + list], hwCount);
-        if (swCount > 0u) {
-          swBase = atomicAdd(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + list], swCount);
-          atomicAdd(stats[STAT_SW_TRIANGLES], swTriangleSum);
-          uint swArgs = SW_ARGS + pc.phase * SW_ARGS_UINTS;
-          atomicMax(stats[swArgs + SW_ARGS_DISPATCH], min((swBase + swCount + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
-          atomicMax(stats[swArgs + SW_ARGS_MERGE], 3u);
-        }
-      }
-      hwBase = subgroupBroadcastFirst(hwBase);
-      swBase = subgroupBroadcastFirst(swBase);
-      uint slot = startsRun ? hwBase + subgroupBallotExclusiveBitCount(drawBallot)
-                            : swBase + subgroupBallotExclusiveBitCount(swBallot);
-      if (startsRun || sw) {
-        if (slot >= region.z) {  // (the cull pass reserved room for every cluster: never, but counted)
-          atomicAdd(stats[STAT_DRAW_OVERFLOW], 1u);
-        } else {
-          if (sw) slot = region.z - 1u - slot;
-          uint drawTriangles = sw ? clusterTriangles : runTriangles;
-          draws[first + slot] = DrawCommand(3u * drawTriangles, 1u, ld.firstIndex + 3u * CLUSTER_TRIANGLES * c,
-                                            vertexOffset, id);
-        }
-      }
-    }
-  }
-}
-
-#else
 void main() {
   // The early phase of occlusion culling runs over last frame's visible list (indirect dispatch, one thread per
   // listed object): a heavily occluded scene pays for the few it drew, not for every object it holds.
@@ -353,14 +135,18 @@ void main() {
     }
     // Small objects of the lists the micro-raster may take go to sw_raster.comp (FrameData.swRaster): they fill their
     // list's region from its end, with a count of their own.
+    bool capped = false;  // small enough for the micro-raster, but its level has more triangles than one draw may
     if (draw && frame.swRaster != 0u && drawLists[list].w != 0u) {
       uint lodTriangles = meshLod(meshIndex, lod).indexCount / 3u;
-      sw = lodTriangles <= frame.swMaxTriangles && smallOnScreen(rect, lo, hi, lodTriangles);
+      bool small = smallOnScreen(rect, lo, hi, lodTriangles);
+      sw = lodTriangles <= frame.swMaxTriangles && small;
+      capped = small && !sw;
     }
-    // The hardware raster's objects whose LOD has clusters: to the cluster dispatch.
+    // The hardware raster's objects whose LOD has clusters, if large on screen or capped (then their clusters, 64
+    // triangles each, go to the micro-raster): to the cluster dispatch.
     vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
     if (draw && !sw && frame.clusterCull != 0u && frame.cullMode != CULL_NONE &&
-        (!rect || max(extent.x, extent.y) > CLUSTER_MIN_PIXELS)) {
+        (!rect || max(extent.x, extent.y) > CLUSTER_MIN_PIXELS || capped)) {
       LodData ld = meshLod(meshIndex, lod);
       if (ld.firstCluster != CLUSTER_NONE) {
         clustered = true;
@@ -457,4 +243,3 @@ void main() {
     counting = counting && lod != current;
   }
 }
-#endif

@@ -120,6 +120,9 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["coveredPixels"] = s.coveredPixels;
   if (s.coveredPixels > 0) j["trianglesPerCoveredPixel"] = double(s.trianglesDrawn) / s.coveredPixels;
   j["swRaster"] = {{"on", s.sw.on}, {"draws", s.sw.draws}, {"triangles", s.sw.triangles}, {"oversize", s.sw.oversize}};
+  const CullStats::Clusters& c = s.cull.clusters;
+  j["clusters"] = {{"objects", c.objects},       {"tested", c.tested},     {"frustumCulled", c.frustumCulled},
+                   {"backfacing", c.backfacing}, {"occluded", c.occluded}, {"draws", c.draws}};
   j["transparentDraws"] = s.transparent.draws;
   j["transparentTriangles"] = s.transparent.triangles;
   j["lodHistogram"] = s.cull.lodHistogram;

@@ -12,7 +12,7 @@ namespace visbuf::passes {
 struct CullPass {
   gpu::PassLayout layout;
   gpu::Pipeline pipeline;
-  gpu::Pipeline clusterPipeline;  // the cluster dispatch (CULL_CLUSTERS): cull.comp.glsl built with CULL_CLUSTER_PASS
+  gpu::Pipeline clusterPipeline;  // the cluster dispatch (CULL_CLUSTERS, cull_clusters.comp.glsl)
   static CullPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec);
   // Its set: the draws it writes, the per-object history and visible lists (config.h VISIBLE_LIST_HEADER, then the
   // cluster lists' entries), the draw lists, the depth pyramid (GENERAL, all levels) and the scene's clusters.

@@ -1,0 +1,102 @@
+// The cull passes' shared part (cull.comp.glsl, cull_clusters.comp.glsl): set 1's bindings (bindings_cull.h) and the
+// tests both apply to a bounding sphere -- frustum, screen rectangle, micro-raster size, depth pyramid.
+#ifndef VISBUF_CULL_TESTS_GLSL
+#define VISBUF_CULL_TESTS_GLSL
+#include "common.glsl"
+#include "shared/bindings_cull.h"
+
+layout(local_size_x = CULL_WORKGROUP_SIZE) in;
+layout(std430, set = 1, binding = CULL_BINDING_DRAWS) writeonly buffer DrawBlock { DrawCommand draws[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatBlock { uint stats[]; };
+layout(std430, set = 1, binding = CULL_BINDING_HISTORY) buffer HistoryBlock { uint history[]; };
+layout(std430, set = 1, binding = CULL_BINDING_VISIBLE_LIST) buffer VisibleListBlock { uint visibleList[]; };
+layout(std430, set = 1, binding = CULL_BINDING_DRAW_LISTS) readonly buffer DrawListBlock { uvec4 drawLists[]; };
+layout(set = 1, binding = CULL_BINDING_PYRAMID) uniform sampler2D pyramid;
+layout(std430, set = 1, binding = CULL_BINDING_CLUSTERS) readonly buffer ClusterBlock { ClusterData clusters[]; };
+layout(push_constant) uniform Push { PassConstants pc; };
+
+bool frustumVisible(vec3 c, float r) {
+  // Conservative margin: covers float rounding of the plane distance (a few ulps of the magnitudes
+  // involved), so the GPU never culls what a double-precision test keeps.
+  float margin = 1e-5 * (abs(c.x) + abs(c.y) + abs(c.z) + r) + 1e-6;
+  bool visible = true;
+  for (int i = 0; i < 5; ++i)
+    if (dot(frame.frustum[i].xyz, c) + frame.frustum[i].w < -(r + margin)) visible = false;
+  return visible;
+}
+
+// Screen rectangle (NDC) of the sphere's bounding cube; false if the sphere touches the near plane. v: the centre in
+// view space, rr: the radius widened for rounding. Every corner is then in front of the camera, so the hull of the
+// projected corners contains the projected sphere. The corners have two depths and two x (y) values: the hull's
+// bounds are among their four quotients each (two reciprocals instead of eight divisions; the occlusion test's
+// 0.01-pixel margin covers the ulp this rounds differently).
+bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2 hi) {
+  v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
+  rr = r * (1.0 + 1e-5) + 1e-6;
+  lo = vec2(1e30);
+  hi = vec2(-1e30);
+  if (-(v.z + rr) <= frame.nearPlane * 1.001) return false;
+  float nearInv = 1.0 / -(v.z + rr), farInv = 1.0 / -(v.z - rr);
+  vec2 proj = vec2(frame.projX, frame.projY);
+  vec2 a = proj * (v.xy - rr), b = proj * (v.xy + rr);
+  lo = min(min(a * nearInv, a * farInv), min(b * nearInv, b * farInv));
+  hi = max(max(a * nearInv, a * farInv), max(b * nearInv, b * farInv));
+  return true;
+}
+
+// Software micro-raster routing: the object's screen box (rect: screenRect's) is at most frame.swMaxPixels per
+// side, its triangles are small (SW_RASTER_MAX_AREA_PER_TRIANGLE) and it lies wholly beyond the near plane
+// (sw_raster.comp needs no clipping and keeps its edge functions within 32 bits).
+bool smallOnScreen(bool rect, vec2 lo, vec2 hi, uint triangles) {
+  vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
+  return rect && max(extent.x, extent.y) <= frame.swMaxPixels &&
+         extent.x * extent.y <= SW_RASTER_MAX_AREA_PER_TRIANGLE * float(triangles);
+}
+
+// The farthest depth the pyramid holds over the pixels [a, b] (reverse-Z: the minimum of the level's texels over
+// them; every level is a conservative reduction of the ones below).
+float farthestDepth(ivec2 a, ivec2 b, int level) {
+  ivec2 ta = a >> level, tb = b >> level;
+  float farthest = 1.0;
+  for (int y = ta.y; y <= tb.y; ++y)
+    for (int x = ta.x; x <= tb.x; ++x) farthest = min(farthest, texelFetch(pyramid, ivec2(x, y), level).r);
+  return farthest;
+}
+
+// 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre, 4: not proved occluded at the coarse level
+// where a finer one exists (to the refinement list; `refine`: the refinement dispatch's test, 0 or 1). rect, v,
+// rr, lo, hi: screenRect's.
+uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, bool usePyramid) {
+  if (!rect) return 0u;  // touches the near plane: always visible
+  vec2 size = frame.viewport.xy;
+  // Pixel centres (p + 0.5) inside [lo, hi] in pixels, widened by a small tolerance for rounding. MSAA: a
+  // triangle can cover a sample and no centre; every sample lies within 0.5 px of its pixel's centre (per axis),
+  // so widening by 0.5 keeps every pixel with a covered sample (and the pyramid texels over it).
+  float margin = frame.msaaSamples > 1u ? 0.51 : 0.01;
+  vec2 pxLo = (lo * 0.5 + 0.5) * size - 0.5 - margin;
+  vec2 pxHi = (hi * 0.5 + 0.5) * size - 0.5 + margin;
+  ivec2 a = ivec2(ceil(pxLo));
+  ivec2 b = ivec2(floor(pxHi));
+  a = max(a, ivec2(0));
+  b = min(b, ivec2(size) - 1);
+  if (a.x > b.x || a.y > b.y) return 2u;  // no pixel centre can be covered
+  if (!usePyramid || frame.pyramidLevels == 0u) return 0u;  // (pyramid skipped this frame: it occluded nothing lately)
+  // Level whose texels span the rectangle in at most 2x2 texels: 2^k >= extent (never floor(log2)).
+  int extent = max(b.x - a.x + 1, b.y - a.y + 1);
+  int level = min(int(ceil(log2(float(extent)))), int(frame.pyramidLevels) - 1);
+  if ((1 << level) < extent) level = min(level + 1, int(frame.pyramidLevels) - 1);  // guard log2 rounding
+  // The object's nearest possible depth, rounded towards nearer.
+  float nearest = frame.nearPlane / -(v.z + rr) * (1.0 + 1e-5);
+  // That level's texels may reach past the rectangle by up to their own size per axis (up to 4x its area): what it
+  // does not prove occluded is tested again three levels finer, in at most 9x9 texels that reach past it by at most
+  // 1/4 of its extent per axis. The peer field (1M kittens): 61,487 objects drawn with the coarse level alone,
+  // 45,049 two levels finer, 41,297 three levels finer, 38,110 at full resolution. That runs in the refinement
+  // dispatch, dense over the few objects concerned (on lavapipe a loop here would run in every SIMD batch that
+  // holds one of them).
+  int fine = max(level - 3, 0);
+  if (refine) return nearest < farthestDepth(a, b, fine) ? 1u : 0u;
+  if (nearest < farthestDepth(a, b, level)) return 1u;
+  return fine < level ? 4u : 0u;
+}
+
+#endif
