@@ -23,8 +23,9 @@ out, counts = sys.argv[1], sys.argv[2:]
 # The peer's frame on this project's 2-core machine (niagara, compute cull + DrawIndexedIndirectCount, lavapipe,
 # 1024x768, the same view; issue 20): the steady figure at 10k, the lower bound of the range at 100k and 1M.
 peer = {10000: 64.0, 100000: 431.0, 1000000: 2700.0}
-print("| objects | frame ms (GPU) | vs peer | largest passes (ms) | triangles drawn | triangles per covered pixel | PSNR vs exact (dB) | max error |")
-print("|---|---|---|---|---|---|---|---|")
+print("| objects | frame ms (GPU) | vs peer | largest passes (ms) | triangles drawn | triangles per covered pixel | "
+      "clusters (objects, tested, culled, draws) | PSNR vs exact (dB) | max error |")
+print("|---|---|---|---|---|---|---|---|---|")
 for n in counts:
     j = json.load(open(f"{out}/peer_{n}.json"))
     passes = sorted(j["passMs"].items(), key=lambda kv: -kv[1])[:4]
@@ -34,6 +35,9 @@ for n in counts:
     ratio = f"{peer[int(n)] / j['gpuMs']:.1f}x" if int(n) in peer else "-"
     tpp = j.get("trianglesPerCoveredPixel")
     tpp = f"{tpp:.2f}" if tpp is not None else "-"
+    c = j.get("clusters", {})
+    culled = c.get("frustumCulled", 0) + c.get("backfacing", 0) + c.get("occluded", 0)
+    cl = f"{c['objects']:,}, {c['tested']:,}, {culled:,}, {c['draws']:,}" if c.get("objects") else "-"
     print(f"| {int(n):,} | {j['gpuMs']:.1f} | {ratio} | " + ", ".join(f"{k} {v:.1f}" for k, v in passes) +
-          f" | {j['trianglesDrawn']:,} | {tpp} | {psnr} | {err} |")
+          f" | {j['trianglesDrawn']:,} | {tpp} | {cl} | {psnr} | {err} |")
 PY
