@@ -207,10 +207,6 @@ TEST(Renderer, WideAndNarrowIdsAgree) {
   FrameOptions fo;
   fo.readIds = true;
   fo.lodErrorPixels = 0.0f;
-  // Hardware raster only: when the cluster reserve runs out (200 knots at LOD 0: 90,000 clusters), which objects are
-  // drawn whole depends on the order the GPU ran its atomics, and the micro-raster, which takes the others'
-  // clusters, may break an edge tie otherwise than the hardware raster (1 pixel of 30,000 measured).
-  fo.swRaster = SwRasterMode::Off;
   auto a = (*narrow)->renderFrame(cam, fo);
   auto b = (*wide)->renderFrame(cam, fo);
   ASSERT_TRUE(a.ok() && b.ok());
