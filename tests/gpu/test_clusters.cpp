@@ -3,6 +3,7 @@
 // triangle of its LOD level) pixel for pixel.
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -88,22 +89,31 @@ Totals compareClusters(Renderer& r, FrameOptions options, int frames, int cut) {
   return t;
 }
 
+// Both tests: the dense field at 320x200 (the renderer keeps a reference to its scene), validation counted from here.
+class Clusters : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto r = Renderer::create(dev, scene, {.width = 320, .height = 200});
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    renderer = std::move(r.value());
+  }
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene scene = denseField(1500);
+  std::unique_ptr<Renderer> renderer;
+};
+
 }  // namespace
 
 // With the hardware raster alone, clusters are the same triangles drawn by other commands: every pixel must hold the
 // same object and triangle, with LOD on and off, occlusion culling with its history across frames and a cut.
-TEST(Clusters, IdImageUnchangedByClusterCulling) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
-  Scene scene = denseField(1500);
-  auto renderer = Renderer::create(dev, scene, {.width = 320, .height = 200});
-  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+TEST_F(Clusters, IdImageUnchangedByClusterCulling) {
   FrameOptions fo;
   fo.cull = CullMode::Occlusion;
   fo.swRaster = SwRasterMode::Off;
   for (float lodPixels : {1.0f, 0.0f}) {
     fo.lodErrorPixels = lodPixels;
-    const Totals t = compareClusters(**renderer, fo, lodPixels > 0.0f ? 16 : 6, lodPixels > 0.0f ? 8 : 3);
+    const Totals t = compareClusters(*renderer, fo, lodPixels > 0.0f ? 16 : 6, lodPixels > 0.0f ? 8 : 3);
     EXPECT_EQ(t.otherObject + t.otherTriangle, 0u) << "LOD " << lodPixels << " px: clusters changed pixels";
     EXPECT_GT(t.covered, t.frames * 320 * 200 / 4);
     EXPECT_GT(t.clusters.objects, 0u);
@@ -116,7 +126,7 @@ TEST(Clusters, IdImageUnchangedByClusterCulling) {
   // Frustum culling alone (one phase, no pyramid).
   fo.cull = CullMode::Frustum;
   fo.lodErrorPixels = 1.0f;
-  const Totals t = compareClusters(**renderer, fo, 4, -1);
+  const Totals t = compareClusters(*renderer, fo, 4, -1);
   EXPECT_EQ(t.otherObject + t.otherTriangle, 0u);
   EXPECT_GT(t.clusters.backfacing, 0u);
   EXPECT_NO_VALIDATION_MESSAGES(before);
@@ -125,16 +135,11 @@ TEST(Clusters, IdImageUnchangedByClusterCulling) {
 // Small clusters go to the micro-raster: against the frames without clusters, pixels may change only where the two
 // rasters break an edge tie differently (the bounds of SwRaster.MatchesHardwareRaster: 0.05 % of the pixels another
 // triangle, 0.01 % another object).
-TEST(Clusters, MicroRasterClustersMatchHardwareRaster) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
-  Scene scene = denseField(1500);
-  auto renderer = Renderer::create(dev, scene, {.width = 320, .height = 200});
-  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+TEST_F(Clusters, MicroRasterClustersMatchHardwareRaster) {
   FrameOptions fo;
   fo.cull = CullMode::Occlusion;
   fo.swRaster = SwRasterMode::On;
-  const Totals t = compareClusters(**renderer, fo, 12, 6);
+  const Totals t = compareClusters(*renderer, fo, 12, 6);
   const size_t pixels = t.frames * 320 * 200;
   EXPECT_GT(t.swDrawsOn, t.swDrawsOff) << "the micro-raster must take clusters";
   EXPECT_LE(t.otherTriangle, pixels / 2000);
