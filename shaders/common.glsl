@@ -17,6 +17,11 @@ layout(constant_id = 0) const uint VB_WINDOWED = 1u;
 // a bounds-checked scalar load per lane and word: the cull, micro-raster and shading passes fetch per object,
 // triangle or pixel. Set per renderer (gpu::Specialization::texels).
 layout(constant_id = 3) const uint VB_TEXELS = 0u;
+// 0: no mesh of the scene has VertexExtra records (MeshData.extraOffset is EXTRA_NONE everywhere), resp. the scene
+// has no punctual lights: the code that reads them is removed (lavapipe runs a branch's body under a lane mask even
+// when no lane takes it). Set per renderer (gpu::Specialization::extras, ::pointLights).
+layout(constant_id = 4) const uint VB_EXTRAS = 1u;
+layout(constant_id = 5) const uint VB_POINT_LIGHTS = 1u;
 layout(set = 0, binding = SCENE_BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
 layout(set = 0, binding = SCENE_BINDING_INDEX_TEXELS) uniform usamplerBuffer indexTexels;
 layout(set = 0, binding = SCENE_BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData

@@ -24,7 +24,7 @@ void main() {
   outUv = vec4(v.u, v.v, 0.0, 0.0);
   outTangent = vec4(0.0);
   uint extra = meshes[o.meshIndex].extraOffset;
-  if (extra != EXTRA_NONE) {
+  if (VB_EXTRAS != 0u && extra != EXTRA_NONE) {
     uint local = uint(gl_VertexIndex) - meshes[o.meshIndex].vertexOffset;
     VertexExtra e = vertexExtras[extra + local];
     outUv.zw = vec2(e.u1, e.v1);

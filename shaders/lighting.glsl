@@ -98,7 +98,7 @@ vec3 shadeSurface(Surface s, uvec2 pixel) {
   vec3 f0 = mix(vec3(0.04), s.baseColor, s.metallic);
   vec3 color = AMBIENT_RADIANCE * (cDiff + f0) * s.occlusion;
   color += brdfCosine(s, v, frame.lightDir.xyz) * frame.lightDir.w;
-  if (frame.pointLightCount > 0u) {
+  if (VB_POINT_LIGHTS != 0u && frame.pointLightCount > 0u) {
     if (frame.lightTilesX > 0u) {
       uint tile = (pixel.y / LIGHT_TILE_SIZE) * frame.lightTilesX + pixel.x / LIGHT_TILE_SIZE;
       uint base = LIGHT_TILE_HEADER + tile * LIGHT_TILE_STRIDE;

@@ -97,7 +97,7 @@ vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   si.duv1dx = vec2(0.0);
   si.duv1dy = vec2(0.0);
   uint extra = meshExtraOffset(o.meshIndex);
-  if (extra != EXTRA_NONE) {
+  if (VB_EXTRAS != 0u && extra != EXTRA_NONE) {
     VertexExtra e0 = vertexExtras[extra + indexAt(base + 0u)], e1 = vertexExtras[extra + indexAt(base + 1u)],
                 e2 = vertexExtras[extra + indexAt(base + 2u)];
     mat3x2 uv1 = mat3x2(vec2(e0.u1, e0.v1), vec2(e1.u1, e1.v1), vec2(e2.u1, e2.v1));

@@ -25,7 +25,7 @@ void main() {
   outUv0 = vec2(v.u, v.v);
   outUv1 = vec2(0.0);
   uint extra = meshes[o.meshIndex].extraOffset;
-  if (extra != EXTRA_NONE) {
+  if (VB_EXTRAS != 0u && extra != EXTRA_NONE) {
     VertexExtra e = vertexExtras[extra + uint(gl_VertexIndex) - meshes[o.meshIndex].vertexOffset];
     outUv1 = vec2(e.u1, e.v1);
   }

@@ -194,18 +194,17 @@ void Pipeline::reset() {
 }
 
 namespace {
-const VkSpecializationMapEntry kEntries[4] = {{0, 0, sizeof(uint32_t)},
-                                              {1, sizeof(uint32_t), sizeof(uint32_t)},
-                                              {2, 2 * sizeof(uint32_t), sizeof(uint32_t)},
-                                              {3, 3 * sizeof(uint32_t), sizeof(uint32_t)}};
-VkSpecializationInfo specializationInfo(const uint32_t (&values)[4]) { return {4, kEntries, sizeof(values), values}; }
+const VkSpecializationMapEntry kEntries[6] = {
+    {0, 0, sizeof(uint32_t)},     {1, sizeof(uint32_t), sizeof(uint32_t)}, {2, 2 * sizeof(uint32_t), sizeof(uint32_t)},
+    {3, 3 * sizeof(uint32_t), 4}, {4, 4 * sizeof(uint32_t), 4},           {5, 5 * sizeof(uint32_t), 4}};
+VkSpecializationInfo specializationInfo(const uint32_t (&values)[6]) { return {6, kEntries, sizeof(values), values}; }
 }  // namespace
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization specialization) {
   VkShaderModule module = createModule(device, shader, specialization.textureClasses > 0);
-  const uint32_t values[4] = {specialization.windowed, specialization.textureClasses, specialization.skinned,
-                              specialization.texels};
+  const uint32_t values[6] = {specialization.windowed, specialization.textureClasses, specialization.skinned,
+                              specialization.texels,   specialization.extras,         specialization.pointLights};
   const VkSpecializationInfo spec = specializationInfo(values);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -231,7 +230,7 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
-  const uint32_t values[4] = {desc.windowed, desc.textureClasses, desc.skinned, desc.texels};
+  const uint32_t values[6] = {desc.windowed, desc.textureClasses, desc.skinned, desc.texels, desc.extras, desc.pointLights};
   const VkSpecializationInfo spec = specializationInfo(values);
   stages[0].pSpecializationInfo = stages[1].pSpecializationInfo = &spec;
 

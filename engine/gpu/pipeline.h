@@ -50,6 +50,10 @@ class Pipeline {
 // ran before skinning existed.
 // Specialisation constant 3 (common.glsl VB_TEXELS): 1 to read object records, vertex positions and indices through
 // uniform texel buffers (GpuScene::texels) in the passes that fetch them per object, triangle or pixel.
+// Specialisation constants 4 (common.glsl VB_EXTRAS: a mesh of the scene has VertexExtra records) and 5
+// (VB_POINT_LIGHTS: the scene has punctual lights): 0 removes the code that reads them. lavapipe runs both sides of
+// every branch under a lane mask, so a branch no pixel takes still costs its loads and arithmetic (a third of the
+// shading pass at 10k kittens); both are fixed for a renderer's life (meshes and lights are set at creation).
 struct Specialization {
   Specialization(uint32_t windowedValue = 1, uint32_t textureClassCount = 0,  // NOLINT: implicit from `windowed`
                  uint32_t skinnedValue = 0, uint32_t texelsValue = 0)
@@ -58,6 +62,8 @@ struct Specialization {
   uint32_t textureClasses;
   uint32_t skinned;
   uint32_t texels;
+  uint32_t extras = 1;
+  uint32_t pointLights = 1;
 };
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization spec = {});
@@ -76,6 +82,8 @@ struct GraphicsPipelineDesc {
   uint32_t textureClasses = 0;  // specialisation constant 1 of both stages (see Specialization)
   uint32_t skinned = 0;         // specialisation constant 2 of both stages (see Specialization)
   uint32_t texels = 0;          // specialisation constant 3 of both stages (see Specialization)
+  uint32_t extras = 1;          // specialisation constant 4 of both stages (see Specialization)
+  uint32_t pointLights = 1;     // specialisation constant 5 of both stages (see Specialization)
 };
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
 

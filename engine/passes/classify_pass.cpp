@@ -26,8 +26,11 @@ void ClassifyPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout
   scatter_ = gpu::createComputePipeline(device, layout, "classify_scatter.comp", spec.windowed);
   const bool anyTextured = spec.textureClasses > 0 && std::find(textured_.begin(), textured_.end(), true) != textured_.end();
   if (anyTextured) shadeTextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", spec);
-  if (!anyTextured || std::find(textured_.begin(), textured_.end(), false) != textured_.end())
-    shadeUntextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", {spec.windowed, 0});
+  if (!anyTextured || std::find(textured_.begin(), textured_.end(), false) != textured_.end()) {
+    gpu::Specialization untextured = spec;  // (skinned slots, texel views and the rest as the scene has them)
+    untextured.textureClasses = 0;
+    shadeUntextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", untextured);
+  }
   if (!anyTextured) textured_.assign(textured_.size(), false);
   const VkDeviceSize bytes = kHeaderBytes + textured_.size() * sizeof(gpu::MaterialTiles);
   materialTiles_ = gpu::Buffer(device, bytes,

@@ -25,6 +25,8 @@ gpu::GraphicsPipelineDesc drawListPipelineDesc(const gpu::Specialization& spec, 
   d.textureClasses = spec.textureClasses;
   d.skinned = spec.skinned;
   d.texels = spec.texels;
+  d.extras = spec.extras;
+  d.pointLights = spec.pointLights;
   d.cullMode = drawListCullMode(list);
   return d;
 }

@@ -310,8 +310,12 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   // Texel views: the scene's records and the draws (five words each) within maxTexelBufferElements.
   const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
   const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
-  const gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
-                                     impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
+  gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
+                               impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
+  const auto& meshTable = impl->gpuScene.meshTable;
+  textured.extras = std::any_of(meshTable.begin(), meshTable.end(),
+                                [](const gpu::MeshData& m) { return m.extraOffset != EXTRA_NONE; }) ? 1u : 0u;
+  textured.pointLights = impl->hasPointLights() ? 1u : 0u;
   impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
   impl->objectUpload.create(device);
   impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
