@@ -261,6 +261,32 @@ TEST(Skinning, IdImageUnchangedByCullingOnAnimatedPath) {
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
+// Classified shading reads the skinned vertices too: RiggedFigure (skinned, untextured, so the classified pass uses
+// its untextured pipeline) mid-animation, classified against the ubershader, same frame: the same image, and a pose
+// that moved from the rest pose (the rest vertices would shade another image).
+TEST(Skinning, ClassifiedShadingOfSkinnedMeshEqualsUbershader) {
+  REQUIRE_ASSET(assetPath("RiggedFigure/glTF/RiggedFigure.gltf"));
+  auto scene = loadAsset("RiggedFigure/glTF/RiggedFigure.gltf");
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  auto r = Renderer::create(dev, *scene, {.width = 200, .height = 200});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  FrameOptions fo;
+  fo.animationTime = 0.0;
+  auto rest = (*r)->renderFrame(scene->defaultCamera, fo);
+  fo.animationTime = 0.6;
+  auto uber = (*r)->renderFrame(scene->defaultCamera, fo);
+  fo.shading = ShadingMode::Classified;
+  auto classified = (*r)->renderFrame(scene->defaultCamera, fo);
+  ASSERT_TRUE(rest.ok() && uber.ok() && classified.ok());
+  EXPECT_EQ(classified->stats.shade.mode, ShadingMode::Classified);
+  EXPECT_GT(uber->stats.coveredPixels, 1000u);
+  EXPECT_EQ(test::compareColor(classified->color, uber->color).maxAbs, 0.0);
+  EXPECT_GT(test::compareColor(rest->color, uber->color).maxAbs, 0.1) << "the pose must move";
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
 // Skip what the scene does not need: a static scene records no skinning pass (and has no skinning state);
 // an animated one re-skins only when the pose changes, and a paused frame is identical to the one before.
 TEST(Skinning, StaticScenesAndPausedPosesRecordNoSkinning) {
