@@ -6,7 +6,8 @@
 // Occlusion mode runs this twice per frame (Hill & Collin's two-phase scheme as used by niagara):
 //   early: objects visible at the end of last frame (history, dispatched over its list) -> frustum + LOD -> drawn
 //          first;
-//   late:  every object -> frustum -> sub-pixel and depth-pyramid tests (pyramid of the early depth)
+//   late:  every object -> frustum (cull_sieve.comp; the objects inside are listed) -> sub-pixel and depth-pyramid
+//          tests (pyramid of the early depth)
 //          -> drawn if visible and not already drawn early; history := visible.
 //          The pyramid test runs at the level whose texels span the object's rectangle in 2x2; the objects it does
 //          not prove occluded are listed and tested again, three levels finer, by a second dispatch over that list
@@ -22,21 +23,6 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_vote : require
 #include "cull_tests.glsl"
-
-// Appends the IDs of the lanes where `mine` holds to the list at word `base` of the visible-list buffer (count, indirect
-// dispatch size, then IDs): one atomic per subgroup for the slots, one for the dispatch size.
-void appendToList(uint base, bool mine, uint id) {
-  uvec4 ballot = subgroupBallot(mine);
-  uint count = subgroupBallotBitCount(ballot);
-  if (count == 0u) return;
-  uint first = 0u;
-  if (subgroupElect()) {
-    first = atomicAdd(visibleList[base], count);
-    atomicMax(visibleList[base + 1u], (first + count + CULL_WORKGROUP_SIZE - 1u) / CULL_WORKGROUP_SIZE);
-  }
-  first = subgroupBroadcastFirst(first);
-  if (mine) visibleList[base + VISIBLE_LIST_HEADER + first + subgroupBallotExclusiveBitCount(ballot)] = id;
-}
 
 // Lists the lanes where `mine` holds for this phase's cluster dispatch: (object ID, LOD) entries after the
 // refinement list, the early phase's from the start, the late phase's from the end; the dispatch size grows with
@@ -65,10 +51,12 @@ void main() {
   // The early phase of occlusion culling runs over last frame's visible list (indirect dispatch, one thread per
   // listed object): a heavily occluded scene pays for the few it drew, not for every object it holds.
   // The late phase's refinement dispatch runs over the list its first dispatch wrote.
+  // The late phase's first dispatch runs over the objects the sieve (cull_sieve.comp) found inside the frustum.
   const bool refine = pc.phase == CULL_PHASE_LATE && pc.variant == CULL_REFINE;
+  const bool lateListed = pc.phase == CULL_PHASE_LATE && pc.variant == CULL_LATE_LISTED;
   const uint refineList = VISIBLE_LIST_HEADER + frame.objectCount;
-  const bool listed = (pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION) || refine;
-  const uint listBase = refine ? refineList : 0u;
+  const bool listed = (pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION) || refine || lateListed;
+  const uint listBase = refine ? refineList : lateListed ? LATE_LIST_WORD(frame.objectCount) : 0u;
   uint id = gl_GlobalInvocationID.x;
   bool valid = id < (listed ? min(visibleList[listBase], frame.objectCount) : frame.objectCount);
   if (listed) id = valid ? visibleList[listBase + VISIBLE_LIST_HEADER + id] : 0u;

@@ -15,6 +15,21 @@ layout(set = 1, binding = CULL_BINDING_PYRAMID) uniform sampler2D pyramid;
 layout(std430, set = 1, binding = CULL_BINDING_CLUSTERS) readonly buffer ClusterBlock { ClusterData clusters[]; };
 layout(push_constant) uniform Push { PassConstants pc; };
 
+// Appends the IDs of the lanes where `mine` holds to the list at word `base` of the visible-list buffer (count, indirect
+// dispatch size, then IDs): one atomic per subgroup for the slots, one for the dispatch size.
+void appendToList(uint base, bool mine, uint id) {
+  uvec4 ballot = subgroupBallot(mine);
+  uint count = subgroupBallotBitCount(ballot);
+  if (count == 0u) return;
+  uint first = 0u;
+  if (subgroupElect()) {
+    first = atomicAdd(visibleList[base], count);
+    atomicMax(visibleList[base + 1u], (first + count + CULL_WORKGROUP_SIZE - 1u) / CULL_WORKGROUP_SIZE);
+  }
+  first = subgroupBroadcastFirst(first);
+  if (mine) visibleList[base + VISIBLE_LIST_HEADER + first + subgroupBallotExclusiveBitCount(ballot)] = id;
+}
+
 bool frustumVisible(vec3 c, float r) {
   // Conservative margin: covers float rounding of the plane distance (a few ulps of the magnitudes
   // involved), so the GPU never culls what a double-precision test keeps.

@@ -9,6 +9,7 @@
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"
 #include "cull_clusters.comp.h"
+#include "cull_sieve.comp.h"
 #include "object_scatter.comp.h"
 #include "covered_tiles.comp.h"
 #include "shade_covered.comp.h"
@@ -84,6 +85,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
   VB_SHADER("cull.comp", spv_cull_comp)
   VB_SHADER("cull_clusters.comp", spv_cull_clusters_comp)
+  VB_SHADER("cull_sieve.comp", spv_cull_sieve_comp)
   VB_SHADER("object_scatter.comp", spv_object_scatter_comp)
   VB_SHADER("sw_raster.comp", spv_sw_raster_comp)
   VB_SHADER("sw_raster_cpu.comp", spv_sw_raster_cpu_comp)

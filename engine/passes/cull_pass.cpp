@@ -18,6 +18,7 @@ CullPass CullPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout
              {}};
   p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull.comp", spec);
   p.clusterPipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_clusters.comp", spec);
+  p.sievePipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_sieve.comp", spec);
   return p;
 }
 
@@ -38,6 +39,13 @@ void CullPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objec
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   layout.push(cmd, {phase, 0, 0, 0});  // (drawBase: the visibility pass's; lists come from the draw lists' buffer)
+  vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
+}
+
+void CullPass::recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, sievePipeline.handle());
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
+  layout.push(cmd, {CULL_PHASE_LATE, 0, 0, CULL_LATE_LISTED});
   vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
 }
 

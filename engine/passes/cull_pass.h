@@ -13,6 +13,7 @@ struct CullPass {
   gpu::PassLayout layout;
   gpu::Pipeline pipeline;
   gpu::Pipeline clusterPipeline;  // the cluster dispatch (CULL_CLUSTERS, cull_clusters.comp.glsl)
+  gpu::Pipeline sievePipeline;    // the late phase's frustum sieve (CULL_LATE_LISTED, cull_sieve.comp.glsl)
   static CullPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec);
   // Its set: the draws it writes, the per-object history and visible lists (config.h VISIBLE_LIST_HEADER, then the
   // cluster lists' entries), the draw lists, the depth pyramid (GENERAL, all levels) and the scene's clusters.
@@ -22,9 +23,13 @@ struct CullPass {
   // phase: CULL_PHASE_EARLY/LATE. Occlusion mode also reads the depth pyramid and reads/writes the per-object
   // history.
   void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount, uint32_t phase) const;
+  // The late phase's frustum sieve over every object: it lists those inside for the late cull (recordListed with
+  // variant CULL_LATE_LISTED at the late list, config.h LATE_LIST_WORD).
+  void recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount) const;
   // An indirect dispatch over a list whose header (at byte `headerOffset` of `lists`) holds the dispatch size: one
   // thread per object of the early phase of occlusion culling over last frame's visible list and of the late phase's
-  // refinement dispatch (variant CULL_REFINE) over the objects its first dispatch listed; one workgroup per object
+  // first dispatch over the objects inside the frustum (variant CULL_LATE_LISTED) and of its refinement dispatch
+  // (variant CULL_REFINE) over the objects the first listed; one workgroup per object
   // of the cluster dispatch (variant CULL_CLUSTERS, its header in the stats buffer) (config.h).
   void recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists, VkDeviceSize headerOffset,
                     uint32_t phase, uint32_t variant) const;

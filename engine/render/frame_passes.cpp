@@ -219,6 +219,11 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, visibleList, 0, CULL_PHASE_EARLY, 0);
     });
+  } else if (occlusion) {  // the frustum sieve over every object, then the late cull over those inside
+    p.step(cullUses(), [this](VkCommandBuffer cmd) { cull.recordSieve(cmd, sceneSet, gpuScene.objectCount); });
+    p.step(cullUses(), [this](VkCommandBuffer cmd) {
+      cull.recordListed(cmd, sceneSet, visibleList, lateListOffset(), CULL_PHASE_LATE, CULL_LATE_LISTED);
+    });
   } else {
     p.step(cullUses(), [this, phase](VkCommandBuffer cmd) { cull.record(cmd, sceneSet, gpuScene.objectCount, phase); });
   }

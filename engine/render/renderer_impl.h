@@ -220,11 +220,15 @@ struct Renderer::Impl {
   // An empty visible list (no thread in the next early cull) with its dispatch arguments (0, 1, 1).
   // Byte offset of the late cull's refinement list in the visibleList buffer (config.h VISIBLE_LIST_HEADER).
   VkDeviceSize refineListOffset() const { return (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) * 4; }
-  // Empties the visible list and the refinement list (count 0, dispatch size 0 x 1 x 1).
+  // Byte offset of the late phase's list of the objects inside the frustum (config.h LATE_LIST_WORD).
+  VkDeviceSize lateListOffset() const {
+    return (2 * (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) + 2 * VkDeviceSize(gpuScene.objectCount)) * 4;
+  }
+  // Empties the visible list, the refinement list and the late list (count 0, dispatch size 0 x 1 x 1).
   void resetVisibleList(VkCommandBuffer cmd) const {
     const uint32_t header[VISIBLE_LIST_HEADER] = {0, 0, 1, 1};
-    vkCmdUpdateBuffer(cmd, visibleList.handle(), 0, sizeof(header), header);
-    vkCmdUpdateBuffer(cmd, visibleList.handle(), refineListOffset(), sizeof(header), header);
+    for (VkDeviceSize offset : {VkDeviceSize(0), refineListOffset(), lateListOffset()})
+      vkCmdUpdateBuffer(cmd, visibleList.handle(), offset, sizeof(header), header);
   }
 
   // The LOD level a draw command of the cull pass draws (whole, or a cluster run within it).

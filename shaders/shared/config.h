@@ -37,6 +37,11 @@
 // the frustum, its back-face cone and, in the late phase, the depth pyramid, and appends one draw per run of
 // consecutive surviving clusters (to the micro-raster: one per small cluster).
 #define CULL_CLUSTERS 2u
+// The late phase of occlusion culling first sieves every object through the frustum alone (cull_sieve.comp: a
+// culled object's history is cleared and counted) and lists the rest; the late cull proper then runs over that list
+// (PassConstants.variant = CULL_LATE_LISTED, indirect). lavapipe runs every branch of the cull under a lane mask,
+// so without the sieve an object outside the frustum cost as much as one tested against the pyramid.
+#define CULL_LATE_LISTED 3u
 #define CLUSTER_TRIANGLES 64u
 // Only objects whose screen box exceeds this many pixels per side (or that reach the near plane) are drawn as
 // clusters: a smaller one would pay a draw per cluster for the few triangles its cones and pyramid could remove.
@@ -180,8 +185,10 @@
 // thread per listed object instead of one per object of the scene): VISIBLE_LIST_HEADER uints -- count, then the
 // early cull's indirect dispatch (x, 1, 1) --, then the object IDs in append order. Written by the late cull, reset
 // before it. The late phase's refinement list (CULL_REFINE) follows it in the same buffer, at word
-// VISIBLE_LIST_HEADER + objectCount, in the same layout.
+// VISIBLE_LIST_HEADER + objectCount, in the same layout. Then the cluster lists' (object, LOD) entries (2 x
+// objectCount words), then the late phase's list of the objects inside the frustum (CULL_LATE_LISTED), same layout.
 #define VISIBLE_LIST_HEADER 4u
+#define LATE_LIST_WORD(objectCount) (2u * (VISIBLE_LIST_HEADER + (objectCount)) + 2u * (objectCount))
 
 // Materials (types.h MaterialData). Flags: the glTF alpha mode and double-sidedness.
 #define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out
