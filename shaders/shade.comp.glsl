@@ -30,7 +30,7 @@ layout(std430, set = 1, binding = CLASSIFY_BINDING_MATERIAL_TILES) readonly buff
 layout(std430, set = 1, binding = CLASSIFY_BINDING_TILE_LIST) readonly buffer TileListBlock { uint tileList[]; };
 #endif
 #if COVERED  // (buffer references: common.glsl)
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer CoveredTileList { uint words[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer CoveredPixelList { uint words[]; };
 #endif
 #if WRITE_ATTRIBUTES
 layout(std430, set = 1, binding = SHADE_BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
@@ -127,12 +127,13 @@ void main() {
   uint tile = tileList[materialTiles[pc.material].first + entry];
   ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
 #elif COVERED
-  // One workgroup per covered tile (covered_tiles.comp listed them; rows of CLASSIFY_DISPATCH_WIDTH).
-  CoveredTileList list = CoveredTileList(uvec2(frame.coveredTilesLow, frame.coveredTilesHigh));
-  uint entry = gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x;
+  // One thread per covered pixel (covered_pixels.comp listed them; workgroups in rows of CLASSIFY_DISPATCH_WIDTH).
+  CoveredPixelList list = CoveredPixelList(uvec2(frame.coveredPixelsLow, frame.coveredPixelsHigh));
+  uint entry = (gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x) * (SHADE_TILE_X * SHADE_TILE_Y) +
+               gl_LocalInvocationIndex;
   if (entry >= list.words[3]) return;
-  uint tile = list.words[COVERED_TILES_HEADER + entry];
-  ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
+  uint pixel = list.words[COVERED_PIXELS_HEADER + entry];
+  ivec2 p = ivec2(pixel & 0xffffu, pixel >> 16);
 #else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
 #endif

@@ -65,7 +65,7 @@ std::string formatStats(const FrameStats& s) {
                              s.shade.materialsPresent, s.shade.materialPixels.size(), s.shade.classifiedTiles,
                              ((s.width + 7) / 8) * ((s.height + 7) / 8))
            : s.shade.mode == ShadingMode::Covered
-               ? std::string("shading       covered (the ubershader over the 8x8 tiles that show anything)\n")
+               ? std::string("shading       covered (the ubershader over the pixels that show anything)\n")
                : std::string("shading       uber (one dispatch, every material)\n");
   out += fmt::format("frame graph   {} passes ({}), {} barriers ({} layout transitions){}\n", s.graph.passesRecorded.size(),
                      fmt::join(s.graph.passesRecorded, ", "), s.graph.barriers, s.graph.layoutTransitions,

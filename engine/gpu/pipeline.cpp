@@ -11,7 +11,7 @@
 #include "cull_clusters.comp.h"
 #include "cull_sieve.comp.h"
 #include "object_scatter.comp.h"
-#include "covered_tiles.comp.h"
+#include "covered_pixels.comp.h"
 #include "shade_covered.comp.h"
 #include "shade_covered_textured.comp.h"
 #include "sw_merge.frag.h"
@@ -98,7 +98,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("shade.comp", spv_shade_comp)
   VB_SHADER("shade_covered.comp", spv_shade_covered_comp)
   VB_SHADER("shade_covered_textured.comp", spv_shade_covered_textured_comp)
-  VB_SHADER("covered_tiles.comp", spv_covered_tiles_comp)
+  VB_SHADER("covered_pixels.comp", spv_covered_pixels_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
   VB_SHADER("skin.comp", spv_skin_comp)
   VB_SHADER("skin_bounds.comp", spv_skin_bounds_comp)

@@ -35,7 +35,7 @@ ShadePass ShadePass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayo
   p.pipeline = gpu::createComputePipeline(device, layout, "shade.comp", spec);
   p.attributesPipeline = gpu::createComputePipeline(device, layout, "shade_attributes.comp", spec);
   p.coveredPipeline = gpu::createComputePipeline(device, layout, "shade_covered.comp", spec);
-  p.coveredTilesPipeline = gpu::createComputePipeline(device, layout, "covered_tiles.comp", spec);
+  p.coveredPixelsPipeline = gpu::createComputePipeline(device, layout, "covered_pixels.comp", spec);
   return p;
 }
 
@@ -64,15 +64,15 @@ void ShadePass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t widt
                  width, height);
 }
 
-void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& tiles, uint32_t width,
+void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& pixels, uint32_t width,
                               uint32_t height) const {
   const uint32_t tileCount = ((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
   // (The previous frame's reads of the list are behind the frame graph's frame boundary.)
-  vkCmdFillBuffer(cmd, tiles.handle(), 0, COVERED_TILES_HEADER * sizeof(uint32_t), 0);
+  vkCmdFillBuffer(cmd, pixels.handle(), 0, COVERED_PIXELS_HEADER * sizeof(uint32_t), 0);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredTilesPipeline.handle());
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredPixelsPipeline.handle());
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   gpu::PassConstants pc{};
   layout.push(cmd, pc);
@@ -87,7 +87,7 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const 
                      VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredPipeline.handle());
-  vkCmdDispatchIndirect(cmd, tiles.handle(), 0);
+  vkCmdDispatchIndirect(cmd, pixels.handle(), 0);
 }
 
 void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const {

@@ -35,16 +35,16 @@ struct ShadePass {
   gpu::Pipeline attributesPipeline;  // same shading, plus the attribute record (stress suite)
   gpu::Pipeline msaaPipeline;        // created by createMsaa (the first MSAA frame): it compiles the materials again
   gpu::Pipeline sampleIdsPipeline;
-  gpu::Pipeline coveredPipeline;       // one workgroup per listed tile (shade.comp COVERED)
-  gpu::Pipeline coveredTilesPipeline;  // covered_tiles.comp: the list and its indirect dispatch
+  gpu::Pipeline coveredPipeline;        // one thread per listed pixel (shade.comp COVERED)
+  gpu::Pipeline coveredPixelsPipeline;  // covered_pixels.comp: the list and its indirect dispatch
   static ShadePass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec);
   void createMsaa(gpu::Device& device, gpu::Specialization spec);
   void bind(const ShadeInputs& in) const;
   void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height, Variant variant) const;
-  // The ubershader over the covered tiles only: covered_tiles.comp lists the 8x8 tiles whose IDs show anything
-  // into `tiles` (FrameData.coveredTiles* holds its address) and writes the indirect dispatch, then one workgroup
-  // per listed tile shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
-  void recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& tiles, uint32_t width,
+  // The ubershader over the covered pixels only: covered_pixels.comp lists the pixels whose IDs show anything into
+  // `pixels` (FrameData.coveredPixels* holds its address) and writes the indirect dispatch, then one thread per
+  // listed pixel shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
+  void recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& pixels, uint32_t width,
                      uint32_t height) const;
   void recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const;
 

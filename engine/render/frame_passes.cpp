@@ -38,10 +38,10 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
   f.clusterCull = plan.clusters ? 1u : 0u;
-  if (plan.coveredTiles) {
-    const VkDeviceAddress a = coveredTiles.address();
-    f.coveredTilesLow = uint32_t(a);
-    f.coveredTilesHigh = uint32_t(a >> 32);
+  if (plan.coveredPixels) {
+    const VkDeviceAddress a = coveredPixels.address();
+    f.coveredPixelsLow = uint32_t(a);
+    f.coveredPixelsHigh = uint32_t(a >> 32);
     f.coveredTilesX = (config.width + SHADE_TILE_X - 1) / SHADE_TILE_X;
   }
   return f;
@@ -137,7 +137,7 @@ FrameResources Renderer::Impl::declareResources(Graph& g, const FrameOptions& op
   r.sw = g.buffer("micro-raster buffer");
   r.lightTiles = g.buffer("light tiles");
   r.classification = g.buffer("material tiles");
-  r.coveredTiles = g.buffer("covered tiles");
+  r.coveredPixels = g.buffer("covered pixels");
   r.attributes = g.buffer("attributes");
   // Images: the raster targets of this frame (multisampled ones with MSAA), their content not needed at the start.
   r.ids = g.image("ids", msaa ? idsMs : ids);
@@ -356,14 +356,14 @@ void Renderer::Impl::declareShade(Graph& g, const FrameResources& r, const Frame
   if (plan.lightsCulled) uses.push_back(Graph::reads(r.lightTiles, access::computeRead));
   if (plan.shading == ShadingMode::Classified)
     uses.push_back(Graph::reads(r.classification, access::computeRead | access::indirect));
-  if (plan.coveredTiles)
-    uses.push_back(Graph::overwrites(r.coveredTiles, access::transferWrite | access::computeReadWrite | access::indirect));
+  if (plan.coveredPixels)
+    uses.push_back(Graph::overwrites(r.coveredPixels, access::transferWrite | access::computeReadWrite | access::indirect));
   p.step(std::move(uses), [this, plan, attributesToo = options.readAttributes](VkCommandBuffer cmd) {
     const uint32_t w = config.width, h = config.height;
     if (plan.shading == ShadingMode::Classified)
       classify.recordShade(cmd, sceneSet);
-    else if (plan.coveredTiles)
-      shade.recordCovered(cmd, sceneSet, coveredTiles, w, h);
+    else if (plan.coveredPixels)
+      shade.recordCovered(cmd, sceneSet, coveredPixels, w, h);
     else
       shade.record(cmd, sceneSet, w, h,
                    plan.msaa      ? passes::ShadePass::Msaa

@@ -33,7 +33,7 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
   p.msaa = options.msaa > 1;
   p.shading = resolveShading(options, facts);
-  p.coveredTiles = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
+  p.coveredPixels = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
   p.clusters = p.gpuCulled && !p.frozen && options.clusters && facts.clusters && p.cull != CullMode::None;
   return p;
 }

@@ -21,16 +21,16 @@ struct FramePlan {
   bool readAttributes = false;  // the shading pass writes the attribute record
   bool msaa = false;
   ShadingMode shading = ShadingMode::Uber;
-  // The ubershader over the covered tiles only (covered_tiles.comp lists them): single-sampled visbuf frames
+  // The ubershader over the covered pixels only (covered_pixels.comp lists them): single-sampled visbuf frames
   // without the attribute record.
-  bool coveredTiles = false;
+  bool coveredPixels = false;
   // Objects drawn by the hardware raster are expanded into clusters (the cull pass's CULL_CLUSTERS dispatch).
   bool clusters = false;
 };
 
 // What the renderer's scene and device are, as far as a plan depends on them.
 struct SceneFacts {
-  bool cpuDevice = false;         // lavapipe and the like: covered-tile shading by default
+  bool cpuDevice = false;         // lavapipe and the like: covered-pixel shading by default
   bool microRasterLists = false;  // some draw list the micro-raster may take (opaque, uncapped)
   bool microRasterFits = false;   // its 64-bit per-pixel buffer fits one storage-buffer range at this size
   bool pointLights = false;       // the scene has punctual lights

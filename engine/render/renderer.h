@@ -35,7 +35,7 @@ namespace visbuf {
 enum class RenderPath { Visbuf, Forward, GBuffer };
 enum class CullMode { None, Frustum, Occlusion };
 // How the visbuf path's shading pass runs: one "ubershader" dispatch over every pixel (Uber), the ubershader
-// over the 8x8 tiles that show anything (Covered: covered_tiles.comp lists them first), or material
+// over the pixels that show anything (Covered: covered_pixels.comp lists them first), or material
 // classification followed by one indirect dispatch per material (Classified, passes/classify_pass.h). Auto:
 // the faster one for the device type, as measured by the benchmark (docs/benchmarks.md, defaultShading).
 enum class ShadingMode { Auto, Uber, Classified, Covered };

@@ -59,7 +59,7 @@ namespace access = gpu::access;
 struct FrameResources {
   static constexpr Graph::Resource kNone = Graph::kNoResource;  // (not declared this frame)
   Graph::Resource scene = kNone, stats = kNone, draws = kNone, history = kNone, sw = kNone, lightTiles = kNone,
-                  classification = kNone, coveredTiles = kNone, attributes = kNone;
+                  classification = kNone, coveredPixels = kNone, attributes = kNone;
   Graph::Resource ids = kNone, depth = kNone, color = kNone, colorMs = kNone, forwardIds = kNone, pyramid = kNone,
                   overdraw = kNone;
   std::array<Graph::Resource, GBUFFER_TARGETS> gbuffer = [] {
@@ -188,7 +188,7 @@ struct Renderer::Impl {
   gpu::BufferView drawTexels;  // the same as R32UI texels: the shading's per-pixel fetch
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Image ids, depth, color;
-  gpu::Buffer coveredTiles;  // covered-tile shading: COVERED_TILES_HEADER uints + one per shading tile
+  gpu::Buffer coveredPixels;  // covered-pixel shading: COVERED_PIXELS_HEADER uints + one per pixel
   // MSAA (FrameOptions::msaa > 1): multisampled IDs and depth (visbuf, forward shares the depth) and forward
   // colour, created by the first frame at a count (msaaSamples) and dropped by a resize; the single-sample ids and
   // depth above stay allocated (the descriptor set's stand-ins). Pipelines for that count likewise.

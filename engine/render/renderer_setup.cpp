@@ -48,8 +48,7 @@ void Renderer::Impl::createTargets(uint32_t width, uint32_t height) {
                      VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
                          VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                      VK_IMAGE_ASPECT_COLOR_BIT);
-  const VkDeviceSize tiles = VkDeviceSize((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
-  coveredTiles = gpu::Buffer(device, (COVERED_TILES_HEADER + tiles) * sizeof(uint32_t),
+  coveredPixels = gpu::Buffer(device, (COVERED_PIXELS_HEADER + VkDeviceSize(width) * height) * sizeof(uint32_t),
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
                              gpu::MemoryUse::DeviceLocal);

@@ -1,4 +1,4 @@
-// Set 1 of the shading pass (shade.comp.glsl, covered_tiles.comp.glsl, msaa_ids.comp.glsl, visibility_id.glsl,
+// Set 1 of the shading pass (shade.comp.glsl, covered_pixels.comp.glsl, msaa_ids.comp.glsl, visibility_id.glsl,
 // msaa_samples.glsl; engine/passes/shade_pass.cpp): lighting.glsl's, then its own. The classified shading
 // (bindings_classify.h) is the same shader: it has these numbers too.
 #ifndef VISBUF_BINDINGS_SHADE_H

@@ -269,10 +269,11 @@
 // material can cover more tiles (a 4K frame has 129,600); rows of 128 fit the largest frame (2048^2 tiles) in
 // 32,768 rows.
 #define CLASSIFY_DISPATCH_WIDTH 128u
-// Covered-tile shading: the buffer's header (VkDispatchIndirectCommand of the shading dispatch, then the tile count);
-// the shading dispatch lays its tiles out in rows of CLASSIFY_DISPATCH_WIDTH workgroups, as the classified one.
-#define COVERED_TILES_HEADER 4u
-#define COVERED_TILES_WORKGROUP 64u  // covered_tiles.comp: shading tiles per workgroup (one per thread)
+// Covered-pixel shading: the buffer's header (VkDispatchIndirectCommand of the shading dispatch, then the pixel
+// count); the shading dispatch takes SHADE_TILE_X x SHADE_TILE_Y listed pixels per workgroup, its workgroups in rows
+// of CLASSIFY_DISPATCH_WIDTH, as the classified one.
+#define COVERED_PIXELS_HEADER 4u
+#define COVERED_TILES_WORKGROUP 64u  // covered_pixels.comp: shading tiles per workgroup (one thread lists a tile)
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
 //  0..2 camera-relative world position, 3 depth (reverse-Z NDC), 4..6 unit world normal, 7 = 1 (written),

@@ -181,11 +181,11 @@ struct FrameData {
   float swMaxPixels;
   uint swMaxTriangles;
   uint swTriangleBits;     // payload = (slot << swTriangleBits) | triangle (wide IDs); narrow: the encoded ID
-  // Covered-tile shading (covered_tiles.comp, shade.comp COVERED): the device address of the covered-tile buffer
-  // (COVERED_TILES_HEADER uints: the dispatch's x, y, z and the tile count; then one (x | y << 16) per tile) and
+  // Covered-pixel shading (covered_pixels.comp, shade.comp COVERED): the device address of the covered-pixel buffer
+  // (COVERED_PIXELS_HEADER uints: the dispatch's x, y, z and the pixel count; then one (x | y << 16) per pixel) and
   // the shading tiles per row. 0: the shading pass dispatches over every pixel.
-  uint coveredTilesLow;
-  uint coveredTilesHigh;
+  uint coveredPixelsLow;
+  uint coveredPixelsHigh;
   uint coveredTilesX;
   uint clusterCull;        // 1: the cull pass expands hardware-raster objects into clusters (CULL_CLUSTERS)
 };

@@ -22,12 +22,12 @@ TEST(FramePlan, PathsDecideCullingShadingAndLights) {
   EXPECT_TRUE(p.swOn);
   EXPECT_TRUE(p.lightsCulled);
   EXPECT_EQ(p.shading, ShadingMode::Uber) << "GPUs shade with the ubershader by default";
-  EXPECT_FALSE(p.coveredTiles);
+  EXPECT_FALSE(p.coveredPixels);
   SceneFacts cpu = gpuFacts();
   cpu.cpuDevice = true;
   p = planFrame(fo, cpu, none);
-  EXPECT_EQ(p.shading, ShadingMode::Covered) << "CPU devices shade the covered tiles only";
-  EXPECT_TRUE(p.coveredTiles);
+  EXPECT_EQ(p.shading, ShadingMode::Covered) << "CPU devices shade the covered pixels only";
+  EXPECT_TRUE(p.coveredPixels);
   fo.readAttributes = true;  // the attribute record exists in the ubershader only
   p = planFrame(fo, cpu, none);
   EXPECT_EQ(p.shading, ShadingMode::Uber);
