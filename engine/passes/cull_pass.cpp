@@ -1,5 +1,6 @@
 #include "visbuf/passes/cull_pass.h"
 
+#include "visbuf/gpu/resources.h"
 #include "visbuf/shared/bindings_cull.h"
 #include "visbuf/shared/types.h"
 
@@ -46,7 +47,13 @@ void CullPass::recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t 
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, sievePipeline.handle());
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   layout.push(cmd, {CULL_PHASE_LATE, 0, 0, CULL_LATE_LISTED});
-  vkCmdDispatch(cmd, (objectCount + CULL_WORKGROUP_SIZE - 1) / CULL_WORKGROUP_SIZE, 1, 1);
+  const uint32_t perWorkgroup = CULL_WORKGROUP_SIZE * SIEVE_OBJECTS_PER_THREAD;
+  vkCmdDispatch(cmd, (objectCount + perWorkgroup - 1) / perWorkgroup, 1, 1);
+  gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  layout.push(cmd, {CULL_PHASE_LATE, 0, 1, CULL_LATE_LISTED});  // its second step: the late cull's dispatch size
+  vkCmdDispatch(cmd, 1, 1, 1);
 }
 
 void CullPass::recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists,

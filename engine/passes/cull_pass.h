@@ -24,7 +24,8 @@ struct CullPass {
   // history.
   void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount, uint32_t phase) const;
   // The late phase's frustum sieve over every object: it lists those inside for the late cull (recordListed with
-  // variant CULL_LATE_LISTED at the late list, config.h LATE_LIST_WORD).
+  // variant CULL_LATE_LISTED at the late list, config.h LATE_LIST_WORD); a second one-thread dispatch sizes the late
+  // cull's from the list's count.
   void recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount) const;
   // An indirect dispatch over a list whose header (at byte `headerOffset` of `lists`) holds the dispatch size: one
   // thread per object of the early phase of occlusion culling over last frame's visible list and of the late phase's

@@ -42,6 +42,7 @@
 // (PassConstants.variant = CULL_LATE_LISTED, indirect). lavapipe runs every branch of the cull under a lane mask,
 // so without the sieve an object outside the frustum cost as much as one tested against the pyramid.
 #define CULL_LATE_LISTED 3u
+#define SIEVE_OBJECTS_PER_THREAD 8u  // cull_sieve.comp: one atomic per subgroup for this many objects per lane
 #define CLUSTER_TRIANGLES 64u
 // Only objects whose screen box exceeds this many pixels per side (or that reach the near plane) are drawn as
 // clusters: a smaller one would pay a draw per cluster for the few triangles its cones and pyramid could remove.
