@@ -39,13 +39,17 @@ void main() {
     bool swList = !exhausted && frame.swRaster != 0u && drawLists[list].w != 0u &&
                   CLUSTER_TRIANGLES <= frame.swMaxTriangles;
     bool pyramidTest = frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE;
+    // Early cluster occlusion (CULL_CLUSTER_RETEST): the early phase tests against last frame's pyramid too, and
+    // defers what it hides to the late phase's retest.
+    bool guess = frame.earlyClusterOcclusion != 0u && pc.phase == CULL_PHASE_EARLY;
     uvec4 region = drawLists[list];
     uint first = pc.phase == CULL_PHASE_LATE ? region.y : region.x;
     for (uint b = 0u; b < n; b += CULL_WORKGROUP_SIZE) {
       uint c = b + gl_LocalInvocationIndex;
       bool valid = c < n;
       uint culledFrustum = 0u, culledBack = 0u, culledOccluded = 0u;
-      bool keep = false, sw = false;
+      bool keep = false, sw = false, defer = false, rect = false;
+      vec2 lo = vec2(0.0), hi = vec2(0.0);
       uint clusterTriangles = valid ? min(triangles - c * CLUSTER_TRIANGLES, CLUSTER_TRIANGLES) : 0u;
       if (valid) {
         ClusterData cd = clusters[ld.firstCluster + c];
@@ -58,19 +62,44 @@ void main() {
         bool back = coneTest && dot(toApex, cd.cone.xyz) >= (cd.cone.w + 1e-3) * length(toApex);
         vec3 v;
         float rr;
-        vec2 lo, hi;
-        bool rect = screenRect(centre, r, v, rr, lo, hi);
+        rect = screenRect(centre, r, v, rr, lo, hi);
         if (!frustumVisible(centre, r)) {
           culledFrustum = 1u;
         } else if (back) {
           culledBack = 1u;
-        } else if (occlusionTest(rect, v, rr, lo, hi, false, pyramidTest) % 4u != 0u) {  // 1, 2: occluded, no pixel
-          culledOccluded = 1u;
         } else {
-          keep = true;
-          sw = swList && smallOnScreen(rect, lo, hi, clusterTriangles);
+          uint test = occlusionTest(rect, v, rr, lo, hi, false, pyramidTest || guess) % 4u;
+          defer = guess && test == 1u;  // hidden by last frame's pyramid: retested late
+          keep = test == 0u;
+          culledOccluded = test != 0u && !defer ? 1u : 0u;  // 1, 2: occluded, no pixel centre
         }
       }
+      // Each deferred cluster takes a retest entry and one late cluster draw (one atomic each per subgroup; the
+      // workgroup's object, hence its list, is uniform); one that finds no room is drawn now.
+      if (subgroupAny(defer)) {
+        uvec4 ballot = subgroupBallot(defer);
+        uint want = subgroupBallotBitCount(ballot), before = subgroupBallotExclusiveBitCount(ballot);
+        uint reserved = 0u, at = 0u;
+        if (subgroupElect()) {
+          reserved = atomicAdd(stats[STAT_CLUSTER_RESERVED + CULL_PHASE_LATE * DRAW_LISTS + list], want);
+          at = atomicAdd(stats[RETEST_ARGS], want);
+          atomicMax(stats[RETEST_ARGS + 1u],
+                    min((at + want + CULL_WORKGROUP_SIZE - 1u) / CULL_WORKGROUP_SIZE, CLUSTER_MAX_WORKGROUPS));
+        }
+        reserved = subgroupBroadcastFirst(reserved) + before;
+        at = subgroupBroadcastFirst(at) + before;
+        bool room = reserved < drawLists[DRAW_LISTS + list].x;
+        if (defer && at < RETEST_CAPACITY(frame.objectCount)) {
+          uint word = RETEST_LIST_WORD(frame.objectCount) + 2u * at;
+          visibleList[word] = room ? id : RETEST_NONE;
+          visibleList[word + 1u] = lod << 24 | c;
+        }
+        if (defer && !(room && at < RETEST_CAPACITY(frame.objectCount))) {
+          defer = false;  // (the retest skips its entry)
+          keep = true;
+        }
+      }
+      sw = keep && swList && smallOnScreen(rect, lo, hi, clusterTriangles);
       // Hardware draws: one per run of consecutive surviving clusters among the workgroup's (a mask of them in shared
       // memory; on lavapipe a draw costs about as much as 50 triangles, so runs matter more than the clusters culled
       // between them).
@@ -95,7 +124,7 @@ void main() {
       uint hwCount = subgroupBallotBitCount(drawBallot), swCount = subgroupBallotBitCount(swBallot);
       uint tested = subgroupAdd(valid ? 1u : 0u);
       uint frustumSum = subgroupAdd(culledFrustum), backSum = subgroupAdd(culledBack);
-      uint occludedSum = subgroupAdd(culledOccluded);
+      uint occludedSum = subgroupAdd(culledOccluded), deferredSum = subgroupAdd(defer ? 1u : 0u);
       uint triangleSum = subgroupAdd(runTriangles + (sw ? clusterTriangles : 0u));
       uint swTriangleSum = subgroupAdd(sw ? clusterTriangles : 0u);
       uint hwBase = 0u, swBase = 0u;
@@ -104,6 +133,7 @@ void main() {
         if (frustumSum > 0u) atomicAdd(stats[STAT_CLUSTERS_FRUSTUM], frustumSum);
         if (backSum > 0u) atomicAdd(stats[STAT_CLUSTERS_BACKFACING], backSum);
         if (occludedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_OCCLUDED], occludedSum);
+        if (deferredSum > 0u) atomicAdd(stats[STAT_CLUSTERS_DEFERRED], deferredSum);
         if (hwCount + swCount > 0u) {
           atomicAdd(stats[counter], hwCount + swCount);
           atomicAdd(stats[STAT_CLUSTER_DRAWS], hwCount + swCount);

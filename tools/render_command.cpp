@@ -112,6 +112,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_flag("--no-clusters", c.noClusters,
                 "draw every hardware-raster object whole (default: as its clusters that survive the frustum, their "
                 "back-face cone and the depth pyramid)");
+  sub->add_flag("--no-early-cluster-occlusion", c.noEarlyClusterOcclusion,
+                "occlusion culling with clusters: draw every front-facing cluster of last frame's visible objects in "
+                "the early phase (default: defer the ones last frame's depth pyramid hides to a retest in the late "
+                "phase; the image is the same)");
   sub->add_option("--moving", c.moving,
                   "every frame, move this fraction of the objects (not skinned or node-animated) along deterministic "
                   "closed paths through the renderer's scene-update API; the JSON gets per-frame uploaded bytes and "
@@ -340,6 +344,7 @@ int runRender(const RenderCommand& c) {
   fo.swRaster = parseSwRasterMode(c.swRaster);
   fo.swRasterPixels = c.swRasterPixels;
   fo.clusters = !c.noClusters;
+  fo.earlyClusterOcclusion = !c.noEarlyClusterOcclusion;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   // --moving / --churn: the scene changes before every frame; perFrame gets each frame's changes and counters.
   nlohmann::json perFrame = nlohmann::json::array();

@@ -27,9 +27,11 @@ std::string formatStats(const FrameStats& s) {
              : fmt::format("triangles     {} drawn\n", s.trianglesDrawn);
   if (s.cull.clusters.objects)
     out += fmt::format("clusters      {} objects drawn as clusters: {} clusters tested, {} outside the frustum, {} "
-                       "back-facing, {} occluded or between pixel centres; {} draws\n",
+                       "back-facing, {} occluded or between pixel centres; {} draws; {} deferred by the early phase, "
+                       "{} of them drawn late\n",
                        s.cull.clusters.objects, s.cull.clusters.tested, s.cull.clusters.frustumCulled,
-                       s.cull.clusters.backfacing, s.cull.clusters.occluded, s.cull.clusters.draws);
+                       s.cull.clusters.backfacing, s.cull.clusters.occluded, s.cull.clusters.draws,
+                       s.cull.clusters.deferred, s.cull.clusters.recovered);
   if (s.sw.on)
     out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.sw.draws,
                        s.sw.triangles, s.sw.oversize);
@@ -122,7 +124,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["swRaster"] = {{"on", s.sw.on}, {"draws", s.sw.draws}, {"triangles", s.sw.triangles}, {"oversize", s.sw.oversize}};
   const CullStats::Clusters& c = s.cull.clusters;
   j["clusters"] = {{"objects", c.objects},       {"tested", c.tested},     {"frustumCulled", c.frustumCulled},
-                   {"backfacing", c.backfacing}, {"occluded", c.occluded}, {"draws", c.draws}};
+                   {"backfacing", c.backfacing}, {"occluded", c.occluded}, {"draws", c.draws},
+                   {"deferred", c.deferred},     {"recovered", c.recovered}};
   j["transparentDraws"] = s.transparent.draws;
   j["transparentTriangles"] = s.transparent.triangles;
   j["lodHistogram"] = s.cull.lodHistogram;

@@ -9,6 +9,7 @@
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
 #include "cull.comp.h"
 #include "cull_clusters.comp.h"
+#include "cull_cluster_retest.comp.h"
 #include "cull_sieve.comp.h"
 #include "object_scatter.comp.h"
 #include "covered_pixels.comp.h"
@@ -85,6 +86,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   if (name == file) return {sym, sizeof(sym) / sizeof(uint32_t)};
   VB_SHADER("cull.comp", spv_cull_comp)
   VB_SHADER("cull_clusters.comp", spv_cull_clusters_comp)
+  VB_SHADER("cull_cluster_retest.comp", spv_cull_cluster_retest_comp)
   VB_SHADER("cull_sieve.comp", spv_cull_sieve_comp)
   VB_SHADER("object_scatter.comp", spv_object_scatter_comp)
   VB_SHADER("sw_raster.comp", spv_sw_raster_comp)

@@ -38,6 +38,7 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
   f.clusterCull = plan.clusters ? 1u : 0u;
+  f.earlyClusterOcclusion = plan.earlyClusterOcclusion ? 1u : 0u;
   if (plan.coveredPixels) {
     const VkDeviceAddress a = coveredPixels.address();
     f.coveredPixelsLow = uint32_t(a);
@@ -170,10 +171,10 @@ void Renderer::Impl::declareSetup(Graph& g, const FrameResources& r, const Frame
     if (!frozen) {  // frozen: keep the counts (and the micro-raster's arguments)
       vkCmdFillBuffer(cmd, stats.handle(), 0, STAT_COUNT * sizeof(uint32_t), 0);
       // Per phase: the micro-raster's dispatch (0 x 1 x 1) and merge draw (0, 1, 0, 0), then the cluster list's
-      // count and dispatch (0 x 1 x 1).
+      // count and dispatch (0 x 1 x 1), then the retest list's count and dispatch (0 x 1 x 1).
       const uint32_t args[STAT_BUFFER_UINTS - SW_ARGS] = {0, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1, 0, 0, 0,
-                                                          0, 0, 1, 1, 0, 0, 1, 1};
-      static_assert(STAT_BUFFER_UINTS - SW_ARGS == 2 * SW_ARGS_UINTS + 2 * CLUSTER_ARGS_UINTS);
+                                                          0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1};
+      static_assert(STAT_BUFFER_UINTS - SW_ARGS == 2 * SW_ARGS_UINTS + 2 * CLUSTER_ARGS_UINTS + 4);
       vkCmdUpdateBuffer(cmd, stats.handle(), SW_ARGS * sizeof(uint32_t), sizeof(args), args);
     }
     if (overdrawCount) {
@@ -208,7 +209,7 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     std::vector<Graph::Use> u = {Graph::reads(r.scene, access::computeRead),
                                  Graph::writes(r.stats, access::computeReadWrite | access::indirect),
                                  Graph::writes(r.draws, access::computeReadWrite), Graph::writes(r.history, lists)};
-    if (late && plan.usePyramid)
+    if ((late && plan.usePyramid) || (!late && plan.earlyClusterOcclusion))  // (early: last frame's pyramid)
       u.push_back(Graph::reads(r.pyramid, access::inLayout(access::computeSampled, VK_IMAGE_LAYOUT_GENERAL)));
     return u;
   };
@@ -235,6 +236,10 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.step(cullUses(), [this, phase](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, stats, (CLUSTER_ARGS + phase * CLUSTER_ARGS_UINTS) * sizeof(uint32_t), phase,
                         CULL_CLUSTERS);
+    });
+  if (late && plan.earlyClusterOcclusion)  // the clusters the early phase deferred, against this frame's pyramid
+    p.step(cullUses(), [this](VkCommandBuffer cmd) {
+      cull.recordListed(cmd, sceneSet, stats, RETEST_ARGS * sizeof(uint32_t), CULL_PHASE_LATE, CULL_CLUSTER_RETEST);
     });
 }
 

@@ -35,6 +35,7 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.shading = resolveShading(options, facts);
   p.coveredPixels = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
   p.clusters = p.gpuCulled && !p.frozen && options.clusters && facts.clusters && p.cull != CullMode::None;
+  p.earlyClusterOcclusion = p.clusters && p.usePyramid && options.earlyClusterOcclusion && history.pyramidBuilt;
   return p;
 }
 
@@ -42,6 +43,7 @@ void FrameHistory::recorded(const FramePlan& plan) {
   if (!plan.gpuCulled) return;
   haveDraws = true;
   lastCull = plan.cull;
+  if (!plan.frozen) pyramidBuilt = plan.usePyramid;
   if (!plan.frozen) lastSwOn = plan.swOn;
 }
 

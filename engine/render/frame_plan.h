@@ -26,6 +26,9 @@ struct FramePlan {
   bool coveredPixels = false;
   // Objects drawn by the hardware raster are expanded into clusters (the cull pass's CULL_CLUSTERS dispatch).
   bool clusters = false;
+  // The early phase's cluster dispatch tests against the pyramid the previous frame built and defers what it hides
+  // to the late phase's retest (CULL_CLUSTER_RETEST).
+  bool earlyClusterOcclusion = false;
 };
 
 // What the renderer's scene and device are, as far as a plan depends on them.
@@ -50,6 +53,7 @@ struct FrameHistory {
   bool lastSwOn = false;                // ... and whether they routed draws to the micro-raster
   uint32_t swSkipFrames = 0;            // frames before the micro-raster is probed again
   uint32_t pyramidSkipFrames = 0;       // frames before the pyramid is built again
+  bool pyramidBuilt = false;            // the last GPU-culled frame built the pyramid (since the last cut or resize)
 
   // A frame recorded with `plan`.
   void recorded(const FramePlan& plan);
@@ -58,7 +62,10 @@ struct FrameHistory {
   void finished(const FramePlan& plan, const FrameOptions& options, bool cpuDevice, uint64_t swTriangles,
                 uint32_t drawsEarly, uint32_t occlusionCulled);
   // A cut or a new size: the pyramid is probed again at once.
-  void cut() { pyramidSkipFrames = 0; }
+  void cut() {
+    pyramidSkipFrames = 0;
+    pyramidBuilt = false;  // (what it holds is of another view or size: no guess for the next early phase)
+  }
 };
 
 // The shading mode a visbuf frame uses (Auto resolved by the device type; the attribute record and MSAA exist in

@@ -130,7 +130,8 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
     st.trianglesDrawn = s[STAT_TRIANGLES_DRAWN];
     st.cull.lodHistogram.assign(s + STAT_LOD_HISTOGRAM, s + STAT_LOD_HISTOGRAM + MAX_LODS);
     st.cull.clusters = {s[STAT_CLUSTER_OBJECTS],  s[STAT_CLUSTERS_TESTED],   s[STAT_CLUSTERS_FRUSTUM],
-                        s[STAT_CLUSTERS_BACKFACING], s[STAT_CLUSTERS_OCCLUDED], s[STAT_CLUSTER_DRAWS]};
+                        s[STAT_CLUSTERS_BACKFACING], s[STAT_CLUSTERS_OCCLUDED], s[STAT_CLUSTER_DRAWS],
+                        s[STAT_CLUSTERS_DEFERRED], s[STAT_CLUSTERS_RECOVERED]};
     frameHistory.finished(slot.plan, options, device.isCpu(), st.sw.triangles, st.cull.drawsEarly, st.cull.occlusionCulled);
   }
   while (!st.cull.lodHistogram.empty() && st.cull.lodHistogram.back() == 0) st.cull.lodHistogram.pop_back();

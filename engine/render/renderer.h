@@ -131,6 +131,11 @@ struct FrameOptions {
   // back-face cone and (late phase) the depth pyramid; the small ones go to the micro-raster. Skinned instances are
   // always drawn whole.
   bool clusters = true;
+  // Early cluster occlusion (occlusion culling with clusters): the early phase also tests the clusters of last frame's
+  // visible objects against the pyramid the previous frame built and defers the ones it hides to a retest against
+  // this frame's pyramid in the late phase (config.h CULL_CLUSTER_RETEST). The image is the same either way; off
+  // draws every front-facing cluster of last frame's visible set in the early phase.
+  bool earlyClusterOcclusion = true;
   ShadingMode shading = ShadingMode::Auto;  // visbuf path; readAttributes and MSAA frames always use the
                                             // ubershader over every pixel (its attributes / MSAA variant)
 };
@@ -167,6 +172,9 @@ struct CullStats {
   // the rest (part of drawsRendered: one per run of consecutive hardware clusters, one per micro-raster cluster).
   struct Clusters {
     uint32_t objects = 0, tested = 0, frustumCulled = 0, backfacing = 0, occluded = 0, draws = 0;
+    // Early cluster occlusion: clusters the early phase deferred (last frame's pyramid hid them), and those of them
+    // the late retest drew (the rest are counted in `occluded`).
+    uint32_t deferred = 0, recovered = 0;
   } clusters;
 };
 

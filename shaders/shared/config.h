@@ -42,6 +42,14 @@
 // (PassConstants.variant = CULL_LATE_LISTED, indirect). lavapipe runs every branch of the cull under a lane mask,
 // so without the sieve an object outside the frustum cost as much as one tested against the pyramid.
 #define CULL_LATE_LISTED 3u
+// Early cluster occlusion: the early phase's cluster dispatch also tests each cluster against the pyramid that the
+// previous frame left (FrameData.earlyClusterOcclusion; a guess: the camera and the objects may have moved since),
+// and defers the ones it hides instead of drawing them: each is listed (object ID, LOD << 24 | cluster) and one late
+// cluster draw is reserved for it. After the late phase's pyramid is built, a dispatch over that list
+// (PassConstants.variant = CULL_CLUSTER_RETEST, one thread per entry) tests each against it and draws the ones it
+// does not hide, so that a wrong guess costs time, never a pixel: the early phase draws every object of last frame's
+// visible set, with its clusters that the old pyramid does not hide.
+#define CULL_CLUSTER_RETEST 4u
 #define SIEVE_OBJECTS_PER_THREAD 8u  // cull_sieve.comp: one atomic per subgroup for this many objects per lane
 #define CLUSTER_TRIANGLES 64u
 // Only objects whose screen box exceeds this many pixels per side (or that reach the near plane) are drawn as
@@ -95,7 +103,11 @@
 #define STAT_CLUSTERS_BACKFACING (STAT_CLUSTERS_FRUSTUM + 1)
 #define STAT_CLUSTERS_OCCLUDED (STAT_CLUSTERS_BACKFACING + 1)
 #define STAT_CLUSTER_DRAWS (STAT_CLUSTERS_OCCLUDED + 1)
-#define STAT_CLUSTER_RESERVED (STAT_CLUSTER_DRAWS + 1)
+// Early cluster occlusion (FrameData.earlyClusterOcclusion): the early phase's clusters that last frame's pyramid
+// hid, deferred to the late phase's retest (CULL_CLUSTER_RETEST), and those of them the retest drew.
+#define STAT_CLUSTERS_DEFERRED (STAT_CLUSTER_DRAWS + 1)
+#define STAT_CLUSTERS_RECOVERED (STAT_CLUSTERS_DEFERRED + 1)
+#define STAT_CLUSTER_RESERVED (STAT_CLUSTERS_RECOVERED + 1)
 #define STAT_COUNT (STAT_CLUSTER_RESERVED + 2 * DRAW_LISTS)
 // After the counters (same buffer, not read back): per cull phase, the micro-raster's indirect dispatch (x, 1, 1)
 // and its merge's indirect draw (vertexCount, 1, 0, 0), written by the cull pass where it routes a draw there and
@@ -112,7 +124,11 @@
 #define CLUSTER_ARGS (SW_ARGS + 2 * SW_ARGS_UINTS)
 #define CLUSTER_ARGS_UINTS 4u
 #define CLUSTER_MAX_WORKGROUPS 4096u
-#define STAT_BUFFER_UINTS (CLUSTER_ARGS + 2 * CLUSTER_ARGS_UINTS)
+// Then the retest list's header (CULL_CLUSTER_RETEST): its entry count and the retest dispatch's indirect arguments
+// (x, 1, 1; x at most CLUSTER_MAX_WORKGROUPS, the workgroups stride over the list). Its entries are in the
+// visible-list buffer (RETEST_LIST_WORD).
+#define RETEST_ARGS (CLUSTER_ARGS + 2 * CLUSTER_ARGS_UINTS)
+#define STAT_BUFFER_UINTS (RETEST_ARGS + 4u)
 
 // Draw lists: the cull pass routes each object, by its material and winding, into the list of the raster
 // state it needs. Each list is a region of the draw buffer per phase with its own count (STAT_LIST_DRAWS) and
@@ -190,6 +206,11 @@
 // objectCount words), then the late phase's list of the objects inside the frustum (CULL_LATE_LISTED), same layout.
 #define VISIBLE_LIST_HEADER 4u
 #define LATE_LIST_WORD(objectCount) (2u * (VISIBLE_LIST_HEADER + (objectCount)) + 2u * (objectCount))
+// After the late list: the retest list's entries (2 words each: object ID, LOD << 24 | cluster; RETEST_ARGS holds its
+// count), room for RETEST_CAPACITY of them. A cluster that finds no room is drawn in the early phase.
+#define RETEST_LIST_WORD(objectCount) (LATE_LIST_WORD(objectCount) + VISIBLE_LIST_HEADER + (objectCount))
+#define RETEST_CAPACITY(objectCount) ((objectCount) + 65536u)
+#define RETEST_NONE 0xFFFFFFFFu  // an entry whose cluster was drawn early after all (no late draw left to reserve)
 
 // Materials (types.h MaterialData). Flags: the glTF alpha mode and double-sidedness.
 #define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out

@@ -188,6 +188,8 @@ struct FrameData {
   uint coveredPixelsHigh;
   uint coveredTilesX;
   uint clusterCull;        // 1: the cull pass expands hardware-raster objects into clusters (CULL_CLUSTERS)
+  uint earlyClusterOcclusion;  // 1: the early cluster dispatch defers what the previous frame's pyramid hides
+  uint framePad0, framePad1, framePad2;  // (a multiple of 16 bytes)
 };
 
 // A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;

@@ -69,6 +69,9 @@ Totals compareClusters(Renderer& r, FrameOptions options, int frames, int cut) {
     t.clusters.backfacing += c.backfacing;
     t.clusters.occluded += c.occluded;
     t.clusters.draws += c.draws;
+    t.clusters.deferred += c.deferred;
+    t.clusters.recovered += c.recovered;
+    EXPECT_EQ(b->stats.cull.clusters.deferred, 0u);
     t.swDrawsOn += a->stats.sw.draws;
     t.swDrawsOff += b->stats.sw.draws;
     for (size_t p = 0; p < a->ids.size(); p += 2) {
@@ -81,11 +84,11 @@ Totals compareClusters(Renderer& r, FrameOptions options, int frames, int cut) {
     ++t.frames;
   }
   std::printf("%zu frames: %zu objects as clusters, %zu clusters tested, %zu outside the frustum, %zu back-facing, "
-              "%zu occluded; %zu draws (micro-raster draws %zu vs %zu without clusters); %zu of %zu covered pixels "
-              "another triangle, %zu another object\n",
+              "%zu occluded; %zu draws (micro-raster draws %zu vs %zu without clusters); %zu deferred by the early "
+              "phase, %zu of them drawn late; %zu of %zu covered pixels another triangle, %zu another object\n",
               t.frames, size_t(t.clusters.objects), size_t(t.clusters.tested), size_t(t.clusters.frustumCulled),
               size_t(t.clusters.backfacing), size_t(t.clusters.occluded), size_t(t.clusters.draws), t.swDrawsOn,
-              t.swDrawsOff, t.otherTriangle, t.covered, t.otherObject);
+              t.swDrawsOff, size_t(t.clusters.deferred), size_t(t.clusters.recovered), t.otherTriangle, t.covered, t.otherObject);
   return t;
 }
 
@@ -122,6 +125,9 @@ TEST_F(Clusters, IdImageUnchangedByClusterCulling) {
     const uint32_t inFrustum = t.clusters.tested - t.clusters.frustumCulled;
     EXPECT_GT(t.clusters.backfacing, lodPixels > 0.0f ? 0u : inFrustum / 20) << "the path must exercise the cone test";
     EXPECT_GT(t.clusters.occluded, 0u) << "the path must exercise the late phase's pyramid test";
+    // Last frame's pyramid hides clusters that the turning camera shows now: the late retest must draw them.
+    EXPECT_GT(t.clusters.recovered, 0u) << "the path must exercise the early phase's deferral and the retest";
+    EXPECT_LT(t.clusters.recovered, t.clusters.deferred);
   }
   // Frustum culling alone (one phase, no pyramid).
   fo.cull = CullMode::Frustum;
@@ -129,6 +135,7 @@ TEST_F(Clusters, IdImageUnchangedByClusterCulling) {
   const Totals t = compareClusters(*renderer, fo, 4, -1);
   EXPECT_EQ(t.otherObject + t.otherTriangle, 0u);
   EXPECT_GT(t.clusters.backfacing, 0u);
+  EXPECT_EQ(t.clusters.deferred, 0u) << "no pyramid, no deferral";
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
@@ -142,6 +149,7 @@ TEST_F(Clusters, MicroRasterClustersMatchHardwareRaster) {
   const Totals t = compareClusters(*renderer, fo, 12, 6);
   const size_t pixels = t.frames * 320 * 200;
   EXPECT_GT(t.swDrawsOn, t.swDrawsOff) << "the micro-raster must take clusters";
+  EXPECT_GT(t.clusters.recovered, 0u) << "deferred clusters must reach the micro-raster in the late phase too";
   EXPECT_LE(t.otherTriangle, pixels / 2000);
   EXPECT_LE(t.otherObject, pixels / 10000);
   EXPECT_NO_VALIDATION_MESSAGES(before);

@@ -103,6 +103,35 @@ TEST(FramePlan, HistorySkipsAUselessPyramidThenProbesAgain) {
   EXPECT_TRUE(planFrame(fo, gpuFacts(), h).usePyramid) << "a cut probes at once";
 }
 
+// The early phase guesses with the pyramid the previous frame built: only after a frame that built one, never after
+// a cut or a new size (its pyramid shows another view), and only with clusters and occlusion culling.
+TEST(FramePlan, EarlyClusterOcclusionNeedsLastFramesPyramid) {
+  FrameOptions fo;
+  fo.cull = CullMode::Occlusion;
+  SceneFacts facts = gpuFacts();
+  facts.clusters = true;
+  FrameHistory h;
+  FramePlan p = planFrame(fo, facts, h);
+  ASSERT_TRUE(p.clusters && p.usePyramid);
+  EXPECT_FALSE(p.earlyClusterOcclusion) << "a first frame has no pyramid of its own";
+  h.recorded(p);
+  EXPECT_TRUE(planFrame(fo, facts, h).earlyClusterOcclusion);
+  FrameOptions off = fo;
+  off.earlyClusterOcclusion = false;
+  EXPECT_FALSE(planFrame(off, facts, h).earlyClusterOcclusion);
+  off = fo;
+  off.clusters = false;
+  EXPECT_FALSE(planFrame(off, facts, h).earlyClusterOcclusion);
+  h.cut();
+  EXPECT_FALSE(planFrame(fo, facts, h).earlyClusterOcclusion) << "after a cut the pyramid shows another view";
+  h.recorded(planFrame(fo, facts, h));
+  EXPECT_TRUE(planFrame(fo, facts, h).earlyClusterOcclusion);
+  FrameOptions frustum = fo;
+  frustum.cull = CullMode::Frustum;
+  h.recorded(planFrame(frustum, facts, h));  // builds no pyramid
+  EXPECT_FALSE(planFrame(fo, facts, h).earlyClusterOcclusion) << "the last frame built no pyramid";
+}
+
 TEST(FramePlan, HistorySkipsAMicroRasterThatDoesNotPayOnAGpu) {
   FrameOptions fo;
   FrameHistory h;
