@@ -13,6 +13,7 @@
 layout(local_size_x = COVERED_TILES_WORKGROUP) in;
 layout(push_constant) uniform Push { PassConstants pc; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer CoveredPixels { uint words[]; };
+layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatsBlock { uint stats[]; };  // STAT_COVERED_PIXELS
 
 void main() {
   CoveredPixels list = CoveredPixels(uvec2(frame.coveredPixelsLow, frame.coveredPixelsHigh));
@@ -22,6 +23,9 @@ void main() {
     list.words[0] = min(groups, CLASSIFY_DISPATCH_WIDTH);
     list.words[1] = (groups + CLASSIFY_DISPATCH_WIDTH - 1u) / CLASSIFY_DISPATCH_WIDTH;
     list.words[2] = 1u;
+    // The pixels the shading will shade: every listed one (it counts none itself; on lavapipe its atomic per
+    // subgroup was a locked add bouncing between the cores, once per eight pixels).
+    stats[STAT_COVERED_PIXELS] = list.words[3];
     return;
   }
   uint tilesX = frame.coveredTilesX;

@@ -148,7 +148,9 @@ void main() {
   if (objectAt(drawObject(slot)).materialIndex != pc.material) return;
 #endif
   imageStore(colorOut, p, vec4(shadeVisible(raw, p, vec2(0.5)), 1.0));
+#if !COVERED  // (covered: every listed pixel is shaded, and covered_pixels.comp copies the list's count)
   uint shaded = subgroupAdd(1u);  // (over the lanes still here: the pixels shaded)
   if (subgroupElect()) atomicAdd(stats[STAT_COVERED_PIXELS], shaded);
+#endif
 #endif
 }
