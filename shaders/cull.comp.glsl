@@ -169,7 +169,6 @@ void main() {
   uint culledSum = subgroupAdd(frustumCulled);
   uint occludedSum = subgroupAdd(occluded);
   uint subpixelSum = subgroupAdd(subpixel);
-  // Slots: one atomic per subgroup and draw list present in it (a scene with one list loops once).
   const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
   uint refinedSum = refine ? subgroupAdd(valid ? 1u : 0u) : 0u;
   if (subgroupElect()) {
@@ -179,30 +178,8 @@ void main() {
     if (occludedSum > 0) atomicAdd(stats[STAT_OCCLUSION_CULLED], occludedSum);
     if (subpixelSum > 0) atomicAdd(stats[STAT_SUBPIXEL_CULLED], subpixelSum);
   }
-  uint slot = 0;
-  bool pending = whole;
   uint key = sw ? list + DRAW_LISTS : list;  // hardware draws of list l: l; micro-raster draws: DRAW_LISTS + l
-  while (subgroupAny(pending)) {
-    uint current = subgroupMin(pending ? key : DRAW_LIST_NONE);
-    bool mine = pending && key == current;
-    uvec4 ballot = subgroupBallot(mine);
-    uint count = subgroupBallotBitCount(ballot);
-    uint base = 0;
-    if (subgroupElect()) {
-      atomicAdd(stats[counter], count);
-      uint listCounter = current < DRAW_LISTS ? STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + current
-                                              : STAT_SW_DRAWS + pc.phase * DRAW_LISTS + current - DRAW_LISTS;
-      base = atomicAdd(stats[listCounter], count);
-      if (current >= DRAW_LISTS) {  // the micro-raster and its merge run this phase (sw_raster.comp grid-strides)
-        uint args = SW_ARGS + pc.phase * SW_ARGS_UINTS;
-        atomicMax(stats[args + SW_ARGS_DISPATCH], min((base + count + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
-        atomicMax(stats[args + SW_ARGS_MERGE], 3u);
-      }
-    }
-    base = subgroupBroadcastFirst(base);
-    if (mine) slot = base + subgroupBallotExclusiveBitCount(ballot);
-    pending = pending && !mine;
-  }
+  uint slot = takeDrawSlots(whole, key, pc.phase, counter);
   if (!draw) return;
   if (whole) {
     uvec4 region = drawLists[list];  // x: early first slot, y: late first slot, z: capacity

@@ -56,37 +56,13 @@ void main() {
     if (subgroupElect()) {
       if (occludedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_OCCLUDED], occludedSum);
       if (drawnSum > 0u) {
-        atomicAdd(stats[STAT_DRAW_COUNT_LATE], drawnSum);
         atomicAdd(stats[STAT_CLUSTER_DRAWS], drawnSum);
         atomicAdd(stats[STAT_CLUSTERS_RECOVERED], drawnSum);
         atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangleSum);
       }
       if (swTriangleSum > 0u) atomicAdd(stats[STAT_SW_TRIANGLES], swTriangleSum);
     }
-    // Slots: one atomic per subgroup and (list, raster) present in it.
-    uint slot = 0u;
-    bool pending = draw;
-    uint key = sw ? list + DRAW_LISTS : list;  // hardware draws of list l: l; micro-raster draws: DRAW_LISTS + l
-    while (subgroupAny(pending)) {
-      uint current = subgroupMin(pending ? key : DRAW_LIST_NONE);
-      bool mine = pending && key == current;
-      uvec4 ballot = subgroupBallot(mine);
-      uint n = subgroupBallotBitCount(ballot);
-      uint at = 0u;
-      if (subgroupElect()) {
-        uint counter = current < DRAW_LISTS ? STAT_LIST_DRAWS + CULL_PHASE_LATE * DRAW_LISTS + current
-                                            : STAT_SW_DRAWS + CULL_PHASE_LATE * DRAW_LISTS + current - DRAW_LISTS;
-        at = atomicAdd(stats[counter], n);
-        if (current >= DRAW_LISTS) {  // the late micro-raster and its merge run (sw_raster.comp grid-strides)
-          uint args = SW_ARGS + CULL_PHASE_LATE * SW_ARGS_UINTS;
-          atomicMax(stats[args + SW_ARGS_DISPATCH], min((at + n + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
-          atomicMax(stats[args + SW_ARGS_MERGE], 3u);
-        }
-      }
-      at = subgroupBroadcastFirst(at);
-      if (mine) slot = at + subgroupBallotExclusiveBitCount(ballot);
-      pending = pending && !mine;
-    }
+    uint slot = takeDrawSlots(draw, sw ? list + DRAW_LISTS : list, CULL_PHASE_LATE, STAT_DRAW_COUNT_LATE);
     if (draw) {
       uvec4 region = drawLists[list];  // x: early first slot, y: late first slot, z: capacity
       if (slot >= region.z) {  // (the early phase reserved a late cluster draw: never, but counted)

@@ -30,6 +30,36 @@ void appendToList(uint base, bool mine, uint id) {
   if (mine) visibleList[base + VISIBLE_LIST_HEADER + first + subgroupBallotExclusiveBitCount(ballot)] = id;
 }
 
+// Draw slots for the lanes where `pending` holds, each in the region of its `key` (hardware draws of list l: l;
+// micro-raster draws: DRAW_LISTS + l) in this phase: one atomic per subgroup and key present (a scene with one list
+// loops once), the draws counted in stats[counter] too; where the micro-raster takes one, its dispatch (it
+// grid-strides) and merge run this phase. Returns the lane's slot among its key's draws of the phase.
+uint takeDrawSlots(bool pending, uint key, uint phase, uint counter) {
+  uint slot = 0u;
+  while (subgroupAny(pending)) {
+    uint current = subgroupMin(pending ? key : DRAW_LIST_NONE);
+    bool mine = pending && key == current;
+    uvec4 ballot = subgroupBallot(mine);
+    uint count = subgroupBallotBitCount(ballot);
+    uint base = 0u;
+    if (subgroupElect()) {
+      atomicAdd(stats[counter], count);
+      uint listCounter = current < DRAW_LISTS ? STAT_LIST_DRAWS + phase * DRAW_LISTS + current
+                                              : STAT_SW_DRAWS + phase * DRAW_LISTS + current - DRAW_LISTS;
+      base = atomicAdd(stats[listCounter], count);
+      if (current >= DRAW_LISTS) {
+        uint args = SW_ARGS + phase * SW_ARGS_UINTS;
+        atomicMax(stats[args + SW_ARGS_DISPATCH], min((base + count + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
+        atomicMax(stats[args + SW_ARGS_MERGE], 3u);
+      }
+    }
+    base = subgroupBroadcastFirst(base);
+    if (mine) slot = base + subgroupBallotExclusiveBitCount(ballot);
+    pending = pending && !mine;
+  }
+  return slot;
+}
+
 bool frustumVisible(vec3 c, float r) {
   // Conservative margin: covers float rounding of the plane distance (a few ulps of the magnitudes
   // involved), so the GPU never culls what a double-precision test keeps.
