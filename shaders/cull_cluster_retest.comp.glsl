@@ -42,13 +42,7 @@ void main() {
         occluded = 1u;
       } else {
         draw = true;
-        // As the late cluster dispatch routes (cull_clusters.comp): where the late reserve ran out, the hardware
-        // raster keeps every cluster.
-        bool exhausted = stats[STAT_CLUSTER_RESERVED + CULL_PHASE_LATE * DRAW_LISTS + list] >
-                         drawLists[DRAW_LISTS + list].x;
-        bool swList = !exhausted && frame.swRaster != 0u && drawLists[list].w != 0u &&
-                      CLUSTER_TRIANGLES <= frame.swMaxTriangles;
-        sw = swList && smallOnScreen(rect, lo, hi, clusterTriangles);
+        sw = clustersMayUseMicroRaster(CULL_PHASE_LATE, list) && smallOnScreen(rect, lo, hi, clusterTriangles);
       }
     }
     uint occludedSum = subgroupAdd(occluded), drawnSum = subgroupAdd(draw ? 1u : 0u);

@@ -32,12 +32,7 @@ void main() {
     uint n = (triangles + CLUSTER_TRIANGLES - 1u) / CLUSTER_TRIANGLES;
     vec3 eye = cameraInObjectSpace(o);
     bool coneTest = list != DRAW_LIST_OPAQUE_DOUBLE_SIDED && list != DRAW_LIST_MASKED_DOUBLE_SIDED;
-    // Where this phase's reservations in the list ran out, which objects were drawn whole depends on the order the
-    // GPU ran them: their clusters then stay with the hardware raster too, so that the image does not depend on it
-    // (the micro-raster may break an edge tie otherwise than the hardware raster).
-    bool exhausted = stats[STAT_CLUSTER_RESERVED + pc.phase * DRAW_LISTS + list] > drawLists[DRAW_LISTS + list].x;
-    bool swList = !exhausted && frame.swRaster != 0u && drawLists[list].w != 0u &&
-                  CLUSTER_TRIANGLES <= frame.swMaxTriangles;
+    bool swList = clustersMayUseMicroRaster(pc.phase, list);
     bool pyramidTest = frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE;
     // Early cluster occlusion (CULL_CLUSTER_RETEST): the early phase tests against last frame's pyramid too, and
     // defers what it hides to the late phase's retest.

@@ -60,6 +60,15 @@ uint takeDrawSlots(bool pending, uint key, uint phase, uint counter) {
   return slot;
 }
 
+// Whether this phase's surviving clusters of draw list `list` may go to the micro-raster (the small ones). Where the
+// phase's cluster reservations in the list ran out, which objects were drawn whole depends on the order the GPU ran
+// them: their clusters then stay with the hardware raster too, so that the image does not depend on it (the
+// micro-raster may break an edge tie otherwise than the hardware raster).
+bool clustersMayUseMicroRaster(uint phase, uint list) {
+  bool exhausted = stats[STAT_CLUSTER_RESERVED + phase * DRAW_LISTS + list] > drawLists[DRAW_LISTS + list].x;
+  return !exhausted && frame.swRaster != 0u && drawLists[list].w != 0u && CLUSTER_TRIANGLES <= frame.swMaxTriangles;
+}
+
 bool frustumVisible(vec3 c, float r) {
   // Conservative margin: covers float rounding of the plane distance (a few ulps of the magnitudes
   // involved), so the GPU never culls what a double-precision test keeps.

@@ -43,8 +43,10 @@ void FrameHistory::recorded(const FramePlan& plan) {
   if (!plan.gpuCulled) return;
   haveDraws = true;
   lastCull = plan.cull;
-  if (!plan.frozen) pyramidBuilt = plan.usePyramid;
-  if (!plan.frozen) lastSwOn = plan.swOn;
+  if (!plan.frozen) {
+    lastSwOn = plan.swOn;
+    pyramidBuilt = plan.usePyramid;
+  }
 }
 
 void FrameHistory::finished(const FramePlan& plan, const FrameOptions& options, bool cpuDevice, uint64_t swTriangles,
