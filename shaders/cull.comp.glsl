@@ -7,8 +7,8 @@
 //   early: objects visible at the end of last frame (history, dispatched over its list) -> frustum + LOD -> drawn
 //          first;
 //   late:  every object -> frustum (cull_sieve.comp; the objects inside are listed) -> sub-pixel and depth-pyramid
-//          tests (pyramid of the early depth)
-//          -> drawn if visible and not already drawn early; history := visible.
+//          tests (cull_occlusion.comp, pyramid of the early depth; history := visible) -> the objects visible and
+//          not already drawn early are listed, and this shader's late draw dispatch (CULL_LATE_DRAW) takes them.
 //          The pyramid test runs at the level whose texels span the object's rectangle in 2x2; the objects it does
 //          not prove occluded are listed and tested again, three levels finer, by a second dispatch over that list
 //          (CULL_REFINE), which decides them as above.
@@ -50,34 +50,25 @@ void appendToClusterList(bool mine, uint id, uint lod) {
 void main() {
   // The early phase of occlusion culling runs over last frame's visible list (indirect dispatch, one thread per
   // listed object): a heavily occluded scene pays for the few it drew, not for every object it holds.
-  // The late phase's refinement dispatch runs over the list its first dispatch wrote.
-  // The late phase's first dispatch runs over the objects the sieve (cull_sieve.comp) found inside the frustum.
-  const bool refine = pc.phase == CULL_PHASE_LATE && pc.variant == CULL_REFINE;
-  const bool lateListed = pc.phase == CULL_PHASE_LATE && pc.variant == CULL_LATE_LISTED;
-  const uint refineList = VISIBLE_LIST_HEADER + frame.objectCount;
-  const bool listed = (pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION) || refine || lateListed;
-  const uint listBase = refine ? refineList : lateListed ? LATE_LIST_WORD(frame.objectCount) : 0u;
+  // The late draw dispatch runs over the objects the occlusion test (cull_occlusion.comp) listed to draw late.
+  const bool lateDraw = pc.phase == CULL_PHASE_LATE;  // (only occlusion mode has a late phase)
+  const bool listed = (pc.phase == CULL_PHASE_EARLY && frame.cullMode == CULL_OCCLUSION) || lateDraw;
+  const uint listBase = lateDraw ? LATE_DRAW_LIST_WORD(frame.objectCount) : 0u;
   uint id = gl_GlobalInvocationID.x;
   bool valid = id < (listed ? min(visibleList[listBase], frame.objectCount) : frame.objectCount);
   if (listed) id = valid ? visibleList[listBase + VISIBLE_LIST_HEADER + id] : 0u;
-  // Hidden objects and free slots are skipped in every phase. The late phase clears their history bit: the early
-  // phase draws only listed objects and the late phase takes a set bit for "drawn early", so a bit without a list
-  // entry would lose the object when it is shown again or its slot reused (a hidden object is never listed).
-  if (valid && (objectAt(id).flags & OBJECT_FLAG_HIDDEN) != 0u) {
-    valid = false;
-    if (frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE && !refine && history[id] != 0u)
-      history[id] = 0u;
-  }
+  // Hidden objects and free slots are skipped in every phase (the sieve clears their history bit: the early phase
+  // draws only listed objects and the late phase takes a set bit for "drawn early", so a bit without a list entry
+  // would lose the object when it is shown again or its slot reused; a hidden object is never listed).
+  if (valid && (objectAt(id).flags & OBJECT_FLAG_HIDDEN) != 0u) valid = false;
   bool draw = false;
   uint lod = 0;
   uint meshIndex = 0;
   uint list = DRAW_LIST_NONE;
-  uint frustumCulled = 0, occluded = 0, subpixel = 0;
+  uint frustumCulled = 0;
   bool sw = false;  // routed to the software micro-raster
   bool clustered = false;  // listed for the cluster dispatch
   uint clusterCount = 0u;
-  bool visibleNow = false;  // late phase: listed for the next frame's early phase
-  bool deferred = false;  // late phase, first dispatch: listed for the refinement dispatch, decided there
   if (valid) {
     // Only the fields needed are loaded: copying the whole 224-byte MeshData per thread made the pass
     // ~3x slower on lavapipe (0.71 s vs 0.23 s per million objects, all culled, same machine and load).
@@ -90,24 +81,17 @@ void main() {
     vec3 v;
     float rr;
     vec2 lo, hi;
-    bool rect = screenRect(c, r, v, rr, lo, hi);  // (the occlusion test's and the micro-raster routing's)
-    bool inFrustum = frame.cullMode == CULL_NONE || frustumVisible(c, r);
-    if (frame.cullMode != CULL_OCCLUSION) {
-      draw = inFrustum && list != DRAW_LIST_NONE;  // BLEND objects: the transparency pass
-      frustumCulled = inFrustum ? 0u : 1u;
-    } else if (pc.phase == CULL_PHASE_EARLY) {
-      draw = inFrustum && history[id] != 0u && list != DRAW_LIST_NONE;  // culled ones: counted late
+    bool rect = screenRect(c, r, v, rr, lo, hi);  // (the micro-raster routing's)
+    if (lateDraw) {
+      draw = true;  // inside the frustum, visible now, not drawn early, in a draw list (cull_occlusion.comp)
     } else {
-      bool drawnEarly = inFrustum && history[id] != 0u;  // exactly the early phase's decision
-      uint test = inFrustum ? occlusionTest(rect, v, rr, lo, hi, refine, true) : 3u;
-      deferred = test == 4u;
-      if (deferred) test = 5u;  // nothing counted, written or drawn here
-      frustumCulled = test == 3u ? 1u : 0u;
-      occluded = test == 1u ? 1u : 0u;
-      subpixel = test == 2u ? 1u : 0u;
-      if (!deferred) history[id] = test == 0u ? 1u : 0u;
-      draw = test == 0u && !drawnEarly && list != DRAW_LIST_NONE;
-      visibleNow = test == 0u;
+      bool inFrustum = frame.cullMode == CULL_NONE || frustumVisible(c, r);
+      if (frame.cullMode != CULL_OCCLUSION) {
+        draw = inFrustum && list != DRAW_LIST_NONE;  // BLEND objects: the transparency pass
+        frustumCulled = inFrustum ? 0u : 1u;
+      } else {
+        draw = inFrustum && history[id] != 0u && list != DRAW_LIST_NONE;  // culled ones: counted late
+      }
     }
     if (draw && frame.lodErrorPixels > 0.0) {
       // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist.
@@ -163,21 +147,9 @@ void main() {
     if (clusteredSum > 0u && subgroupElect()) atomicAdd(stats[STAT_CLUSTER_OBJECTS], clusteredSum);
   }
   bool whole = draw && !clustered;  // a draw command of its own
-  // The next frame's visible list, and the refinement dispatch's.
-  appendToList(0u, visibleNow, id);
-  if (pc.phase == CULL_PHASE_LATE && !refine) appendToList(refineList, deferred, id);
   uint culledSum = subgroupAdd(frustumCulled);
-  uint occludedSum = subgroupAdd(occluded);
-  uint subpixelSum = subgroupAdd(subpixel);
   const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
-  uint refinedSum = refine ? subgroupAdd(valid ? 1u : 0u) : 0u;
-  if (subgroupElect()) {
-    if (refinedSum > 0) atomicAdd(stats[STAT_REFINE_TESTED], refinedSum);
-    if (refine && occludedSum > 0) atomicAdd(stats[STAT_REFINE_OCCLUDED], occludedSum);
-    if (culledSum > 0) atomicAdd(stats[STAT_FRUSTUM_CULLED], culledSum);
-    if (occludedSum > 0) atomicAdd(stats[STAT_OCCLUSION_CULLED], occludedSum);
-    if (subpixelSum > 0) atomicAdd(stats[STAT_SUBPIXEL_CULLED], subpixelSum);
-  }
+  if (subgroupElect() && culledSum > 0) atomicAdd(stats[STAT_FRUSTUM_CULLED], culledSum);
   uint key = sw ? list + DRAW_LISTS : list;  // hardware draws of list l: l; micro-raster draws: DRAW_LISTS + l
   uint slot = takeDrawSlots(whole, key, pc.phase, counter);
   if (!draw) return;

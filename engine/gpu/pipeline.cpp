@@ -11,6 +11,7 @@
 #include "cull_clusters.comp.h"
 #include "cull_cluster_retest.comp.h"
 #include "cull_sieve.comp.h"
+#include "cull_occlusion.comp.h"
 #include "object_scatter.comp.h"
 #include "covered_pixels.comp.h"
 #include "shade_covered.comp.h"
@@ -88,6 +89,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("cull_clusters.comp", spv_cull_clusters_comp)
   VB_SHADER("cull_cluster_retest.comp", spv_cull_cluster_retest_comp)
   VB_SHADER("cull_sieve.comp", spv_cull_sieve_comp)
+  VB_SHADER("cull_occlusion.comp", spv_cull_occlusion_comp)
   VB_SHADER("object_scatter.comp", spv_object_scatter_comp)
   VB_SHADER("sw_raster.comp", spv_sw_raster_comp)
   VB_SHADER("sw_raster_cpu.comp", spv_sw_raster_cpu_comp)

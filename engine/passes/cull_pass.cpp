@@ -20,6 +20,7 @@ CullPass CullPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout
   p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull.comp", spec);
   p.clusterPipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_clusters.comp", spec);
   p.sievePipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_sieve.comp", spec);
+  p.occlusionPipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_occlusion.comp", spec);
   p.retestPipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "cull_cluster_retest.comp", spec);
   return p;
 }
@@ -59,9 +60,10 @@ void CullPass::recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t 
 
 void CullPass::recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists,
                             VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const {
-  const gpu::Pipeline& p = variant == CULL_CLUSTERS         ? clusterPipeline
-                          : variant == CULL_CLUSTER_RETEST ? retestPipeline
-                                                           : pipeline;
+  const gpu::Pipeline& p = variant == CULL_CLUSTERS                                 ? clusterPipeline
+                          : variant == CULL_CLUSTER_RETEST                         ? retestPipeline
+                          : variant == CULL_LATE_LISTED || variant == CULL_REFINE ? occlusionPipeline
+                                                                                   : pipeline;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   layout.push(cmd, {phase, 0, 0, variant});

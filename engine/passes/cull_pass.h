@@ -14,6 +14,8 @@ struct CullPass {
   gpu::Pipeline pipeline;
   gpu::Pipeline clusterPipeline;  // the cluster dispatch (CULL_CLUSTERS, cull_clusters.comp.glsl)
   gpu::Pipeline sievePipeline;    // the late phase's frustum sieve (CULL_LATE_LISTED, cull_sieve.comp.glsl)
+  // The late phase's occlusion test (CULL_LATE_LISTED and CULL_REFINE, cull_occlusion.comp.glsl)
+  gpu::Pipeline occlusionPipeline;
   gpu::Pipeline retestPipeline;   // the deferred clusters' retest (CULL_CLUSTER_RETEST, cull_cluster_retest.comp.glsl)
   static CullPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec);
   // Its set: the draws it writes, the per-object history and visible lists (config.h VISIBLE_LIST_HEADER, then the
@@ -29,11 +31,12 @@ struct CullPass {
   // cull's from the list's count.
   void recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount) const;
   // An indirect dispatch over a list whose header (at byte `headerOffset` of `lists`) holds the dispatch size: one
-  // thread per object of the early phase of occlusion culling over last frame's visible list and of the late phase's
-  // first dispatch over the objects inside the frustum (variant CULL_LATE_LISTED) and of its refinement dispatch
-  // (variant CULL_REFINE) over the objects the first listed; one workgroup per object
-  // of the cluster dispatch (variant CULL_CLUSTERS, its header in the stats buffer); one thread per deferred cluster
-  // of the late phase's retest (variant CULL_CLUSTER_RETEST, its header in the stats buffer) (config.h).
+  // thread per object of the early phase of occlusion culling over last frame's visible list, of the late phase's
+  // occlusion test over the objects inside the frustum (variant CULL_LATE_LISTED), of its refinement dispatch
+  // (variant CULL_REFINE) over the objects the first listed, and of the late draw dispatch (variant CULL_LATE_DRAW)
+  // over the objects those two listed to draw; one workgroup per object of the cluster dispatch (variant
+  // CULL_CLUSTERS, its header in the stats buffer); one thread per deferred cluster of the late phase's retest
+  // (variant CULL_CLUSTER_RETEST, its header in the stats buffer) (config.h).
   void recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists, VkDeviceSize headerOffset,
                     uint32_t phase, uint32_t variant) const;
 };

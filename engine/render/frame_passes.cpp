@@ -232,6 +232,10 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
     });
+  if (occlusion && late)  // the objects those tests found visible and the early phase did not draw: LOD, routing
+    p.step(cullUses(), [this](VkCommandBuffer cmd) {
+      cull.recordListed(cmd, sceneSet, visibleList, lateDrawListOffset(), CULL_PHASE_LATE, CULL_LATE_DRAW);
+    });
   if (plan.clusters)  // the clusters of the objects this phase listed for them
     p.step(cullUses(), [this, phase](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, stats, (CLUSTER_ARGS + phase * CLUSTER_ARGS_UINTS) * sizeof(uint32_t), phase,

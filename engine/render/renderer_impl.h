@@ -224,10 +224,16 @@ struct Renderer::Impl {
   VkDeviceSize lateListOffset() const {
     return (2 * (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) + 2 * VkDeviceSize(gpuScene.objectCount)) * 4;
   }
-  // Empties the visible list, the refinement list and the late list (count 0, dispatch size 0 x 1 x 1).
+  // Byte offset of the late phase's list of the objects to draw late (config.h LATE_DRAW_LIST_WORD).
+  VkDeviceSize lateDrawListOffset() const {
+    return (lateListOffset() / 4 + VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount) +
+            2 * VkDeviceSize(RETEST_CAPACITY(gpuScene.objectCount))) * 4;
+  }
+  // Empties the visible list, the refinement list, the late list and the late draw list (count 0, dispatch size
+  // 0 x 1 x 1).
   void resetVisibleList(VkCommandBuffer cmd) const {
     const uint32_t header[VISIBLE_LIST_HEADER] = {0, 0, 1, 1};
-    for (VkDeviceSize offset : {VkDeviceSize(0), refineListOffset(), lateListOffset()})
+    for (VkDeviceSize offset : {VkDeviceSize(0), refineListOffset(), lateListOffset(), lateDrawListOffset()})
       vkCmdUpdateBuffer(cmd, visibleList.handle(), offset, sizeof(header), header);
   }
 

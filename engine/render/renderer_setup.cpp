@@ -346,9 +346,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                               gpu::MemoryUse::DeviceLocal);
   // The visible list, the refinement list, the cluster lists' (object, LOD) entries (config.h CLUSTER_ARGS), the
-  // late list (LATE_LIST_WORD), then the retest list's entries (RETEST_LIST_WORD).
-  impl->visibleList = gpu::Buffer(device, (uint64_t(RETEST_LIST_WORD(impl->gpuScene.objectCount)) +
-                                           2 * uint64_t(RETEST_CAPACITY(impl->gpuScene.objectCount))) * 4,
+  // late list (LATE_LIST_WORD), the retest list's entries (RETEST_LIST_WORD), then the late draw list
+  // (LATE_DRAW_LIST_WORD).
+  impl->visibleList = gpu::Buffer(device, (impl->lateDrawListOffset() / 4 + VISIBLE_LIST_HEADER +
+                                           uint64_t(impl->gpuScene.objectCount)) * 4,
                                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                                       VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                                   gpu::MemoryUse::DeviceLocal);

@@ -50,6 +50,10 @@
 // does not hide, so that a wrong guess costs time, never a pixel: the early phase draws every object of last frame's
 // visible set, with its clusters that the old pyramid does not hide.
 #define CULL_CLUSTER_RETEST 4u
+// The late phase's occlusion test (cull_occlusion.comp, variants CULL_LATE_LISTED and CULL_REFINE) decides
+// visibility only and lists the objects to draw late (visible now, not drawn early: LATE_DRAW_LIST_WORD); the late
+// draw dispatch (cull.comp, PassConstants.variant = CULL_LATE_DRAW, indirect) selects their LOD and routes them.
+#define CULL_LATE_DRAW 5u
 #define SIEVE_OBJECTS_PER_THREAD 8u  // cull_sieve.comp: one atomic per subgroup for this many objects per lane
 #define CLUSTER_TRIANGLES 64u
 // Only objects whose screen box exceeds this many pixels per side (or that reach the near plane) are drawn as
@@ -203,7 +207,8 @@
 // early cull's indirect dispatch (x, 1, 1) --, then the object IDs in append order. Written by the late cull, reset
 // before it. The late phase's refinement list (CULL_REFINE) follows it in the same buffer, at word
 // VISIBLE_LIST_HEADER + objectCount, in the same layout. Then the cluster lists' (object, LOD) entries (2 x
-// objectCount words), then the late phase's list of the objects inside the frustum (CULL_LATE_LISTED), same layout.
+// objectCount words), then the late phase's list of the objects inside the frustum (CULL_LATE_LISTED), same layout,
+// then the retest list and the late draw list.
 #define VISIBLE_LIST_HEADER 4u
 #define LATE_LIST_WORD(objectCount) (2u * (VISIBLE_LIST_HEADER + (objectCount)) + 2u * (objectCount))
 // After the late list: the retest list's entries (2 words each: object ID, LOD << 24 | cluster; RETEST_ARGS holds its
@@ -211,6 +216,8 @@
 #define RETEST_LIST_WORD(objectCount) (LATE_LIST_WORD(objectCount) + VISIBLE_LIST_HEADER + (objectCount))
 #define RETEST_CAPACITY(objectCount) ((objectCount) + 65536u)
 #define RETEST_NONE 0xFFFFFFFFu  // an entry whose cluster was drawn early after all (no late draw left to reserve)
+// After the retest list's room: the late draw list (CULL_LATE_DRAW), in the visible list's layout.
+#define LATE_DRAW_LIST_WORD(objectCount) (RETEST_LIST_WORD(objectCount) + 2u * RETEST_CAPACITY(objectCount))
 
 // Materials (types.h MaterialData). Flags: the glTF alpha mode and double-sidedness.
 #define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out

@@ -245,7 +245,7 @@ struct PassConstants {
   uint drawBase;  // slot of this phase's first draw in the draw buffer (late draws follow the early ones)
   uint material;  // classified shading: the material of this dispatch; classification's scan: the material count;
                   // skinning: SKIN_MODE_* flags
-  uint variant;   // cull: CULL_REFINE in the late phase's refinement dispatch; skin bounds: the step (SKIN_BOUNDS_*)
+  uint variant;   // cull: which dispatch of a phase (config.h CULL_REFINE ...); skin bounds: the step (SKIN_BOUNDS_*)
 };
 
 // Push constants of one depth pyramid dispatch (32 bytes): the valid size of its source level (ceil(size / 2^k)),
