@@ -20,6 +20,11 @@ void main() {
   const uint counter = pc.phase == CULL_PHASE_LATE ? STAT_DRAW_COUNT_LATE : STAT_DRAW_COUNT;
   if (gl_LocalInvocationIndex < CULL_WORKGROUP_SIZE / 32u) hwClusters[gl_LocalInvocationIndex] = 0u;
   barrier();
+  // The counters, per lane over every cluster it takes, added to the stats once at the end (on lavapipe each atomic
+  // on a word every core writes is a locked operation bouncing between the cores: per batch of clusters they cost
+  // more than the tests). Only the draw slots are taken as the clusters go.
+  uint tested = 0u, frustumCulled = 0u, backfacing = 0u, occluded = 0u, deferred = 0u;
+  uint drawCount = 0u, drawnTriangles = 0u, swTriangles = 0u, swDispatch = 0u;
   for (uint e = gl_WorkGroupID.x; e < count; e += gl_NumWorkGroups.x) {
     uint at = pc.phase == CULL_PHASE_LATE ? frame.objectCount - 1u - e : e;
     uint word = 2u * (VISIBLE_LIST_HEADER + frame.objectCount) + 2u * at;
@@ -117,34 +122,22 @@ void main() {
       uint runTriangles = startsRun ? min(triangles - c * CLUSTER_TRIANGLES, runClusters * CLUSTER_TRIANGLES) : 0u;
       uvec4 drawBallot = subgroupBallot(startsRun), swBallot = subgroupBallot(sw);
       uint hwCount = subgroupBallotBitCount(drawBallot), swCount = subgroupBallotBitCount(swBallot);
-      uint tested = subgroupAdd(valid ? 1u : 0u);
-      uint frustumSum = subgroupAdd(culledFrustum), backSum = subgroupAdd(culledBack);
-      uint occludedSum = subgroupAdd(culledOccluded), deferredSum = subgroupAdd(defer ? 1u : 0u);
-      uint triangleSum = subgroupAdd(runTriangles + (sw ? clusterTriangles : 0u));
-      uint swTriangleSum = subgroupAdd(sw ? clusterTriangles : 0u);
+      tested += valid ? 1u : 0u;
+      frustumCulled += culledFrustum;
+      backfacing += culledBack;
+      occluded += culledOccluded;
+      deferred += defer ? 1u : 0u;
+      drawCount += startsRun || sw ? 1u : 0u;
+      drawnTriangles += runTriangles + (sw ? clusterTriangles : 0u);
+      swTriangles += sw ? clusterTriangles : 0u;
       uint hwBase = 0u, swBase = 0u;
       if (subgroupElect()) {
-        if (tested > 0u) atomicAdd(stats[STAT_CLUSTERS_TESTED], tested);
-        if (frustumSum > 0u) atomicAdd(stats[STAT_CLUSTERS_FRUSTUM], frustumSum);
-        if (backSum > 0u) atomicAdd(stats[STAT_CLUSTERS_BACKFACING], backSum);
-        if (occludedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_OCCLUDED], occludedSum);
-        if (deferredSum > 0u) atomicAdd(stats[STAT_CLUSTERS_DEFERRED], deferredSum);
-        if (hwCount + swCount > 0u) {
-          atomicAdd(stats[counter], hwCount + swCount);
-          atomicAdd(stats[STAT_CLUSTER_DRAWS], hwCount + swCount);
-          atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangleSum);
-        }
         if (hwCount > 0u) hwBase = atomicAdd(stats[STAT_LIST_DRAWS + pc.phase * DRAW_LISTS + list], hwCount);
-        if (swCount > 0u) {
-          swBase = atomicAdd(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + list], swCount);
-          atomicAdd(stats[STAT_SW_TRIANGLES], swTriangleSum);
-          uint swArgs = SW_ARGS + pc.phase * SW_ARGS_UINTS;
-          atomicMax(stats[swArgs + SW_ARGS_DISPATCH], min((swBase + swCount + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
-          atomicMax(stats[swArgs + SW_ARGS_MERGE], 3u);
-        }
+        if (swCount > 0u) swBase = atomicAdd(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + list], swCount);
       }
       hwBase = subgroupBroadcastFirst(hwBase);
       swBase = subgroupBroadcastFirst(swBase);
+      if (swCount > 0u) swDispatch = max(swDispatch, min((swBase + swCount + 7u) / 8u, SW_RASTER_MAX_WORKGROUPS));
       uint slot = startsRun ? hwBase + subgroupBallotExclusiveBitCount(drawBallot)
                             : swBase + subgroupBallotExclusiveBitCount(swBallot);
       if (startsRun || sw) {
@@ -157,6 +150,28 @@ void main() {
                                             vertexOffset, id);
         }
       }
+    }
+  }
+  uint testedSum = subgroupAdd(tested), frustumSum = subgroupAdd(frustumCulled), backSum = subgroupAdd(backfacing);
+  uint occludedSum = subgroupAdd(occluded), deferredSum = subgroupAdd(deferred), drawSum = subgroupAdd(drawCount);
+  uint triangleSum = subgroupAdd(drawnTriangles), swTriangleSum = subgroupAdd(swTriangles);
+  uint swDispatchMax = subgroupMax(swDispatch);
+  if (subgroupElect()) {
+    if (testedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_TESTED], testedSum);
+    if (frustumSum > 0u) atomicAdd(stats[STAT_CLUSTERS_FRUSTUM], frustumSum);
+    if (backSum > 0u) atomicAdd(stats[STAT_CLUSTERS_BACKFACING], backSum);
+    if (occludedSum > 0u) atomicAdd(stats[STAT_CLUSTERS_OCCLUDED], occludedSum);
+    if (deferredSum > 0u) atomicAdd(stats[STAT_CLUSTERS_DEFERRED], deferredSum);
+    if (drawSum > 0u) {
+      atomicAdd(stats[counter], drawSum);
+      atomicAdd(stats[STAT_CLUSTER_DRAWS], drawSum);
+      atomicAdd(stats[STAT_TRIANGLES_DRAWN], triangleSum);
+    }
+    if (swDispatchMax > 0u) {
+      uint swArgs = SW_ARGS + pc.phase * SW_ARGS_UINTS;
+      atomicAdd(stats[STAT_SW_TRIANGLES], swTriangleSum);
+      atomicMax(stats[swArgs + SW_ARGS_DISPATCH], swDispatchMax);
+      atomicMax(stats[swArgs + SW_ARGS_MERGE], 3u);
     }
   }
 }
