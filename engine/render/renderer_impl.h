@@ -225,10 +225,7 @@ struct Renderer::Impl {
     return (2 * (VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount)) + 2 * VkDeviceSize(gpuScene.objectCount)) * 4;
   }
   // Byte offset of the late phase's list of the objects to draw late (config.h LATE_DRAW_LIST_WORD).
-  VkDeviceSize lateDrawListOffset() const {
-    return (lateListOffset() / 4 + VISIBLE_LIST_HEADER + VkDeviceSize(gpuScene.objectCount) +
-            2 * VkDeviceSize(RETEST_CAPACITY(gpuScene.objectCount))) * 4;
-  }
+  VkDeviceSize lateDrawListOffset() const { return LATE_DRAW_LIST_WORD(VkDeviceSize(gpuScene.objectCount)) * 4; }
   // Empties the visible list, the refinement list, the late list and the late draw list (count 0, dispatch size
   // 0 x 1 x 1).
   void resetVisibleList(VkCommandBuffer cmd) const {
