@@ -3,7 +3,8 @@
 // occlusion history cleared between configurations). Every configuration's measured frames are compared
 // with a reference rendered once per camera of the path (forward path, no culling, no LOD; visbuf with no
 // culling and no LOD when that would draw too many triangles). Writes bench.json, bench.csv, bench.md and
-// bench.svg (time-vs-PSNR plot with the Pareto front) to the output folder, each atomically.
+// bench.svg (time-vs-PSNR plot with the Pareto front) to the output folder, each atomically
+// (tools/bench_report.cpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,7 +19,7 @@
 #include <unistd.h>
 
 #include "bench_in_flight.h"
-#include "bench_plot.h"
+#include "bench_report.h"
 #include "cli_checks.h"
 #include "commands.h"
 #include "render_budget.h"
@@ -29,14 +30,8 @@
 #include "visbuf/asset/pack_reader.h"
 #include "visbuf/asset/pack_writer.h"
 #include "invocation.h"
-#include "stats_output.h"
 
 namespace visbuf::tools {
-
-namespace {
-
-
-}  // namespace
 
 void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   for (int i = 0; i < argc; ++i) c.commandLine += (i ? " " : "") + shellQuote(argv[i]);
@@ -189,61 +184,6 @@ double p95(std::vector<double> v) {  // nearest rank
   return v[std::clamp<size_t>(rank, 1, v.size()) - 1];
 }
 
-nlohmann::json dbJson(double db) { return std::isfinite(db) ? nlohmann::json(db) : nlohmann::json("inf"); }
-std::string dbText(double db) { return std::isfinite(db) ? fmt::format("{:.2f}", db) : std::string("inf"); }
-
-struct Config {
-  RenderPath path;
-  CullMode cull;
-  float lod;          // <= 0: off
-  std::string lodLabel;
-  bool wideIds = false;  // visbuf: the 64-bit ID target forced where the renderer would pick 32 bits
-  bool quantized = false;  // vertices quantised as `bake --quantize` stores them (pack round trip in memory)
-  uint32_t msaa = 1;       // samples per pixel (FrameOptions::msaa); its reference renders at the same count
-  ShadingMode shading = ShadingMode::Auto;  // visbuf only
-  SwRasterMode swRaster = SwRasterMode::Auto;  // visbuf only
-};
-
-// "visbuf", or "visbuf 4x" with MSAA (tables).
-std::string pathLabel(const Config& k) {
-  return k.msaa > 1 ? fmt::format("{} {}x", renderPathName(k.path), k.msaa) : std::string(renderPathName(k.path));
-}
-
-
-struct Row {
-  uint32_t objects = 0;
-  Config config;
-  std::vector<std::pair<std::string, std::pair<double, double>>> passMs;  // name -> median, p95
-  double frameMedian = 0, frameP95 = 0, gpuMedian = 0, gpuP95 = 0, cpuMedian = 0, wallMedian = 0;
-  double trianglesMedian = 0, drawnMedian = 0;
-  // Visbuf, single-sampled: triangles drawn per covered pixel (median; a visibility buffer's ideal is about 1);
-  // 0 where the path does not count covered pixels.
-  double trianglesPerCoveredPixel = 0;
-  uint64_t sceneBytes = 0, targetBytesPerPixel = 0;
-  // One extra (untimed) frame at the last measured camera with countOverdraw: depth-passing raster writes per
-  // pixel and the bytes written per pixel (FrameStats::bytesWrittenPerPixel).
-  double rasterWritesPerPixel = 0, bytesWrittenPerPixel = 0;
-  double perSamplePixels = 0;  // visbuf MSAA: median pixels shaded per distinct sample ID
-  double psnrMean = INFINITY, psnrWorst = INFINITY, maxAbs = 0, meanAbs = 0, differingFraction = 0;
-  std::optional<uint64_t> idMismatches;  // pixels over all measured frames; empty: not comparable
-  uint64_t idPixels = 0;
-  std::string reference;
-  std::string idBits;  // "32" / "64": bits per pixel of the visbuf ID target; "-": forward (none)
-  std::string shading = "-";  // visbuf: the shading mode used (uber / classified); "-": other paths
-  std::string raster = "hw";  // visbuf: "hw+sw" where the last measured frame used the software micro-raster
-  double materialsPresent = 0, classifiedTiles = 0;  // classified: medians over the measured frames
-  bool pareto = false;
-};
-
-struct SceneInfo {
-  uint32_t objects = 0;  // as asked (0: the file's own)
-  uint32_t sceneObjects = 0;
-  uint64_t triangles = 0;
-  std::string reference;
-  std::string referenceReason;
-  double referenceFrameMsMedian = 0;
-};
-
 std::string lodText(float lod) { return lod > 0 ? fmt::format("{:g}", lod) : std::string("off"); }
 
 }  // namespace
@@ -271,24 +211,11 @@ std::string utcNow() {
 
 namespace {
 
-uint64_t countIdMismatches(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
-  if (a.size() != b.size()) return std::max(a.size(), b.size()) / 2;
-  uint64_t n = 0;
-  for (size_t i = 0; i + 1 < a.size(); i += 2) n += (a[i] != b[i] || a[i + 1] != b[i + 1]) ? 1 : 0;
-  return n;
-}
+// ---- the configuration matrix ---------------------------------------------------------------------------
 
-}  // namespace
-
-int runBench(const BenchCommand& c) {
-  auto size = parseSize(c.size);
-  if (!size) return benchFail(size.error());
-  auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
-  if (!devOptions) return benchFail(devOptions.error());
-  if (c.paths.empty() || c.cull.empty() || c.lod.empty() || c.shading.empty())
-    return benchFail({ErrorCode::InvalidArgument, "--paths, --cull, --lod and --shading need at least one value each"});
-
-  // The configuration matrix.
+// path x cull x MSAA x LOD x IDs x vertices x shading x micro-raster. A path/cull pair that would repeat another
+// goes to `skipped` with the reason; the visbuf-only dimensions are not varied for the other paths.
+Result<std::vector<BenchConfig>> configMatrix(const BenchCommand& c, nlohmann::json& skipped) {
   std::vector<float> lods;
   for (const std::string& s : c.lod) {
     if (s == "off") {
@@ -298,11 +225,10 @@ int runBench(const BenchCommand& c) {
     char* end = nullptr;
     const float v = std::strtof(s.c_str(), &end);
     if (s.empty() || *end != '\0' || !std::isfinite(v) || v < 0.0f)
-      return benchFail({ErrorCode::InvalidArgument, fmt::format("--lod '{}': expected off or a threshold >= 0 px", s)});
+      return Error{ErrorCode::InvalidArgument, fmt::format("--lod '{}': expected off or a threshold >= 0 px", s)};
     lods.push_back(v);
   }
-  std::vector<Config> configs;
-  nlohmann::json skipped = nlohmann::json::array();
+  std::vector<BenchConfig> configs;
   for (const std::string& p : c.paths)
     for (const std::string& cu : c.cull) {
       const RenderPath path = p == "forward"   ? RenderPath::Forward
@@ -327,7 +253,312 @@ int runBench(const BenchCommand& c) {
                                      v == "quantized", m, parseShadingMode(sh), parseSwRasterMode(sw)});
                 }
     }
-  if (configs.empty()) return benchFail({ErrorCode::InvalidArgument, "no configuration left to run"});
+  if (configs.empty()) return Error{ErrorCode::InvalidArgument, "no configuration left to run"};
+  return configs;
+}
+
+// ---- one scene size -------------------------------------------------------------------------------------
+
+// The renderers of the other precision variants of a scene: 64-bit IDs forced (--ids wide), quantised vertices
+// (--vertices quantized: the scene through an in-memory pack written with quantisation and read back). The
+// quantised scene is kept beside the renderers drawing it.
+struct PrecisionVariants {
+  std::unique_ptr<Scene> quantizedScene;
+  std::map<std::pair<bool, bool>, std::unique_ptr<Renderer>> renderers;  // (wide IDs, quantised) -> renderer
+};
+
+Status createVariants(gpu::Device& device, const Scene& scene, const RendererConfig& rc,
+                      const std::vector<BenchConfig>& configs, PrecisionVariants& variants) {
+  if (std::any_of(configs.begin(), configs.end(), [](const BenchConfig& k) { return k.quantized; })) {
+    PackWriteOptions po;
+    po.quantize = true;
+    auto bytes = serializePack(scene, po);
+    if (!bytes) return bytes.error();
+    auto q = parsePack(bytes->data(), bytes->size(), "quantised scene");
+    if (!q) return q.error();
+    variants.quantizedScene = std::make_unique<Scene>(std::move(*q));
+  }
+  for (const BenchConfig& k : configs) {
+    if ((!k.wideIds && !k.quantized) || variants.renderers.count({k.wideIds, k.quantized})) continue;
+    RendererConfig vc = rc;
+    vc.forceWideIds = k.wideIds;
+    auto vr = Renderer::create(device, k.quantized ? *variants.quantizedScene : scene, vc);
+    if (!vr) return vr.error();
+    variants.renderers[{k.wideIds, k.quantized}] = std::move(*vr);
+  }
+  return {};
+}
+
+// The forward path as the reference (else visbuf with no culling and no LOD).
+bool forwardReference(const BenchCommand& c, uint64_t triangles) {
+  return c.reference == "forward" || (c.reference == "auto" && triangles <= c.referenceMaxTriangles);
+}
+
+// The scene's size and which reference its rows are compared with (and why).
+BenchSceneInfo sceneInfo(const BenchCommand& c, uint32_t objects, const Scene& scene) {
+  BenchSceneInfo info;
+  info.objects = objects;
+  info.sceneObjects = uint32_t(scene.objects.size());
+  info.triangles = scene.totalTriangles();
+  const bool forwardRef = forwardReference(c, info.triangles);
+  info.reference = forwardRef ? "forward-full" : "visbuf-full";
+  info.referenceReason = c.reference != "auto" ? "asked for (--reference)"
+                         : forwardRef
+                             ? fmt::format("{} triangles <= --reference-max-triangles {}", info.triangles,
+                                           c.referenceMaxTriangles)
+                             : fmt::format("{} triangles > --reference-max-triangles {}: forward would be too slow",
+                                           info.triangles, c.referenceMaxTriangles);
+  return info;
+}
+
+struct References {
+  std::map<uint32_t, std::vector<std::vector<float>>> colors;  // per sample count, per measured camera
+  std::vector<std::vector<uint32_t>> fullIds;  // per measured camera: visbuf with no culling and no LOD
+  std::vector<double> frameMs;                 // the single-sampled references' GPU + record times
+};
+
+// References, once per measured camera (and per MSAA sample count: each row is compared at its own count).
+Result<References> renderReferences(const BenchCommand& c, Renderer& r, const std::vector<Camera>& path,
+                                    bool forwardRef, bool needFullIds) {
+  References ref;
+  ref.fullIds.resize(c.frames);
+  r.clearHistory();
+  for (uint32_t m : c.msaa) {
+    if (m == 1) continue;
+    ref.colors[m].resize(c.frames);
+    for (uint32_t f = 0; f < c.frames; ++f) {
+      FrameOptions ro;
+      ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
+      ro.cull = CullMode::None;
+      ro.lodErrorPixels = 0.0f;
+      ro.tiledLights = false;
+      ro.swRaster = SwRasterMode::Off;  // the exact reference: hardware raster only
+      ro.msaa = m;
+      auto frame = r.renderFrame(path[c.warmup + f], ro);
+      if (!frame) return frame.error();
+      ref.colors[m][f] = std::move(frame->color);
+    }
+  }
+  std::vector<std::vector<float>>& refColor = ref.colors[1];
+  refColor.resize(c.frames);
+  for (uint32_t f = 0; f < c.frames; ++f) {
+    const Camera& cam = path[c.warmup + f];
+    FrameOptions ro;
+    ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
+    ro.cull = CullMode::None;
+    ro.lodErrorPixels = 0.0f;
+    ro.tiledLights = false;  // every point light at every pixel
+    ro.swRaster = SwRasterMode::Off;  // hardware raster only
+    ro.readColor = true;
+    ro.readIds = !forwardRef && needFullIds;
+    auto frame = r.renderFrame(cam, ro);
+    if (!frame) return frame.error();
+    refColor[f] = std::move(frame->color);
+    if (ro.readIds) ref.fullIds[f] = std::move(frame->ids);
+    ref.frameMs.push_back(frame->stats.gpuMs + frame->stats.cpuRecordMs);
+    if (forwardRef && needFullIds) {
+      FrameOptions io = ro;
+      io.path = RenderPath::Visbuf;
+      io.readColor = false;
+      io.readIds = true;
+      auto idFrame = r.renderFrame(cam, io);
+      if (!idFrame) return idFrame.error();
+      ref.fullIds[f] = std::move(idFrame->ids);
+    }
+  }
+  return ref;
+}
+
+uint64_t countIdMismatches(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
+  if (a.size() != b.size()) return std::max(a.size(), b.size()) / 2;
+  uint64_t n = 0;
+  for (size_t i = 0; i + 1 < a.size(); i += 2) n += (a[i] != b[i] || a[i + 1] != b[i + 1]) ? 1 : 0;
+  return n;
+}
+
+// The row's times and counters: medians (and p95s) over the measured frames.
+void summarizeFrames(BenchRow& row, const std::vector<FrameStats>& measured) {
+  std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
+  std::vector<std::string> passNames;
+  std::vector<double> perCovered;
+  for (const FrameStats& s : measured) {
+    frameMs.push_back(s.gpuMs + s.cpuRecordMs);
+    gpu.push_back(s.gpuMs);
+    cpu.push_back(s.cpuRecordMs);
+    wall.push_back(s.wallMs);
+    tris.push_back(double(s.trianglesDrawn));
+    if (s.coveredPixels > 0) perCovered.push_back(double(s.trianglesDrawn) / double(s.coveredPixels));
+    drawn.push_back(double(s.cull.drawsRendered));
+    for (const auto& [name, ms] : s.graph.passMs)
+      if (std::find(passNames.begin(), passNames.end(), name) == passNames.end()) passNames.push_back(name);
+  }
+  for (const std::string& name : passNames) {  // a pass a frame did not run (a skipped pyramid) took 0 ms
+    std::vector<double> v;
+    for (const FrameStats& s : measured) {
+      double ms = 0.0;
+      for (const auto& [n, t] : s.graph.passMs)
+        if (n == name) ms += t;
+      v.push_back(ms);
+    }
+    row.passMs.push_back({name, {median(v), p95(v)}});
+  }
+  row.frameMedian = median(frameMs);
+  row.frameP95 = p95(frameMs);
+  row.gpuMedian = median(gpu);
+  row.gpuP95 = p95(gpu);
+  row.cpuMedian = median(cpu);
+  row.wallMedian = median(wall);
+  row.trianglesMedian = median(tris);
+  row.drawnMedian = median(drawn);
+  row.trianglesPerCoveredPixel = perCovered.empty() ? 0.0 : median(perCovered);
+  {
+    std::vector<double> present, pairs;
+    for (const FrameStats& s : measured)
+      present.push_back(s.shade.materialsPresent), pairs.push_back(s.shade.classifiedTiles);
+    row.materialsPresent = median(present);
+    row.classifiedTiles = median(pairs);
+  }
+  row.sceneBytes = measured.back().sceneBytes;
+  row.targetBytesPerPixel = measured.back().targetBytesPerPixel;
+  std::vector<double> perSample;
+  for (const FrameStats& s : measured) perSample.push_back(double(s.shade.perSamplePixels));
+  row.perSamplePixels = median(perSample);
+}
+
+// PSNR over all measured frames = that of their mean squared error; worst = lowest frame.
+void summarizeErrors(BenchRow& row, const std::vector<ImageError>& errors) {
+  double mseSum = 0.0;
+  row.psnrWorst = INFINITY;
+  for (const ImageError& e : errors) {
+    mseSum += std::isfinite(e.psnr) ? std::pow(10.0, -e.psnr / 10.0) : 0.0;
+    row.psnrWorst = std::min(row.psnrWorst, e.psnr);
+    row.maxAbs = std::max(row.maxAbs, e.maxAbs);
+    row.meanAbs += e.meanAbs / double(errors.size());
+    row.differingFraction += e.differingFraction / double(errors.size());
+  }
+  const double mse = mseSum / double(errors.size());
+  row.psnrMean = mse > 0 ? 10.0 * std::log10(1.0 / mse) : INFINITY;
+}
+
+// One configuration along the whole path (history cleared first), its measured frames compared with the
+// references.
+Result<BenchRow> measureConfig(const BenchCommand& c, Renderer& rk, const BenchConfig& k,
+                               const std::vector<Camera>& path, const References& ref, const BenchSceneInfo& info,
+                               uint32_t pixels) {
+  rk.clearHistory();
+  const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f && k.msaa == 1;  // (1 ID per pixel)
+  std::vector<FrameStats> measured;
+  std::vector<ImageError> errors;
+  uint64_t mismatches = 0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const bool measure = i >= c.warmup;
+    FrameOptions fo;
+    fo.path = k.path;
+    fo.cull = k.cull;
+    fo.lodErrorPixels = k.lod;
+    fo.msaa = k.msaa;
+    fo.readColor = measure;
+    fo.readIds = measure && idComparable;
+    fo.shading = k.shading;
+    fo.swRaster = k.swRaster;
+    auto frame = rk.renderFrame(path[i], fo);
+    if (!frame) return frame.error();
+    if (!measure) continue;
+    const size_t f = i - c.warmup;
+    measured.push_back(frame->stats);
+    errors.push_back(compareColor(frame->color, ref.colors.at(k.msaa)[f]));
+    if (idComparable) mismatches += countIdMismatches(frame->ids, ref.fullIds[f]);
+  }
+  BenchRow row;
+  if (k.msaa == 1) {  // bandwidth: the raster's real writes at the last measured camera (not timed: the counting
+                      // costs atomics; single-sampled only)
+    FrameOptions bo;
+    bo.path = k.path;
+    bo.cull = k.cull;
+    bo.lodErrorPixels = k.lod;
+    bo.readColor = false;
+    bo.countOverdraw = true;
+    bo.shading = k.shading;
+    auto frame = rk.renderFrame(path.back(), bo);
+    if (!frame) return frame.error();
+    row.rasterWritesPerPixel = frame->stats.rasterWritesPerPixel;
+    row.bytesWrittenPerPixel = frame->stats.bytesWrittenPerPixel;
+  }
+  row.objects = info.objects;
+  row.config = k;
+  row.reference = info.reference;
+  row.idBits = k.path != RenderPath::Visbuf ? "-" : rk.idEncoding().wide ? "64" : "32";
+  if (k.path == RenderPath::Visbuf) {
+    row.shading = shadingModeName(measured.back().shade.mode);
+    row.raster = measured.back().sw.on ? "hw+sw" : "hw";
+  }
+  summarizeFrames(row, measured);
+  summarizeErrors(row, errors);
+  if (idComparable) {
+    row.idMismatches = mismatches;
+    row.idPixels = uint64_t(pixels) * measured.size();
+  }
+  return row;
+}
+
+// The scene of one object count: its references, then every configuration, a console line each; appends the
+// scene and its rows to `results`.
+Status benchScene(const BenchCommand& c, gpu::Device& device, uint32_t width, uint32_t height,
+                  const std::vector<BenchConfig>& configs, uint32_t objects, BenchResults& results) {
+  auto scene = loadScene(sceneOptions(c, objects));
+  if (!scene) return scene.error();
+  RendererConfig rc;
+  rc.width = width;
+  rc.height = height;
+  auto renderer = Renderer::create(device, *scene, rc);
+  if (!renderer) return renderer.error();
+  Renderer& r = **renderer;
+  PrecisionVariants variants;
+  if (Status s = createVariants(device, *scene, rc, configs, variants); !s) return s;
+  const std::vector<Camera> path = benchCameraPath(*scene, c.warmup, c.frames);
+
+  BenchSceneInfo info = sceneInfo(c, objects, *scene);
+  const bool forwardRef = forwardReference(c, info.triangles);
+  const bool needFullIds = std::any_of(configs.begin(), configs.end(), [](const BenchConfig& k) {
+    return k.path == RenderPath::Visbuf && k.lod <= 0.0f;
+  });
+  std::printf("scene %s, %u objects, %llu full-detail triangles; reference: %s (%s)\n", printable(scene->name).c_str(),
+              info.sceneObjects, (unsigned long long)info.triangles, info.reference.c_str(),
+              info.referenceReason.c_str());
+
+  auto ref = renderReferences(c, r, path, forwardRef, needFullIds);
+  if (!ref) return ref.error();
+  info.referenceFrameMsMedian = median(ref->frameMs);
+
+  for (const BenchConfig& k : configs) {
+    Renderer& rk = k.wideIds || k.quantized ? *variants.renderers.at({k.wideIds, k.quantized}) : r;
+    auto row = measureConfig(c, rk, k, path, *ref, info, width * height);
+    if (!row) return row.error();
+    std::printf("  %-10s %-5s %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
+                pathLabel(k).c_str(), row->raster.c_str(), row->shading.c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
+                row->idBits.c_str(), k.quantized ? "q16" : "float", row->frameMedian, row->frameP95,
+                row->trianglesMedian, dbText(row->psnrMean).c_str(), dbText(row->psnrWorst).c_str(),
+                row->idMismatches ? fmt::format("{}", *row->idMismatches).c_str() : "n/a");
+    std::fflush(stdout);
+    results.rows.push_back(std::move(*row));
+  }
+  results.scenes.push_back(info);
+  return {};
+}
+
+}  // namespace
+
+int runBench(const BenchCommand& c) {
+  auto size = parseSize(c.size);
+  if (!size) return benchFail(size.error());
+  auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
+  if (!devOptions) return benchFail(devOptions.error());
+  if (c.paths.empty() || c.cull.empty() || c.lod.empty() || c.shading.empty())
+    return benchFail({ErrorCode::InvalidArgument, "--paths, --cull, --lod and --shading need at least one value each"});
+
+  BenchResults results;
+  auto configs = configMatrix(c, results.skipped);
+  if (!configs) return benchFail(configs.error());
 
   std::vector<uint32_t> objectCounts = c.objects;
   if (objectCounts.empty()) {
@@ -376,434 +607,18 @@ int runBench(const BenchCommand& c) {
     return rc;
   }
   std::printf("visbuf bench: %s, %zu configurations x %zu scene sizes, %u+%u frames each, device %s\n",
-              printable(c.scene).c_str(), configs.size(), objectCounts.size(), c.warmup, c.frames, deviceName.c_str());
-  for (const auto& s : skipped)
+              printable(c.scene).c_str(), configs->size(), objectCounts.size(), c.warmup, c.frames, deviceName.c_str());
+  for (const auto& s : results.skipped)
     std::printf("  skipped %s/%s: %s\n", s["path"].get<std::string>().c_str(), s["cull"].get<std::string>().c_str(),
                 s["reason"].get<std::string>().c_str());
 
-  std::vector<Row> rows;
-  std::vector<SceneInfo> scenes;
-  const uint32_t pixels = size->first * size->second;
-  for (uint32_t objects : objectCounts) {
-    auto scene = loadScene(sceneOptions(c, objects));
-    if (!scene) return benchFail(scene.error());
-    RendererConfig rc;
-    rc.width = size->first;
-    rc.height = size->second;
-    auto renderer = Renderer::create(**device, *scene, rc);
-    if (!renderer) return benchFail(renderer.error());
-    Renderer& r = **renderer;
-    // The other precision variants of the same scene: 64-bit IDs forced (--ids wide), quantised vertices
-    // (--vertices quantized: the scene through an in-memory pack written with quantisation and read back).
-    std::unique_ptr<Scene> quantizedScene;
-    if (std::any_of(configs.begin(), configs.end(), [](const Config& k) { return k.quantized; })) {
-      PackWriteOptions po;
-      po.quantize = true;
-      auto bytes = serializePack(*scene, po);
-      if (!bytes) return benchFail(bytes.error());
-      auto q = parsePack(bytes->data(), bytes->size(), "quantised scene");
-      if (!q) return benchFail(q.error());
-      quantizedScene = std::make_unique<Scene>(std::move(*q));
-    }
-    std::map<std::pair<bool, bool>, std::unique_ptr<Renderer>> variants;  // (wide IDs, quantised) -> renderer
-    for (const Config& k : configs) {
-      if ((!k.wideIds && !k.quantized) || variants.count({k.wideIds, k.quantized})) continue;
-      RendererConfig vc = rc;
-      vc.forceWideIds = k.wideIds;
-      auto vr = Renderer::create(**device, k.quantized ? *quantizedScene : *scene, vc);
-      if (!vr) return benchFail(vr.error());
-      variants[{k.wideIds, k.quantized}] = std::move(*vr);
-    }
-    const std::vector<Camera> path = benchCameraPath(*scene, c.warmup, c.frames);
+  for (uint32_t objects : objectCounts)
+    if (Status s = benchScene(c, **device, size->first, size->second, *configs, objects, results); !s)
+      return benchFail(s.error());
 
-    SceneInfo info;
-    info.objects = objects;
-    info.sceneObjects = uint32_t(scene->objects.size());
-    info.triangles = scene->totalTriangles();
-    const bool forwardRef = c.reference == "forward" ||
-                            (c.reference == "auto" && info.triangles <= c.referenceMaxTriangles);
-    info.reference = forwardRef ? "forward-full" : "visbuf-full";
-    info.referenceReason = c.reference != "auto" ? "asked for (--reference)"
-                           : forwardRef
-                               ? fmt::format("{} triangles <= --reference-max-triangles {}", info.triangles,
-                                             c.referenceMaxTriangles)
-                               : fmt::format("{} triangles > --reference-max-triangles {}: forward would be too slow",
-                                             info.triangles, c.referenceMaxTriangles);
-    const bool needFullIds = std::any_of(configs.begin(), configs.end(), [](const Config& k) {
-      return k.path == RenderPath::Visbuf && k.lod <= 0.0f;
-    });
-    std::printf("scene %s, %u objects, %llu full-detail triangles; reference: %s (%s)\n", printable(scene->name).c_str(),
-                info.sceneObjects, (unsigned long long)info.triangles, info.reference.c_str(),
-                info.referenceReason.c_str());
-
-    // References, once per measured camera (and per MSAA sample count: each row is compared at its own count).
-    std::map<uint32_t, std::vector<std::vector<float>>> refColors;
-    std::vector<std::vector<uint32_t>> fullIds(c.frames);
-    std::vector<double> refMs;
-    r.clearHistory();
-    for (uint32_t m : c.msaa) {
-      if (m == 1) continue;
-      refColors[m].resize(c.frames);
-      for (uint32_t f = 0; f < c.frames; ++f) {
-        FrameOptions ro;
-        ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
-        ro.cull = CullMode::None;
-        ro.lodErrorPixels = 0.0f;
-        ro.tiledLights = false;
-        ro.swRaster = SwRasterMode::Off;  // the exact reference: hardware raster only
-        ro.msaa = m;
-        auto frame = r.renderFrame(path[c.warmup + f], ro);
-        if (!frame) return benchFail(frame.error());
-        refColors[m][f] = std::move(frame->color);
-      }
-    }
-    std::vector<std::vector<float>>& refColor = refColors[1];
-    refColor.resize(c.frames);
-    for (uint32_t f = 0; f < c.frames; ++f) {
-      const Camera& cam = path[c.warmup + f];
-      FrameOptions ro;
-      ro.path = forwardRef ? RenderPath::Forward : RenderPath::Visbuf;
-      ro.cull = CullMode::None;
-      ro.lodErrorPixels = 0.0f;
-      ro.tiledLights = false;  // every point light at every pixel
-      ro.swRaster = SwRasterMode::Off;  // hardware raster only
-      ro.readColor = true;
-      ro.readIds = !forwardRef && needFullIds;
-      auto frame = r.renderFrame(cam, ro);
-      if (!frame) return benchFail(frame.error());
-      refColor[f] = std::move(frame->color);
-      if (ro.readIds) fullIds[f] = std::move(frame->ids);
-      refMs.push_back(frame->stats.gpuMs + frame->stats.cpuRecordMs);
-      if (forwardRef && needFullIds) {
-        FrameOptions io = ro;
-        io.path = RenderPath::Visbuf;
-        io.readColor = false;
-        io.readIds = true;
-        auto idFrame = r.renderFrame(cam, io);
-        if (!idFrame) return benchFail(idFrame.error());
-        fullIds[f] = std::move(idFrame->ids);
-      }
-    }
-    info.referenceFrameMsMedian = median(refMs);
-
-    for (const Config& k : configs) {
-      Renderer& rk = k.wideIds || k.quantized ? *variants.at({k.wideIds, k.quantized}) : r;
-      rk.clearHistory();
-      const bool idComparable = k.path == RenderPath::Visbuf && k.lod <= 0.0f && k.msaa == 1;  // (1 ID per pixel)
-      std::vector<FrameStats> measured;
-      std::vector<ImageError> errors;
-      uint64_t mismatches = 0;
-      for (size_t i = 0; i < path.size(); ++i) {
-        const bool measure = i >= c.warmup;
-        FrameOptions fo;
-        fo.path = k.path;
-        fo.cull = k.cull;
-        fo.lodErrorPixels = k.lod;
-        fo.msaa = k.msaa;
-        fo.readColor = measure;
-        fo.readIds = measure && idComparable;
-        fo.shading = k.shading;
-        fo.swRaster = k.swRaster;
-        auto frame = rk.renderFrame(path[i], fo);
-        if (!frame) return benchFail(frame.error());
-        if (!measure) continue;
-        const size_t f = i - c.warmup;
-        measured.push_back(frame->stats);
-        errors.push_back(compareColor(frame->color, refColors.at(k.msaa)[f]));
-        if (idComparable) mismatches += countIdMismatches(frame->ids, fullIds[f]);
-      }
-      Row row;
-      if (k.msaa == 1) {  // bandwidth: the raster's real writes at the last measured camera (not timed: the counting
-                          // costs atomics; single-sampled only)
-        FrameOptions bo;
-        bo.path = k.path;
-        bo.cull = k.cull;
-        bo.lodErrorPixels = k.lod;
-        bo.readColor = false;
-        bo.countOverdraw = true;
-        bo.shading = k.shading;
-        auto frame = rk.renderFrame(path.back(), bo);
-        if (!frame) return benchFail(frame.error());
-        row.rasterWritesPerPixel = frame->stats.rasterWritesPerPixel;
-        row.bytesWrittenPerPixel = frame->stats.bytesWrittenPerPixel;
-      }
-      row.objects = objects;
-      row.config = k;
-      row.reference = info.reference;
-      row.idBits = k.path != RenderPath::Visbuf ? "-" : rk.idEncoding().wide ? "64" : "32";
-      if (k.path == RenderPath::Visbuf) {
-        row.shading = shadingModeName(measured.back().shade.mode);
-        row.raster = measured.back().sw.on ? "hw+sw" : "hw";
-      }
-      std::vector<double> frameMs, gpu, cpu, wall, tris, drawn;
-      std::vector<std::string> passNames;
-      std::vector<double> perCovered;
-      for (const FrameStats& s : measured) {
-        frameMs.push_back(s.gpuMs + s.cpuRecordMs);
-        gpu.push_back(s.gpuMs);
-        cpu.push_back(s.cpuRecordMs);
-        wall.push_back(s.wallMs);
-        tris.push_back(double(s.trianglesDrawn));
-        if (s.coveredPixels > 0) perCovered.push_back(double(s.trianglesDrawn) / double(s.coveredPixels));
-        drawn.push_back(double(s.cull.drawsRendered));
-        for (const auto& [name, ms] : s.graph.passMs)
-          if (std::find(passNames.begin(), passNames.end(), name) == passNames.end()) passNames.push_back(name);
-      }
-      for (const std::string& name : passNames) {  // a pass a frame did not run (a skipped pyramid) took 0 ms
-        std::vector<double> v;
-        for (const FrameStats& s : measured) {
-          double ms = 0.0;
-          for (const auto& [n, t] : s.graph.passMs)
-            if (n == name) ms += t;
-          v.push_back(ms);
-        }
-        row.passMs.push_back({name, {median(v), p95(v)}});
-      }
-      row.frameMedian = median(frameMs);
-      row.frameP95 = p95(frameMs);
-      row.gpuMedian = median(gpu);
-      row.gpuP95 = p95(gpu);
-      row.cpuMedian = median(cpu);
-      row.wallMedian = median(wall);
-      row.trianglesMedian = median(tris);
-      row.drawnMedian = median(drawn);
-      row.trianglesPerCoveredPixel = perCovered.empty() ? 0.0 : median(perCovered);
-      {
-        std::vector<double> present, pairs;
-        for (const FrameStats& s : measured)
-          present.push_back(s.shade.materialsPresent), pairs.push_back(s.shade.classifiedTiles);
-        row.materialsPresent = median(present);
-        row.classifiedTiles = median(pairs);
-      }
-      row.sceneBytes = measured.back().sceneBytes;
-      row.targetBytesPerPixel = measured.back().targetBytesPerPixel;
-      std::vector<double> perSample;
-      for (const FrameStats& s : measured) perSample.push_back(double(s.shade.perSamplePixels));
-      row.perSamplePixels = median(perSample);
-      // PSNR over all measured frames = that of their mean squared error; worst = lowest frame.
-      double mseSum = 0.0;
-      row.psnrWorst = INFINITY;
-      for (const ImageError& e : errors) {
-        mseSum += std::isfinite(e.psnr) ? std::pow(10.0, -e.psnr / 10.0) : 0.0;
-        row.psnrWorst = std::min(row.psnrWorst, e.psnr);
-        row.maxAbs = std::max(row.maxAbs, e.maxAbs);
-        row.meanAbs += e.meanAbs / double(errors.size());
-        row.differingFraction += e.differingFraction / double(errors.size());
-      }
-      const double mse = mseSum / double(errors.size());
-      row.psnrMean = mse > 0 ? 10.0 * std::log10(1.0 / mse) : INFINITY;
-      if (idComparable) {
-        row.idMismatches = mismatches;
-        row.idPixels = uint64_t(pixels) * measured.size();
-      }
-      std::printf("  %-10s %-5s %-10s %-9s lod %-4s ids %-2s %-5s  frame %9.3f ms (p95 %9.3f)  tris %12.0f  PSNR %7s / %7s dB  ids %s\n",
-                  pathLabel(k).c_str(), row.raster.c_str(), row.shading.c_str(), cullModeName(k.cull), k.lodLabel.c_str(),
-                  row.idBits.c_str(), k.quantized ? "q16" : "float", row.frameMedian, row.frameP95,
-                  row.trianglesMedian, dbText(row.psnrMean).c_str(), dbText(row.psnrWorst).c_str(),
-                  row.idMismatches ? fmt::format("{}", *row.idMismatches).c_str() : "n/a");
-      std::fflush(stdout);
-      rows.push_back(std::move(row));
-    }
-    scenes.push_back(info);
-  }
-
-  // Pareto front per scene size: lower frame time, higher PSNR (mean; within 0.1 dB counts as equal).
-  for (uint32_t objects : objectCounts) {
-    std::vector<size_t> idx;
-    std::vector<double> t, q;
-    for (size_t i = 0; i < rows.size(); ++i)
-      if (rows[i].objects == objects) {
-        idx.push_back(i);
-        t.push_back(rows[i].frameMedian);
-        q.push_back(std::isfinite(rows[i].psnrMean) ? rows[i].psnrMean : 1e300);
-      }
-    std::vector<bool> front = paretoFront(t, q);
-    for (size_t j = 0; j < idx.size(); ++j) rows[idx[j]].pareto = front[j];
-  }
-
-  // Every pass name, in first-seen order (CSV columns).
-  std::vector<std::string> passNames;
-  for (const Row& row : rows)
-    for (const auto& p : row.passMs)
-      if (std::find(passNames.begin(), passNames.end(), p.first) == passNames.end()) passNames.push_back(p.first);
-  auto passOf = [](const Row& row, const std::string& name) -> const std::pair<double, double>* {
-    for (const auto& p : row.passMs)
-      if (p.first == name) return &p.second;
-    return nullptr;
-  };
-  auto objectsLabel = [](uint32_t n) { return n ? fmt::format("{}", n) : std::string("file"); };
-
-  const std::string date = utcNow();
-  // bench.json
-  nlohmann::json j;
-  stampInvocation(j, deviceName);
-  j["date"] = date;
-  j["scene"] = c.scene;
-  j["mesh"] = c.mesh;
-  j["materials"] = c.materials;
-  j["seed"] = c.seed;
-  j["width"] = size->first;
-  j["height"] = size->second;
-  j["frames"] = c.frames;
-  j["warmup"] = c.warmup;
-  j["cameraPath"] = c.scene == "city"
-                        ? "walk from the default camera along its avenue (min(150, 0.3 x bounds radius)), yaw +-0.6 rad"
-                        : "90-degree arc around the bounds centre from the default camera, radius 100% -> 55%, "
-                          "height +20% at mid-path";
-  j["frameMs"] = "GPU time of all passes + CPU time to cull (forward) and record; medians over measured frames";
-  j["psnrMean"] = "PSNR of the mean squared error over the measured frames (\"inf\": identical)";
-  j["skipped"] = skipped;
-  nlohmann::json sj = nlohmann::json::array();
-  for (const SceneInfo& s : scenes)
-    sj.push_back({{"objects", s.objects},
-                  {"sceneObjects", s.sceneObjects},
-                  {"fullDetailTriangles", s.triangles},
-                  {"reference", s.reference},
-                  {"referenceReason", s.referenceReason},
-                  {"referenceFrameMsMedian", s.referenceFrameMsMedian}});
-  j["scenes"] = sj;
-  nlohmann::json rj = nlohmann::json::array();
-  for (const Row& row : rows) {
-    nlohmann::json x;
-    x["objects"] = row.objects;
-    x["path"] = renderPathName(row.config.path);
-    x["cull"] = cullModeName(row.config.cull);
-    x["lod"] = row.config.lodLabel;
-    x["lodErrorPixels"] = row.config.lod;
-    x["idBits"] = row.idBits;
-    x["shading"] = row.shading;
-    x["raster"] = row.raster;
-    if (row.shading == "classified") {
-      x["materialsPresent"] = row.materialsPresent;
-      x["tileMaterialPairs"] = row.classifiedTiles;
-    }
-    x["vertices"] = row.config.quantized ? "quantized" : "float";
-    x["msaa"] = row.config.msaa;
-    x["perSamplePixels"] = row.perSamplePixels;
-    nlohmann::json passes = nlohmann::json::object();
-    for (const auto& [name, v] : row.passMs) passes[name] = {{"median", v.first}, {"p95", v.second}};
-    x["passMs"] = passes;
-    x["frameMs"] = {{"median", row.frameMedian}, {"p95", row.frameP95}};
-    x["gpuMs"] = {{"median", row.gpuMedian}, {"p95", row.gpuP95}};
-    x["cpuRecordMs"] = {{"median", row.cpuMedian}};
-    x["wallMs"] = {{"median", row.wallMedian}};
-    x["trianglesDrawn"] = row.trianglesMedian;
-    x["objectsDrawn"] = row.drawnMedian;
-    if (row.trianglesPerCoveredPixel > 0) x["trianglesPerCoveredPixel"] = row.trianglesPerCoveredPixel;
-    x["sceneBytes"] = row.sceneBytes;
-    x["targetBytesPerPixel"] = row.targetBytesPerPixel;
-    x["rasterWritesPerPixel"] = row.rasterWritesPerPixel;
-    x["bytesWrittenPerPixel"] = row.bytesWrittenPerPixel;
-    x["error"] = {{"psnrMean", dbJson(row.psnrMean)},
-                  {"psnrWorst", dbJson(row.psnrWorst)},
-                  {"maxAbs", row.maxAbs},
-                  {"meanAbs", row.meanAbs},
-                  {"differingFraction", row.differingFraction}};
-    if (row.idMismatches) {
-      x["idMismatches"] = *row.idMismatches;
-      x["idPixelsCompared"] = row.idPixels;
-    } else {
-      x["idMismatches"] = "n/a";
-    }
-    x["reference"] = row.reference;
-    x["pareto"] = row.pareto;
-    rj.push_back(x);
-  }
-  j["rows"] = rj;
-
-  // bench.csv
-  std::string csv =
-      "scene,objects,path,cull,lod_px,id_bits,vertices,frames,frame_ms_median,frame_ms_p95,gpu_ms_median,gpu_ms_p95,"
-      "cpu_record_ms_median,wall_ms_median,triangles_median,objects_drawn_median,scene_bytes,"
-      "target_bytes_per_pixel,psnr_mean_db,psnr_worst_db,max_abs_error,mean_abs_error,differing_fraction,"
-      "id_mismatches,reference,pareto";
-  for (std::string n : passNames) {  // "depth pyramid" -> pass_depth_pyramid_ms_median
-    std::replace(n.begin(), n.end(), ' ', '_');
-    csv += fmt::format(",pass_{0}_ms_median,pass_{0}_ms_p95", n);
-  }
-  csv += ",raster_writes_per_pixel,bytes_written_per_pixel,msaa,per_sample_pixels,shading,raster,"
-         "triangles_per_covered_pixel\n";  // appended: earlier columns fixed
-  for (const Row& row : rows) {
-    csv += fmt::format("{},{},{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.0f},{:.0f},{},{},{},{},{:.6f},{:.6f},{:.6f},{},{},{}",
-                       c.scene.find(',') == std::string::npos ? c.scene : "\"" + c.scene + "\"", row.objects,
-                       renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel,
-                       row.idBits, row.config.quantized ? "quantized" : "float", c.frames,
-                       row.frameMedian, row.frameP95, row.gpuMedian, row.gpuP95, row.cpuMedian, row.wallMedian,
-                       row.trianglesMedian, row.drawnMedian, row.sceneBytes, row.targetBytesPerPixel,
-                       dbText(row.psnrMean), dbText(row.psnrWorst), row.maxAbs, row.meanAbs, row.differingFraction,
-                       row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"), row.reference,
-                       row.pareto ? 1 : 0);
-    for (const std::string& n : passNames) {
-      const auto* p = passOf(row, n);
-      csv += p ? fmt::format(",{:.4f},{:.4f}", p->first, p->second) : std::string(",,");
-    }
-    csv += fmt::format(",{:.4f},{:.2f},{},{:.0f},{},{},{}\n", row.rasterWritesPerPixel, row.bytesWrittenPerPixel,
-                       row.config.msaa, row.perSamplePixels, row.shading, row.raster,
-                       row.trianglesPerCoveredPixel > 0 ? fmt::format("{:.3f}", row.trianglesPerCoveredPixel) : "");
-  }
-
-  // bench.md
-  std::string md = fmt::format("`{}`\n\n", c.commandLine);
-  md += fmt::format("{} ({} measured frames after {} warm-up along the camera path, {}x{}), {}. ", deviceName, c.frames,
-                    c.warmup, size->first, size->second, date);
-  md += "frame ms = GPU passes + CPU cull/record (median, p95); PSNR vs the reference: over all measured frames / worst "
-        "frame; ID mism. = pixels whose decoded (object, triangle) differ from visbuf with no culling and no LOD; "
-        "P = on the Pareto front (time vs PSNR; PSNRs within 0.1 dB count as equal); B/px = bytes per pixel of the "
-        "path's targets / bytes written per pixel at the last camera (raster writes x bytes per fragment + resolve "
-        "colour; clears not counted).\n\n";
-  for (const SceneInfo& s : scenes)
-    md += fmt::format("- {} objects: {} objects, {} full-detail triangles; reference {} ({:.1f} ms a frame)\n",
-                      objectsLabel(s.objects), s.sceneObjects, s.triangles, s.reference, s.referenceFrameMsMedian);
-  md += "\n| objects | path | cull | LOD px | IDs | vertices | frame ms | p95 | GPU passes ms (median) | CPU rec ms | triangles | "
-        "tri/px | drawn | scene MiB | B/px | PSNR dB | worst dB | max err | px > 1/255 | ID mism. | P |\n";
-  md += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const Row& row : rows) {
-    std::string passes;
-    for (const auto& [name, v] : row.passMs) passes += fmt::format("{}{} {:.2f}", passes.empty() ? "" : ", ", name, v.first);
-    md += fmt::format("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {:.2f} | {:.0f} | {} | {:.0f} | {:.1f} | {} / {:.1f} | {} | {} | "
-                      "{:.4f} | {:.3f}% | {} | {} |\n",
-                      objectsLabel(row.objects),
-                      row.shading == "-" ? pathLabel(row.config)
-                                         : fmt::format("{} ({}, {})", pathLabel(row.config), row.shading, row.raster),
-                      cullModeName(row.config.cull), row.config.lodLabel, row.idBits, row.config.quantized ? "q16" : "float", row.frameMedian, row.frameP95, passes, row.cpuMedian, row.trianglesMedian,
-                      row.trianglesPerCoveredPixel > 0 ? fmt::format("{:.2f}", row.trianglesPerCoveredPixel) : "-",
-                      row.drawnMedian, row.sceneBytes / 1048576.0, row.targetBytesPerPixel, row.bytesWrittenPerPixel, dbText(row.psnrMean),
-                      dbText(row.psnrWorst), row.maxAbs, 100.0 * row.differingFraction,
-                      row.idMismatches ? fmt::format("{}", *row.idMismatches) : std::string("n/a"),
-                      row.pareto ? "P" : "");
-  }
-  if (!skipped.empty()) {
-    md += "\nSkipped: ";
-    for (size_t i = 0; i < skipped.size(); ++i)
-      md += fmt::format("{}{}/{}: {}", i ? "; " : "", skipped[i]["path"].get<std::string>(),
-                        skipped[i]["cull"].get<std::string>(), skipped[i]["reason"].get<std::string>());
-    md += ".\n";
-  }
-
-  // bench.svg
-  std::vector<PlotPanel> panels;
-  for (const SceneInfo& s : scenes) {
-    PlotPanel panel;
-    panel.title = fmt::format("{}, {} objects, {}x{}, reference {}", c.scene, objectsLabel(s.objects), size->first,
-                              size->second, s.reference);
-    for (const Row& row : rows)
-      if (row.objects == s.objects)
-        panel.points.push_back({renderPathName(row.config.path), cullModeName(row.config.cull), row.config.lodLabel,
-                                row.frameMedian, row.psnrMean, row.pareto});
-    panels.push_back(std::move(panel));
-  }
-  const std::string svg = renderBenchSvg(panels, fmt::format("visbuf bench: frame time against error ({})", deviceName),
-                                         fmt::format("{}   [{}]", c.commandLine, date));
-
-  const std::filesystem::path out(c.output);
-  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
-           {"bench.csv", csv}, {"bench.md", md}, {"bench.svg", svg}}) {
-    Status s = writeTextFile((out / name).string(), text);
-    if (!s) return benchFail(s.error());
-  }
-  Status s = writeJsonFile((out / "bench.json").string(), j);
-  if (!s) return benchFail(s.error());
-  std::printf("wrote %s/bench.{json,csv,md,svg}: %zu rows\n", printable(c.output).c_str(), rows.size());
+  markParetoFront(results.rows);
+  if (Status s = writeBenchReport(c, results, deviceName, size->first, size->second); !s) return benchFail(s.error());
+  std::printf("wrote %s/bench.{json,csv,md,svg}: %zu rows\n", printable(c.output).c_str(), results.rows.size());
 
   if ((*device)->validationEnabled() && (*device)->validationMessages() > 0) {
     std::fprintf(stderr, "visbuf bench: %u validation message(s)\n", (*device)->validationMessages());
