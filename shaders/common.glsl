@@ -29,6 +29,13 @@ layout(set = 0, binding = SCENE_BINDING_MESH_TEXELS) uniform usamplerBuffer mesh
 layout(std430, set = 0, binding = SCENE_BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
 // Index i of the unified index pool.
 uint indexAt(uint i) { return VB_TEXELS != 0u ? texelFetch(indexTexels, int(i)).x : indices[i]; }
+layout(set = 0, binding = SCENE_BINDING_TRIANGLE_TEXELS) uniform usamplerBuffer triangleTexels;
+// The three indices of the triangle whose first index is `first` (a multiple of 3): one fetch where the scene has
+// texels (on lavapipe each fetch is a load per lane, three times the fetches for the same bytes otherwise).
+uvec3 triangleIndices(uint first) {
+  if (VB_TEXELS != 0u) return texelFetch(triangleTexels, int(first / 3u)).xyz;
+  return uvec3(indices[first], indices[first + 1u], indices[first + 2u]);
+}
 layout(std430, set = 0, binding = SCENE_BINDING_OBJECTS) readonly buffer ObjectBlock { ObjectData objects[]; };
 layout(std430, set = 0, binding = SCENE_BINDING_OBJECTS_HIGH) readonly buffer ObjectBlockHigh { ObjectData objectsHigh[]; };
 

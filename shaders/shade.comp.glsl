@@ -69,9 +69,10 @@ vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   o.materialIndex = pc.material;  // the same value (main() checked it), now known to be uniform over the dispatch
 #endif
   uint base = firstIndex + 3u * tri;
-  Vertex v0 = meshVertex(o.meshIndex, indexAt(base + 0u) + vertexOffset);
-  Vertex v1 = meshVertex(o.meshIndex, indexAt(base + 1u) + vertexOffset);
-  Vertex v2 = meshVertex(o.meshIndex, indexAt(base + 2u) + vertexOffset);
+  uvec3 local = triangleIndices(base);
+  Vertex v0 = meshVertex(o.meshIndex, local.x + vertexOffset);
+  Vertex v1 = meshVertex(o.meshIndex, local.y + vertexOffset);
+  Vertex v2 = meshVertex(o.meshIndex, local.z + vertexOffset);
   vec4 c0 = clipPosition(o, vertexPosition(v0));
   vec4 c1 = clipPosition(o, vertexPosition(v1));
   vec4 c2 = clipPosition(o, vertexPosition(v2));
@@ -98,16 +99,15 @@ vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   si.duv1dy = vec2(0.0);
   uint extra = meshExtraOffset(o.meshIndex);
   if (VB_EXTRAS != 0u && extra != EXTRA_NONE) {
-    VertexExtra e0 = vertexExtras[extra + indexAt(base + 0u)], e1 = vertexExtras[extra + indexAt(base + 1u)],
-                e2 = vertexExtras[extra + indexAt(base + 2u)];
+    VertexExtra e0 = vertexExtras[extra + local.x], e1 = vertexExtras[extra + local.y], e2 = vertexExtras[extra + local.z];
     mat3x2 uv1 = mat3x2(vec2(e0.u1, e0.v1), vec2(e1.u1, e1.v1), vec2(e2.u1, e2.v1));
     si.uv1 = uv1 * l;
     si.duv1dx = uv1 * b.ddx;
     si.duv1dy = uv1 * b.ddy;
     if (e0.tangentW != 0.0) {
-      vec3 t = l.x * octDecode(meshTangent(o.meshIndex, indexAt(base + 0u), e0)) +
-               l.y * octDecode(meshTangent(o.meshIndex, indexAt(base + 1u), e1)) +
-               l.z * octDecode(meshTangent(o.meshIndex, indexAt(base + 2u), e2));
+      vec3 t = l.x * octDecode(meshTangent(o.meshIndex, local.x, e0)) +
+               l.y * octDecode(meshTangent(o.meshIndex, local.y, e1)) +
+               l.z * octDecode(meshTangent(o.meshIndex, local.z, e2));
       si.tangent = vec4(objectToCameraVector(o, t), e0.tangentW);  // mirrored instances: w flipped at import
     }
   }

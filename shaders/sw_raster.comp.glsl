@@ -62,9 +62,10 @@ int edgeBias(ivec2 u, ivec2 v) {
 // wherever it stands in the code, taken or not), else 0.
 uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   uint base = d.firstIndex + 3u * t;
-  vec4 c0 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 0u) + uint(d.vertexOffset)));
-  vec4 c1 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 1u) + uint(d.vertexOffset)));
-  vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, indexAt(base + 2u) + uint(d.vertexOffset)));
+  uvec3 v = triangleIndices(base) + uint(d.vertexOffset);
+  vec4 c0 = clipPosition(o, meshPosition(o.meshIndex, v.x));
+  vec4 c1 = clipPosition(o, meshPosition(o.meshIndex, v.y));
+  vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, v.z));
   // The cull pass routes only objects wholly beyond the near plane; a frozen frame's camera may have moved since.
   if (!(c0.w >= frame.nearPlane && c1.w >= frame.nearPlane && c2.w >= frame.nearPlane)) return 1u;
   vec2 g0 = gridPosition(c0), g1 = gridPosition(c1), g2 = gridPosition(c2);

@@ -40,7 +40,8 @@ void SceneDescriptors::create(gpu::Device& device, uint32_t slots) {
                                  {SCENE_BINDING_MESH_TEXELS, texels},
                                  {SCENE_BINDING_MATERIAL_TEXELS, texels},
                                  {SCENE_BINDING_TRIANGLE_PLANES, texels},
-                                 {SCENE_BINDING_STATS, storage}},
+                                 {SCENE_BINDING_STATS, storage},
+                                 {SCENE_BINDING_TRIANGLE_TEXELS, texels}},
                                 gpu::kPassConstantStages, slots);
 }
 
@@ -76,6 +77,7 @@ void SceneDescriptors::write(uint32_t slot, const gpu::Buffer& frame, const Scen
       .texels(SCENE_BINDING_MATERIAL_TEXELS, s.materialTexels.handle())
       .texels(SCENE_BINDING_TRIANGLE_PLANES, s.planeTexels.handle())
       .buffer(SCENE_BINDING_STATS, in.stats->handle())
+      .texels(SCENE_BINDING_TRIANGLE_TEXELS, s.triangleTexels.handle())
       .update();
 }
 

@@ -440,13 +440,19 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
     };
     g.vertexTexels = view(g.vertices, VK_FORMAT_R32G32B32A32_UINT, 16);
     g.indexTexels = view(g.indices, VK_FORMAT_R32_UINT, 4);
+    // One texel per triangle (common.glsl triangleIndices), where the device samples RGB32UI texel buffers (an
+    // optional format feature); the texel path is off where it does not, and an R32UI view stands in.
+    VkFormatProperties rgb{};
+    vkGetPhysicalDeviceFormatProperties(device.physicalDevice(), VK_FORMAT_R32G32B32_UINT, &rgb);
+    const bool rgbTexels = (rgb.bufferFeatures & VK_FORMAT_FEATURE_UNIFORM_TEXEL_BUFFER_BIT) != 0;
+    g.triangleTexels = rgbTexels ? view(g.indices, VK_FORMAT_R32G32B32_UINT, 12) : view(g.indices, VK_FORMAT_R32_UINT, 4);
     g.objectTexels = view(g.objects, VK_FORMAT_R32G32B32A32_UINT, 16);
     g.planeTexels = view(g.trianglePlanes, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
     static_assert(sizeof(gpu::MeshData) == (3 + MAX_LODS) * 16, "common.glsl MESH_TEXELS");
     g.meshTexels = view(g.meshes, VK_FORMAT_R32G32B32A32_UINT, 16);
     static_assert(sizeof(gpu::MaterialData) == (4 + 3 * TEXTURE_SLOTS) * 16, "common.glsl MATERIAL_TEXELS");
     g.materialTexels = view(g.materials, VK_FORMAT_R32G32B32A32_UINT, 16);
-    g.texels = true;
+    g.texels = rgbTexels;
     for (const gpu::Buffer* b : {&g.vertices, &g.objects, &g.trianglePlanes, &g.meshes, &g.materials})
       g.texels = g.texels && b->size() / 16 <= maxTexels;
     g.texels = g.texels && g.indices.size() / 4 <= maxTexels;

@@ -201,6 +201,7 @@
 #define SCENE_BINDING_MATERIAL_TEXELS 16  // the MaterialData records, RGBA32UI
 #define SCENE_BINDING_TRIANGLE_PLANES 17  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
 #define SCENE_BINDING_STATS 18            // uint[STAT_COUNT]: the frame-wide counters (then SW_ARGS)
+#define SCENE_BINDING_TRIANGLE_TEXELS 19  // the index pool as RGB32UI: one texel per triangle (a level starts at a multiple of 3)
 
 // The cull pass's visible list: the visible set of its history as a list, for the next frame's early cull (one
 // thread per listed object instead of one per object of the scene): VISIBLE_LIST_HEADER uints -- count, then the
