@@ -26,7 +26,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
-#include <ctime>
 #include <time.h>
 #include <filesystem>
 #include <fstream>
@@ -41,6 +40,7 @@
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/asset/texture_bake.h"
 #include "visbuf/core/image_compare.h"
+#include "bench_in_flight.h"  // median, utcNow
 #include "cli_checks.h"
 #include "commands.h"
 #include "invocation.h"
@@ -100,13 +100,6 @@ struct StageTimer {
     samples.push_back({std::chrono::duration<double, std::milli>(Clock::now() - wall).count(), cpuMsNow() - cpu});
   }
 };
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // One stage's wall time (median and median absolute deviation) and CPU time (median), ms.
 struct Timing {
@@ -311,15 +304,6 @@ Status measureTextureEncodings(const fs::path& file, const BenchBakeCommand& c, 
   row.bcPsnr = e.psnr;
   row.bcMaxError = e.maxAbs;
   return {};
-}
-
-std::string utcNow() {
-  std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[64];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 double mb(uint64_t bytes) { return double(bytes) / 1e6; }

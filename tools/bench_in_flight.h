@@ -1,5 +1,5 @@
 // visbuf bench --in-flight (tools/bench_in_flight.cpp) and what it shares with the bench matrix
-// (tools/bench_command.cpp).
+// (tools/bench_command.cpp) and bench-bake (tools/bench_bake_command.cpp).
 #pragma once
 
 #include <filesystem>
