@@ -79,6 +79,31 @@ inline std::string base64(const std::vector<uint8_t>& data) {
   return out;
 }
 
+// A binary glTF (.glb) of a JSON chunk (padded with spaces) and, unless `bin` is empty, a BIN chunk (padded with
+// zeros), little-endian as the container's specification has it.
+inline std::vector<uint8_t> makeGlb(const std::string& jsonText, const std::vector<uint8_t>& bin) {
+  std::string jsonChunk = jsonText;
+  while (jsonChunk.size() % 4 != 0) jsonChunk += ' ';
+  std::vector<uint8_t> binChunk = bin;
+  while (binChunk.size() % 4 != 0) binChunk.push_back(0);
+  std::vector<uint8_t> out;
+  auto put32 = [&](uint32_t v) {
+    for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  };
+  put32(0x46546C67);  // "glTF"
+  put32(2);
+  put32(static_cast<uint32_t>(12 + 8 + jsonChunk.size() + (binChunk.empty() ? 0 : 8 + binChunk.size())));
+  put32(static_cast<uint32_t>(jsonChunk.size()));
+  put32(0x4E4F534A);  // "JSON"
+  out.insert(out.end(), jsonChunk.begin(), jsonChunk.end());
+  if (!binChunk.empty()) {
+    put32(static_cast<uint32_t>(binChunk.size()));
+    put32(0x004E4942);  // "BIN\0"
+    out.insert(out.end(), binChunk.begin(), binChunk.end());
+  }
+  return out;
+}
+
 // Registers `suite.name` only when an extra corpus has `relative` (so a clone without one runs the test
 // neither as a pass nor as a skip); the body receives the asset's path. ctest discovers the tests when it
 // runs them (DISCOVERY_MODE PRE_TEST), so VISBUF_EXTRA_ASSETS is read from ctest's environment.

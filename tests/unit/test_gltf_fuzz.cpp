@@ -76,29 +76,7 @@ class BinBuilder {
   std::vector<uint8_t> bytes_;
 };
 
-std::vector<uint8_t> makeGlb(const std::string& jsonText, const std::vector<uint8_t>& bin) {
-  std::string jsonChunk = jsonText;
-  while (jsonChunk.size() % 4 != 0) jsonChunk += ' ';
-  std::vector<uint8_t> binChunk = bin;
-  while (binChunk.size() % 4 != 0) binChunk.push_back(0);
-  std::vector<uint8_t> out;
-  auto put32 = [&](uint32_t v) {
-    for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-  };
-  put32(0x46546C67);  // "glTF"
-  put32(2);
-  put32(static_cast<uint32_t>(12 + 8 + jsonChunk.size() + (binChunk.empty() ? 0 : 8 + binChunk.size())));
-  put32(static_cast<uint32_t>(jsonChunk.size()));
-  put32(0x4E4F534A);  // "JSON"
-  out.insert(out.end(), jsonChunk.begin(), jsonChunk.end());
-  if (!binChunk.empty()) {
-    put32(static_cast<uint32_t>(binChunk.size()));
-    put32(0x004E4942);  // "BIN\0"
-    out.insert(out.end(), binChunk.begin(), binChunk.end());
-  }
-  return out;
-}
-
+using test::makeGlb;
 using test::base64;
 
 // A .glb: an indexed quad skinned to a 2-joint chain (node 0), the same quad with a sparse morph target under

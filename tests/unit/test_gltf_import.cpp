@@ -1,140 +1,39 @@
 // Tests for importGltfMesh (engine/asset/gltf_import.h).
 //
-// Most tests write a tiny .gltf into a temporary folder: JSON built with nlohmann::json and one buffer
-// embedded as a base64 data URI, so every byte of the input is visible in the test. The repository's sample
+// Most tests write a tiny .gltf into a temporary folder (gltf_doc_builder.h: every byte of the input is visible in
+// the test). The containers (.glb, EXT_meshopt_compression): test_gltf_container.cpp; the repository's sample
 // assets: test_gltf_import_assets.cpp.
 #include <gtest/gtest.h>
-#include <meshoptimizer.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <glm/glm.hpp>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <optional>
-#include <random>
 #include <string>
 #include <vector>
 
+#include "gltf_doc_builder.h"
 #include "mesh_source_checks.h"
-#include "temp_dir_test.h"
-#include "test_assets.h"  // (test::base64)
 #include "visbuf/asset/gltf_import.h"
 
 namespace visbuf {
 namespace {
 
 using nlohmann::json;
-namespace fs = std::filesystem;
 
-constexpr int kByte = 5120;
-constexpr int kUByte = 5121;
-constexpr int kShort = 5122;
-constexpr int kUShort = 5123;
-constexpr int kFloat = 5126;
-
-using test::base64;
+using test::DocBuilder;
 using test::expectValidMesh;
 using test::expectVec3Near;
 using test::geometricNormal;
-
-// Builds a glTF document around one binary buffer: each add*() call appends raw data (4-byte aligned), a
-// bufferView over it and an accessor, and returns the accessor index.
-class DocBuilder {
- public:
-  // Appends raw bytes and a bufferView over them; returns the bufferView index.
-  template <typename T>
-  int addView(const std::vector<T>& values, std::optional<int> byteStride = std::nullopt) {
-    while (bytes_.size() % 4 != 0) bytes_.push_back(0);
-    const size_t offset = bytes_.size();
-    bytes_.resize(offset + values.size() * sizeof(T));
-    if (!values.empty()) std::memcpy(bytes_.data() + offset, values.data(), values.size() * sizeof(T));
-    json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * sizeof(T)}};
-    if (byteStride) view["byteStride"] = *byteStride;
-    views_.push_back(view);
-    return static_cast<int>(views_.size()) - 1;
-  }
-
-  int addAccessor(json accessor) {
-    accessors_.push_back(std::move(accessor));
-    return static_cast<int>(accessors_.size()) - 1;
-  }
-
-  int addFloats(const std::vector<float>& values, const char* type, int components) {
-    const int view = addView(values);
-    return addAccessor({{"bufferView", view},
-                        {"componentType", kFloat},
-                        {"count", values.size() / static_cast<size_t>(components)},
-                        {"type", type}});
-  }
-  int addVec3(const std::vector<glm::vec3>& v) {
-    std::vector<float> flat;
-    for (const glm::vec3& p : v) flat.insert(flat.end(), {p.x, p.y, p.z});
-    return addFloats(flat, "VEC3", 3);
-  }
-  int addIndices16(const std::vector<uint16_t>& indices) {
-    const int view = addView(indices);
-    return addAccessor(
-        {{"bufferView", view}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}});
-  }
-
-  json& accessor(int index) { return accessors_[static_cast<size_t>(index)]; }
-  json& view(int index) { return views_[static_cast<size_t>(index)]; }
-  std::vector<uint8_t>& bytes() { return bytes_; }
-
-  // The complete document with the buffer embedded as a data URI. `meshes` / `nodes` / `scenes` as glTF JSON.
-  json build(json meshes, json nodes, json scenes = json::array({{{"nodes", {0}}}})) const {
-    json doc = {{"asset", {{"version", "2.0"}}},
-                {"buffers",
-                 {{{"byteLength", bytes_.size()},
-                   {"uri", "data:application/octet-stream;base64," + base64(bytes_)}}}},
-                {"bufferViews", views_},
-                {"accessors", accessors_},
-                {"meshes", std::move(meshes)},
-                {"nodes", std::move(nodes)}};
-    if (!scenes.is_null()) {
-      doc["scenes"] = std::move(scenes);
-      doc["scene"] = 0;
-    }
-    return doc;
-  }
-
- private:
-  std::vector<uint8_t> bytes_;
-  json views_ = json::array();
-  json accessors_ = json::array();
-};
-
-json triangleMesh(int position, std::optional<int> indices = std::nullopt, int mode = 4,
-                  std::optional<int> normal = std::nullopt) {
-  json prim = {{"attributes", {{"POSITION", position}}}, {"mode", mode}};
-  if (indices) prim["indices"] = *indices;
-  if (normal) prim["attributes"]["NORMAL"] = *normal;
-  return json::array({{{"name", "tri"}, {"primitives", {prim}}}});
-}
-
-const std::vector<glm::vec3> kTriangle = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};  // counter-clockwise seen from +Z
-
-class GltfImportTest : public test::TempDirTest {
- protected:
-  std::string writeText(const std::string& name, const std::string& text) {
-    const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary) << text;
-    return path.string();
-  }
-  std::string writeBytes(const std::string& name, const std::vector<uint8_t>& bytes) {
-    const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    return path.string();
-  }
-  std::string write(const std::string& name, const json& doc) { return writeText(name, doc.dump(1)); }
-
-};
+using test::GltfImportTest;
+using test::kFloat;
+using test::kByte;
+using test::kShort;
+using test::kTriangle;
+using test::kUByte;
+using test::kUShort;
+using test::triangleMesh;
 
 // --------------------------------------------------------------------------------------------------------
 // Topology
@@ -601,141 +500,6 @@ TEST_F(GltfImportTest, UnsupportedRequiredExtension) {
   auto mesh = importGltfMesh(write("draco.gltf", doc));
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.error().code, ErrorCode::Unsupported);
-}
-
-// --------------------------------------------------------------------------------------------------------
-// Containers and compression
-
-std::vector<uint8_t> makeGlb(const std::string& jsonText, const std::vector<uint8_t>& bin) {
-  std::string jsonChunk = jsonText;
-  while (jsonChunk.size() % 4 != 0) jsonChunk += ' ';
-  std::vector<uint8_t> binChunk = bin;
-  while (binChunk.size() % 4 != 0) binChunk.push_back(0);
-  std::vector<uint8_t> out;
-  auto put32 = [&](uint32_t v) {
-    for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-  };
-  put32(0x46546C67);
-  put32(2);
-  put32(static_cast<uint32_t>(12 + 8 + jsonChunk.size() + 8 + binChunk.size()));
-  put32(static_cast<uint32_t>(jsonChunk.size()));
-  put32(0x4E4F534A);
-  out.insert(out.end(), jsonChunk.begin(), jsonChunk.end());
-  put32(static_cast<uint32_t>(binChunk.size()));
-  put32(0x004E4942);
-  out.insert(out.end(), binChunk.begin(), binChunk.end());
-  return out;
-}
-
-TEST_F(GltfImportTest, GlbContainer) {
-  DocBuilder b;
-  const int pos = b.addVec3(kTriangle);
-  json doc = b.build(triangleMesh(pos), {{{"mesh", 0}}});
-  doc["buffers"][0].erase("uri");  // GLB: buffer 0 is the BIN chunk
-  const std::vector<uint8_t> glb = makeGlb(doc.dump(), b.bytes());
-  auto mesh = importGltfMesh(writeBytes("tri.glb", glb));
-  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
-  EXPECT_EQ(mesh->indices.size(), 3u);
-
-  // Same bytes under a .gltf name: the magic decides.
-  auto renamed = importGltfMesh(writeBytes("tri_glb.gltf", glb));
-  ASSERT_TRUE(renamed.ok()) << renamed.error().message;
-
-  // Truncated file: the BIN chunk runs past the end.
-  std::vector<uint8_t> truncated(glb.begin(), glb.end() - 8);
-  const uint32_t length = static_cast<uint32_t>(truncated.size());
-  std::memcpy(truncated.data() + 8, &length, 4);
-  auto cut = importGltfMesh(writeBytes("cut.glb", truncated));
-  ASSERT_FALSE(cut.ok());
-  EXPECT_EQ(cut.error().code, ErrorCode::MalformedInput);
-
-  // .glb without the magic.
-  auto notGlb = importGltfMesh(writeText("text.glb", doc.dump()));
-  ASSERT_FALSE(notGlb.ok());
-  EXPECT_EQ(notGlb.error().code, ErrorCode::MalformedInput);
-}
-
-// Builds a document whose positions and indices live only in EXT_meshopt_compression streams (encoded here
-// with meshoptimizer), with the uncompressed bufferViews in a fallback buffer that has no uri.
-json meshoptDoc(const std::vector<glm::vec3>& positions, const std::vector<uint16_t>& indices,
-                std::vector<uint8_t>* compressed) {
-  std::vector<uint8_t> vertexStream(meshopt_encodeVertexBufferBound(positions.size(), sizeof(glm::vec3)));
-  vertexStream.resize(meshopt_encodeVertexBuffer(vertexStream.data(), vertexStream.size(), positions.data(),
-                                                 positions.size(), sizeof(glm::vec3)));
-  std::vector<uint8_t> indexStream(meshopt_encodeIndexBufferBound(indices.size(), positions.size()));
-  indexStream.resize(
-      meshopt_encodeIndexBuffer(indexStream.data(), indexStream.size(), indices.data(), indices.size()));
-  *compressed = vertexStream;
-  while (compressed->size() % 4 != 0) compressed->push_back(0);
-  const size_t indexOffset = compressed->size();
-  compressed->insert(compressed->end(), indexStream.begin(), indexStream.end());
-
-  const size_t vertexBytes = positions.size() * 12;
-  const size_t indexBytes = indices.size() * 2;
-  json ext = {{"EXT_meshopt_compression", json::object()}};
-  return {{"asset", {{"version", "2.0"}}},
-          {"extensionsUsed", {"EXT_meshopt_compression"}},
-          {"extensionsRequired", {"EXT_meshopt_compression"}},
-          {"buffers",
-           {{{"byteLength", compressed->size()},
-             {"uri", "data:application/octet-stream;base64," + base64(*compressed)}},
-            {{"byteLength", vertexBytes + indexBytes},
-             {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}}}},
-          {"bufferViews",
-           {{{"buffer", 1},
-             {"byteLength", vertexBytes},
-             {"byteStride", 12},
-             {"extensions",
-              {{"EXT_meshopt_compression",
-                {{"buffer", 0},
-                 {"byteLength", vertexStream.size()},
-                 {"byteStride", 12},
-                 {"count", positions.size()},
-                 {"mode", "ATTRIBUTES"}}}}}},
-            {{"buffer", 1},
-             {"byteOffset", vertexBytes},
-             {"byteLength", indexBytes},
-             {"extensions",
-              {{"EXT_meshopt_compression",
-                {{"buffer", 0},
-                 {"byteOffset", indexOffset},
-                 {"byteLength", indexStream.size()},
-                 {"byteStride", 2},
-                 {"count", indices.size()},
-                 {"mode", "TRIANGLES"}}}}}}}},
-          {"accessors",
-           {{{"bufferView", 0}, {"componentType", kFloat}, {"count", positions.size()}, {"type", "VEC3"}},
-            {{"bufferView", 1}, {"componentType", kUShort}, {"count", indices.size()}, {"type", "SCALAR"}}}},
-          {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
-          {"nodes", {{{"mesh", 0}}}},
-          {"scenes", {{{"nodes", {0}}}}},
-          {"scene", 0}};
-}
-
-TEST_F(GltfImportTest, MeshoptCompressedBufferViews) {
-  const std::vector<glm::vec3> positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0.5f}};
-  const std::vector<uint16_t> indices = {0, 1, 2, 2, 1, 3, 3, 1, 4};
-  std::vector<uint8_t> compressed;
-  json doc = meshoptDoc(positions, indices, &compressed);
-  auto mesh = importGltfMesh(write("meshopt.gltf", doc));
-  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
-  ASSERT_EQ(mesh->positions.size(), positions.size());
-  for (size_t i = 0; i < positions.size(); ++i) EXPECT_EQ(mesh->positions[i], positions[i]) << i;
-  EXPECT_EQ(mesh->indices, (std::vector<uint32_t>(indices.begin(), indices.end())));
-
-  // Corrupt stream (truncated) -> MalformedInput, not a crash.
-  json corrupt = doc;
-  corrupt["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["byteLength"] = 3;
-  auto bad = importGltfMesh(write("meshopt_corrupt.gltf", corrupt));
-  ASSERT_FALSE(bad.ok());
-  EXPECT_EQ(bad.error().code, ErrorCode::MalformedInput);
-
-  // A filter this importer does not know, with the extension required and no fallback data -> Unsupported.
-  json unknown = doc;
-  unknown["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["filter"] = "FUTURE";
-  auto unsupported = importGltfMesh(write("meshopt_future.gltf", unknown));
-  ASSERT_FALSE(unsupported.ok());
-  EXPECT_EQ(unsupported.error().code, ErrorCode::Unsupported);
 }
 
 }  // namespace
