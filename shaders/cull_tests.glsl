@@ -137,8 +137,10 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, b
   if (!usePyramid || frame.pyramidLevels == 0u) return 0u;  // (pyramid skipped this frame: it occluded nothing lately)
   // Level whose texels span the rectangle in at most 2x2 texels: 2^k >= extent (never floor(log2)).
   int extent = max(b.x - a.x + 1, b.y - a.y + 1);
-  int level = min(int(ceil(log2(float(extent)))), int(frame.pyramidLevels) - 1);
-  if ((1 << level) < extent) level = min(level + 1, int(frame.pyramidLevels) - 1);  // guard log2 rounding
+  // (Never below PYRAMID_FIRST_TESTED_LEVEL: the frame does not build level 0.)
+  int top = int(frame.pyramidLevels) - 1;
+  int level = min(max(int(ceil(log2(float(extent)))), PYRAMID_FIRST_TESTED_LEVEL), top);
+  if ((1 << level) < extent) level = min(level + 1, top);  // guard log2 rounding
   // The object's nearest possible depth, rounded towards nearer.
   float nearest = frame.nearPlane / -(v.z + rr) * (1.0 + 1e-5);
   // That level's texels may reach past the rectangle by up to their own size per axis (up to 4x its area): what it
@@ -147,7 +149,7 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, b
   // 45,049 two levels finer, 41,297 three levels finer, 38,110 at full resolution. That runs in the refinement
   // dispatch, dense over the few objects concerned (on lavapipe a loop here would run in every SIMD batch that
   // holds one of them).
-  int fine = max(level - 3, 0);
+  int fine = min(max(level - 3, PYRAMID_FIRST_TESTED_LEVEL), top);
   if (refine) return nearest < farthestDepth(a, b, fine) ? 1u : 0u;
   if (nearest < farthestDepth(a, b, level)) return 1u;
   return fine < level ? 4u : 0u;

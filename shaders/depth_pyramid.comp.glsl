@@ -7,8 +7,9 @@
 //
 // One dispatch builds up to PYRAMID_REDUCTIONS levels: each thread reduces an 8x8 block of the dispatch's source
 // level to 4x4, 2x2 and 1 texel by itself (no shared memory, no barrier: on lavapipe a workgroup barrier costs more
-// than the reduction). The first dispatch reads the depth image and also writes level 0 (a copy, or for MSAA the
-// farthest of each pixel's samples); each later one reads the last level written. 1024x768 takes four dispatches
+// than the reduction). The first dispatch reads the depth image; where level 0 is read back it also writes it (a
+// copy, or for MSAA the farthest of each pixel's samples), since the occlusion tests never read it
+// (PYRAMID_FIRST_TESTED_LEVEL). Each later dispatch reads the last level written. 1024x768 takes four dispatches
 // (levels 0-3, 4-6, 7-9, 10) instead of eleven.
 #extension GL_GOOGLE_include_directive : require
 #include "shared/types.h"

@@ -73,7 +73,7 @@ void DepthPyramidPass::create(gpu::Device& device) {
 std::vector<DepthPyramidPass::Dispatch> pyramidDispatches(uint32_t width, uint32_t height) {
   std::vector<DepthPyramidPass::Dispatch> dispatches;
   const uint32_t levels = pyramidLevelCount(width, height);
-  uint32_t source = 0;  // the level the dispatch reads (0: the depth image, which it copies to level 0)
+  uint32_t source = 0;  // the level the dispatch reads (0: the depth image, which it may copy to level 0)
   do {
     DepthPyramidPass::Dispatch d;
     d.source = source;
@@ -153,10 +153,10 @@ void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisa
   }
 }
 
-void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled) const {
+void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled, bool writeLevel0) const {
   for (size_t i = 0; i < dispatches_.size(); ++i) {
     const Dispatch& d = dispatches_[i];
-    gpu::PyramidConstants pc{d.width, d.height, d.source == 0 ? 1u : 0u, d.reductions, 0, 0, 0, 0};
+    gpu::PyramidConstants pc{d.width, d.height, d.source == 0 && writeLevel0 ? 1u : 0u, d.reductions, 0, 0, 0, 0};
     const bool msaa = multisampled && i == 0;
     if (i <= 1) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (msaa ? msaaPipeline_ : pipeline_).handle());
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, msaa ? &msaaSet_ : &sets_[i], 0,

@@ -17,7 +17,7 @@ uint32_t pyramidLevelCount(uint32_t width, uint32_t height);
 
 class DepthPyramidPass {
  public:
-  // One dispatch: it reads level `source` (valid size width x height; 0: the depth image, copied to level 0) and
+  // One dispatch: it reads level `source` (valid size width x height; 0: the depth image, copied to level 0 on request) and
   // writes the next `reductions` levels.
   struct Dispatch {
     uint32_t source = 0, width = 0, height = 0, reductions = 0;
@@ -31,7 +31,9 @@ class DepthPyramidPass {
   // multisampledDepth (MSAA, same size): level 0 can also be built from it, as the farthest depth of each
   // pixel's samples (record with multisampled = true).
   void resize(const gpu::Image& depth, const gpu::Image* multisampledDepth = nullptr);
-  void record(VkCommandBuffer cmd, bool multisampled = false) const;
+  // writeLevel0: also copy the depth into level 0 (the occlusion tests never read it: PYRAMID_FIRST_TESTED_LEVEL;
+  // only a read-back of every level needs it).
+  void record(VkCommandBuffer cmd, bool multisampled = false, bool writeLevel0 = false) const;
   const gpu::Image& pyramid() const { return pyramid_; }
   uint32_t levels() const { return levels_; }
 

@@ -314,12 +314,12 @@ void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint3
             [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, sceneSet, ids, depth, stats, phase); });
 }
 
-void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa) {
+void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa, bool writeLevel0) {
   g.pass("depth pyramid", "depth pyramid")
       .step({Graph::reads(r.depth, access::computeSampled),
              Graph::overwrites(r.pyramid, access::inLayout(access::computeStorageImage | access::computeSampled,
                                                           VK_IMAGE_LAYOUT_GENERAL))},
-            [this, msaa](VkCommandBuffer cmd) { pyramid.record(cmd, msaa); });
+            [this, msaa, writeLevel0](VkCommandBuffer cmd) { pyramid.record(cmd, msaa, writeLevel0); });
 }
 
 // Tile light lists from the final depth.

@@ -227,7 +227,7 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
     } else {
       declareCull(g, r, plan, CULL_PHASE_EARLY, "cull early");
       rasterPhase(CULL_PHASE_EARLY, true, rasterEarly);
-      declarePyramid(g, r, plan.msaa);  // dropped when the late cull does not test against it (plan.usePyramid)
+      declarePyramid(g, r, plan.msaa, options.readPyramid);  // dropped when the late cull does not test against it
       declareCull(g, r, plan, CULL_PHASE_LATE, "cull late");
       rasterPhase(CULL_PHASE_LATE, false, rasterLate);
     }

@@ -322,7 +322,7 @@ struct Renderer::Impl {
   void declareRaster(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan,
                      uint32_t phase, bool clear, const char* name);
   void declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear);
-  void declarePyramid(Graph& g, const FrameResources& r, bool msaa);
+  void declarePyramid(Graph& g, const FrameResources& r, bool msaa, bool writeLevel0);  // (level 0: read back)
   void declareLightCull(Graph& g, const FrameResources& r, bool msaa);
   void declareClassify(Graph& g, const FrameResources& r);
   void declareShade(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan);

@@ -68,6 +68,9 @@
 #define PYRAMID_TILE 8
 #define PYRAMID_REDUCTIONS 3
 #define PYRAMID_DISPATCH_LEVELS (PYRAMID_REDUCTIONS + 1)  // storage images per dispatch: slot j = source level + j
+// The occlusion tests read level 1 (2x2 pixels a texel) and coarser, never level 0: the pyramid then does not copy
+// the full-resolution depth (a quarter of its cost on lavapipe) unless level 0 is read back (--view pyramid).
+#define PYRAMID_FIRST_TESTED_LEVEL 1
 
 // Counter indices in the cull statistics buffer (uint each, read back every frame).
 #define STAT_DRAW_COUNT 0          // draws appended (may exceed capacity: then overflow)
