@@ -23,12 +23,9 @@ layout(constant_id = 3) const uint VB_TEXELS = 0u;
 layout(constant_id = 4) const uint VB_EXTRAS = 1u;
 layout(constant_id = 5) const uint VB_POINT_LIGHTS = 1u;
 layout(set = 0, binding = SCENE_BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
-layout(set = 0, binding = SCENE_BINDING_INDEX_TEXELS) uniform usamplerBuffer indexTexels;
 layout(set = 0, binding = SCENE_BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData
 layout(set = 0, binding = SCENE_BINDING_MESH_TEXELS) uniform usamplerBuffer meshTexels;  // MESH_TEXELS per MeshData
 layout(std430, set = 0, binding = SCENE_BINDING_INDICES) readonly buffer IndexBlock { uint indices[]; };
-// Index i of the unified index pool.
-uint indexAt(uint i) { return VB_TEXELS != 0u ? texelFetch(indexTexels, int(i)).x : indices[i]; }
 layout(set = 0, binding = SCENE_BINDING_TRIANGLE_TEXELS) uniform usamplerBuffer triangleTexels;
 // The three indices of the triangle whose first index is `first` (a multiple of 3): one fetch where the scene has
 // texels (on lavapipe each fetch is a load per lane, three times the fetches for the same bytes otherwise).

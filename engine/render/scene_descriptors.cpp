@@ -35,13 +35,12 @@ void SceneDescriptors::create(gpu::Device& device, uint32_t slots) {
                                  {SCENE_BINDING_VERTEX_EXTRAS, storage},
                                  {SCENE_BINDING_TEXTURE_CLASSES, VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, MAX_TEXTURE_CLASSES},
                                  {SCENE_BINDING_VERTEX_TEXELS, texels},
-                                 {SCENE_BINDING_INDEX_TEXELS, texels},
+                                 {SCENE_BINDING_TRIANGLE_TEXELS, texels},
                                  {SCENE_BINDING_OBJECT_TEXELS, texels},
                                  {SCENE_BINDING_MESH_TEXELS, texels},
                                  {SCENE_BINDING_MATERIAL_TEXELS, texels},
                                  {SCENE_BINDING_TRIANGLE_PLANES, texels},
-                                 {SCENE_BINDING_STATS, storage},
-                                 {SCENE_BINDING_TRIANGLE_TEXELS, texels}},
+                                 {SCENE_BINDING_STATS, storage}},
                                 gpu::kPassConstantStages, slots);
 }
 
@@ -71,13 +70,12 @@ void SceneDescriptors::write(uint32_t slot, const gpu::Buffer& frame, const Scen
       .buffer(SCENE_BINDING_VERTEX_EXTRAS, s.vertexExtras.handle())
       .images(SCENE_BINDING_TEXTURE_CLASSES, std::move(textures))
       .texels(SCENE_BINDING_VERTEX_TEXELS, s.vertexTexels.handle())
-      .texels(SCENE_BINDING_INDEX_TEXELS, s.indexTexels.handle())
+      .texels(SCENE_BINDING_TRIANGLE_TEXELS, s.triangleTexels.handle())
       .texels(SCENE_BINDING_OBJECT_TEXELS, s.objectTexels.handle())
       .texels(SCENE_BINDING_MESH_TEXELS, s.meshTexels.handle())
       .texels(SCENE_BINDING_MATERIAL_TEXELS, s.materialTexels.handle())
       .texels(SCENE_BINDING_TRIANGLE_PLANES, s.planeTexels.handle())
       .buffer(SCENE_BINDING_STATS, in.stats->handle())
-      .texels(SCENE_BINDING_TRIANGLE_TEXELS, s.triangleTexels.handle())
       .update();
 }
 

@@ -439,7 +439,6 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
       return gpu::BufferView(device, b, format, 0, std::max(range, texelBytes));
     };
     g.vertexTexels = view(g.vertices, VK_FORMAT_R32G32B32A32_UINT, 16);
-    g.indexTexels = view(g.indices, VK_FORMAT_R32_UINT, 4);
     // One texel per triangle (common.glsl triangleIndices), where the device samples RGB32UI texel buffers (an
     // optional format feature); the texel path is off where it does not, and an R32UI view stands in.
     VkFormatProperties rgb{};
@@ -455,7 +454,7 @@ Result<GpuScene> uploadScene(gpu::Device& device, const Scene& scene, uint32_t s
     g.texels = rgbTexels;
     for (const gpu::Buffer* b : {&g.vertices, &g.objects, &g.trianglePlanes, &g.meshes, &g.materials})
       g.texels = g.texels && b->size() / 16 <= maxTexels;
-    g.texels = g.texels && g.indices.size() / 4 <= maxTexels;
+    g.texels = g.texels && g.indices.size() / 12 <= maxTexels;  // (the triangle view)
   }
   if (skinVertexCount > 0) {
     g.skinVertices = staging.create(skinVertexCount * sizeof(SkinVertex), ssbo);

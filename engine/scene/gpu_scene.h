@@ -18,12 +18,12 @@ struct GpuScene {
   gpu::Buffer objects;    // gpu::ObjectData[]
   gpu::Buffer materials;  // gpu::MaterialData[]
   gpu::Buffer vertexExtras;  // gpu::VertexExtra[] of the meshes with tangents or TEXCOORD_1 (MeshData.extraOffset)
-  // The same vertex, index and object records as uniform texel buffers (RGBA32UI, R32UI, RGBA32UI; the indices also
-  // as RGB32UI, one texel per triangle): the hot fetches of the frame read through these where `texels` is set
+  // The same vertex, index and object records as uniform texel buffers (RGBA32UI; the indices as RGB32UI, one texel
+  // per triangle): the hot fetches of the frame read through these where `texels` is set
   // (common.glsl VB_TEXELS), because lavapipe loads a texel as one vector while it reads a storage buffer word by
   // word and lane by lane. Set when every record fits maxTexelBufferElements and the device samples RGB32UI texel
   // buffers; the views cover what fits either way (a descriptor is always written).
-  gpu::BufferView vertexTexels, indexTexels, triangleTexels, objectTexels, meshTexels, materialTexels;
+  gpu::BufferView vertexTexels, triangleTexels, objectTexels, meshTexels, materialTexels;
   // Per triangle of `indices` (every LOD; triangle k = indices 3k..3k+2): its object-space plane (unit normal,
   // offset; zero for a degenerate one), RGBA32F, for lavapipe's micro-raster back-face test before projection (on
   // a GPU device, whose micro-raster does not test, an empty stand-in).

@@ -195,16 +195,16 @@
 #define SCENE_BINDING_MATERIALS 9     // MaterialData[]
 #define SCENE_BINDING_VERTEX_EXTRAS 10  // VertexExtra[] (tangent, TEXCOORD_1) of meshes that have them
 #define SCENE_BINDING_TEXTURE_CLASSES 11  // texture2DArray[MAX_TEXTURE_CLASSES]
-// Uniform texel buffer views of the vertex pool (RGBA32UI: two texels per Vertex), the index pool (R32UI) and the
-// object records (RGBA32UI: four texels per ObjectData), read where VB_TEXELS is 1 (GpuScene::texels).
+// Uniform texel buffer views of the vertex pool (RGBA32UI: two texels per Vertex), the index pool (RGB32UI: one
+// texel per triangle; a level starts at a multiple of 3) and the object records (RGBA32UI: four texels per
+// ObjectData), read where VB_TEXELS is 1 (GpuScene::texels).
 #define SCENE_BINDING_VERTEX_TEXELS 12
-#define SCENE_BINDING_INDEX_TEXELS 13
+#define SCENE_BINDING_TRIANGLE_TEXELS 13
 #define SCENE_BINDING_OBJECT_TEXELS 14
 #define SCENE_BINDING_MESH_TEXELS 15      // the MeshData records, RGBA32UI (3 + MAX_LODS texels each)
 #define SCENE_BINDING_MATERIAL_TEXELS 16  // the MaterialData records, RGBA32UI
 #define SCENE_BINDING_TRIANGLE_PLANES 17  // vec4 per triangle of the index pool (GpuScene::trianglePlanes), RGBA32F
 #define SCENE_BINDING_STATS 18            // uint[STAT_COUNT]: the frame-wide counters (then SW_ARGS)
-#define SCENE_BINDING_TRIANGLE_TEXELS 19  // the index pool as RGB32UI: one texel per triangle (a level starts at a multiple of 3)
 
 // The cull pass's visible list: the visible set of its history as a list, for the next frame's early cull (one
 // thread per listed object instead of one per object of the scene): VISIBLE_LIST_HEADER uints -- count, then the
