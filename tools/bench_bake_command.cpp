@@ -40,7 +40,7 @@
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/asset/texture_bake.h"
 #include "visbuf/core/image_compare.h"
-#include "bench_in_flight.h"  // median, utcNow
+#include "bench_common.h"  // median, utcNow
 #include "cli_checks.h"
 #include "commands.h"
 #include "invocation.h"
