@@ -17,8 +17,8 @@ uint32_t pyramidLevelCount(uint32_t width, uint32_t height);
 
 class DepthPyramidPass {
  public:
-  // One dispatch: it reads level `source` (valid size width x height; 0: the depth image, copied to level 0 on request) and
-  // writes the next `reductions` levels.
+  // One dispatch: it reads level `source` (valid size width x height; 0: the depth image, copied to level 0 on
+  // request) and writes the next `reductions` levels.
   struct Dispatch {
     uint32_t source = 0, width = 0, height = 0, reductions = 0;
   };
