@@ -44,6 +44,7 @@ struct RenderCommand {
   std::optional<float> swRasterPixels;  // its object size bound in pixels (FrameOptions::swRasterPixels)
   bool noClusters = false;  // FrameOptions::clusters off
   bool noEarlyClusterOcclusion = false;  // FrameOptions::earlyClusterOcclusion off
+  bool alwaysPyramid = false;            // FrameOptions::skipUselessPyramid off
   double moving = 0.0;  // fraction of the movable objects moved every frame (SceneMotion)
   double churn = 0.0;   // fraction of the objects removed, added and hidden every frame (SceneMotion)
 };

@@ -116,6 +116,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
                 "occlusion culling with clusters: draw every front-facing cluster of last frame's visible objects in "
                 "the early phase (default: defer the ones last frame's depth pyramid hides to a retest in the late "
                 "phase; the image is the same)");
+  sub->add_flag("--always-pyramid", c.alwaysPyramid,
+                "occlusion culling: build the depth pyramid every frame (default: a pyramid that hid nothing, or "
+                "objects worth less than half its GPU time in raster, is skipped for 16 frames, then built again; "
+                "the image is the same)");
   sub->add_option("--moving", c.moving,
                   "every frame, move this fraction of the objects (not skinned or node-animated) along deterministic "
                   "closed paths through the renderer's scene-update API; the JSON gets per-frame uploaded bytes and "
@@ -345,6 +349,7 @@ int runRender(const RenderCommand& c) {
   fo.swRasterPixels = c.swRasterPixels;
   fo.clusters = !c.noClusters;
   fo.earlyClusterOcclusion = !c.noEarlyClusterOcclusion;
+  fo.skipUselessPyramid = !c.alwaysPyramid;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).
   // --moving / --churn: the scene changes before every frame; perFrame gets each frame's changes and counters.
   nlohmann::json perFrame = nlohmann::json::array();

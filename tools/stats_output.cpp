@@ -43,9 +43,10 @@ std::string formatStats(const FrameStats& s) {
   out += fmt::format("lod histogram [{}]\n", lods);
   if (s.path != RenderPath::Forward) {
     if (s.cull.cullingFrozen) out += "culling       FROZEN: draw lists of an earlier frame\n";
-    out += fmt::format("pyramid       {}\n", s.pyramid.levels  ? fmt::format("{} levels", s.pyramid.levels)
-                                            : s.pyramid.skipped ? std::string("skipped (the last one hid nothing)")
-                                                               : std::string("not built"));
+    out += fmt::format("pyramid       {}\n",
+                       s.pyramid.levels    ? fmt::format("{} levels", s.pyramid.levels)
+                       : s.pyramid.skipped ? std::string("skipped (the last one hid nothing, or less than it cost)")
+                                           : std::string("not built"));
     if (s.path == RenderPath::Visbuf) out += fmt::format("ids           {}\n", s.ids.describe());
     out += fmt::format("capacity      draws {} used of {}, overflow {}{}\n", s.cull.drawsRendered, s.cull.drawCapacity,
                        s.cull.drawOverflow, s.cull.drawOverflow ? "  (WARNING: visible objects were dropped)" : "");

@@ -42,6 +42,15 @@ struct SceneFacts {
 
 // A pyramid or micro-raster that did nothing is skipped for this many frames, then probed again.
 inline constexpr uint32_t kPyramidProbeInterval = 16;
+// ... and so is a pyramid that cost more than this many times what the raster would have paid for the objects it hid.
+inline constexpr double kPyramidPayFactor = 2.0;
+
+// A finished frame's GPU times, as far as the pyramid's worth goes: the pyramid pass, and the raster's time (hardware
+// raster and micro-raster, both phases) per object it drew. Zero: not measured (the pyramid is judged by its count).
+struct PyramidCost {
+  double pyramidMs = 0.0;
+  double rasterMsPerObject = 0.0;
+};
 inline constexpr uint32_t kSwProbeInterval = 16;
 // Auto on a GPU: the micro-raster pays for its two full-screen merges from about this many triangles.
 inline constexpr uint64_t kGpuSwMinTriangles = 262144;
@@ -58,9 +67,10 @@ struct FrameHistory {
   // A frame recorded with `plan`.
   void recorded(const FramePlan& plan);
   // The counters of a finished GPU-culled frame recorded with `plan` and `options`: whether its micro-raster and
-  // pyramid paid (swTriangles: the micro-raster's triangles; drawsEarly, occlusionCulled: the cull's counts).
+  // pyramid paid (swTriangles: the micro-raster's triangles; drawsEarly, occlusionCulled: the cull's counts; cost:
+  // the frame's times).
   void finished(const FramePlan& plan, const FrameOptions& options, bool cpuDevice, uint64_t swTriangles,
-                uint32_t drawsEarly, uint32_t occlusionCulled);
+                uint32_t drawsEarly, uint32_t occlusionCulled, const PyramidCost& cost = {});
   // A cut or a new size: the pyramid is probed again at once.
   void cut() {
     pyramidSkipFrames = 0;

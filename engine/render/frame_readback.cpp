@@ -80,6 +80,20 @@ void Renderer::Impl::declareReadback(Graph& g, const FrameResources& r, const Fr
   });
 }
 
+// What a frame's pyramid cost and what its raster paid per object drawn (the LOD histogram counts each drawn object
+// once, whole or as clusters), from its GPU times (FrameHistory::finished).
+static PyramidCost pyramidCost(const FrameStats& st) {
+  double pyramidMs = 0.0, rasterMs = 0.0;
+  for (const auto& [name, ms] : st.graph.passMs) {
+    if (name == "depth pyramid") pyramidMs += ms;
+    if (name == "raster early" || name == "raster late" || name == "sw raster" || name == "sw raster late")
+      rasterMs += ms;
+  }
+  uint64_t objects = 0;
+  for (uint32_t n : st.cull.lodHistogram) objects += n;
+  return {pyramidMs, objects > 0 ? rasterMs / double(objects) : 0.0};
+}
+
 // The counters and GPU times of a finished frame (slot.stats already holds what recording knew), and the
 // decisions later frames take from them (skipping a pyramid or micro-raster that did nothing). synchronous:
 // renderFrame, which also reads the light and classification statistics (their buffers are single).
@@ -132,7 +146,8 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
     st.cull.clusters = {s[STAT_CLUSTER_OBJECTS],  s[STAT_CLUSTERS_TESTED],   s[STAT_CLUSTERS_FRUSTUM],
                         s[STAT_CLUSTERS_BACKFACING], s[STAT_CLUSTERS_OCCLUDED], s[STAT_CLUSTER_DRAWS],
                         s[STAT_CLUSTERS_DEFERRED], s[STAT_CLUSTERS_RECOVERED]};
-    frameHistory.finished(slot.plan, options, device.isCpu(), st.sw.triangles, st.cull.drawsEarly, st.cull.occlusionCulled);
+    frameHistory.finished(slot.plan, options, device.isCpu(), st.sw.triangles, st.cull.drawsEarly, st.cull.occlusionCulled,
+                          pyramidCost(st));
   }
   while (!st.cull.lodHistogram.empty() && st.cull.lodHistogram.back() == 0) st.cull.lodHistogram.pop_back();
 

@@ -107,7 +107,8 @@ struct FrameOptions {
   double animationTime = 0.0;   // seconds: the pose of every skinned instance (plus its own time offset)
   bool tiledLights = true;       // visbuf: shade each pixel with its 16x16 tile's light list (light cull pass);
                                 // false: every pixel loops over every point light (the reference, no culling)
-  bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, skip it (and the
+  bool skipUselessPyramid = true;  // occlusion mode: when the pyramid occluded nothing, or objects that would have
+                                   // cost the raster less than half the pyramid's own GPU time, skip it (and the
                                    // occlusion test) for the next kPyramidProbeInterval frames
   // Samples per pixel: 1 (no MSAA), 2 or 4 where supportedMsaaSamples() lists it. visbuf: multisampled ID and
   // depth targets, each pixel shaded once where its samples agree and once per distinct ID where they differ;
@@ -190,7 +191,7 @@ struct SwRasterStats {
 // depth_pyramid_pass.
 struct PyramidStats {
   uint32_t levels = 0;   // levels built this frame (0: no pyramid pass)
-  bool skipped = false;  // occlusion mode, but the last pyramid hid nothing: skipped this frame
+  bool skipped = false;  // occlusion mode, but the last pyramid hid nothing or less than it cost: skipped this frame
 };
 
 // skin_pass (and the CPU pose evaluation that feeds it).

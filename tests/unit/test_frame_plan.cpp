@@ -103,6 +103,38 @@ TEST(FramePlan, HistorySkipsAUselessPyramidThenProbesAgain) {
   EXPECT_TRUE(planFrame(fo, gpuFacts(), h).usePyramid) << "a cut probes at once";
 }
 
+// A pyramid that hid objects worth less raster time than half its own is skipped too; without times (or with a
+// pyramid that pays) the count alone decides. Reference: the rule's arithmetic on round figures.
+TEST(FramePlan, HistorySkipsAPyramidThatCostsMoreThanItSaves) {
+  FrameOptions fo;
+  fo.cull = CullMode::Occlusion;
+  FrameHistory h;
+  const FramePlan p = planFrame(fo, gpuFacts(), h);
+  ASSERT_TRUE(p.usePyramid);
+  // 20 objects hidden at 1/64 ms of raster each (0.31 ms) by a 4 ms pyramid: skipped.
+  const PyramidCost cost{4.0, 1.0 / 64.0};
+  h.finished(p, fo, true, 0, 1500, 20, cost);
+  EXPECT_EQ(h.pyramidSkipFrames, kPyramidProbeInterval);
+  h.cut();
+  // 4,000 objects hidden (62.5 ms of raster) by the same pyramid: kept.
+  h.finished(p, fo, true, 0, 9000, 4000, cost);
+  EXPECT_EQ(h.pyramidSkipFrames, 0u);
+  // At the bound, 4 ms against 2 x 128 / 64 ms, the pyramid does not cost more: kept; one object fewer: skipped.
+  h.finished(p, fo, true, 0, 9000, 128, cost);
+  EXPECT_EQ(h.pyramidSkipFrames, 0u);
+  h.finished(p, fo, true, 0, 9000, 127, cost);
+  EXPECT_EQ(h.pyramidSkipFrames, kPyramidProbeInterval);
+  h.cut();
+  // No times measured: the count decides, as before.
+  h.finished(p, fo, true, 0, 1500, 20, {});
+  EXPECT_EQ(h.pyramidSkipFrames, 0u);
+  // Pinned on: never skipped.
+  FrameOptions pinned = fo;
+  pinned.skipUselessPyramid = false;
+  h.finished(p, pinned, true, 0, 1500, 20, cost);
+  EXPECT_EQ(h.pyramidSkipFrames, 0u);
+}
+
 // The early phase guesses with the pyramid the previous frame built: only after a frame that built one, never after
 // a cut or a new size (its pyramid shows another view), and only with clusters and occlusion culling.
 TEST(FramePlan, EarlyClusterOcclusionNeedsLastFramesPyramid) {
