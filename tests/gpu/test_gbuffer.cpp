@@ -184,7 +184,9 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
   std::printf("gbuffer bandwidth: %.3f raster writes/pixel, %u B/fragment, %.2f B written/pixel (visbuf %u B/fragment, "
               "%.2f B written/pixel)\n", g->stats.rasterWritesPerPixel, g->stats.rasterBytesPerFragment,
               g->stats.bytesWrittenPerPixel, v->stats.rasterBytesPerFragment, v->stats.bytesWrittenPerPixel);
-  EXPECT_GT(double(fragments), 1.2 * double(covered)) << "a city view has overdraw";
+  // A city view has overdraw. The fragments that pass the depth test when they run depend on the order they run in:
+  // lavapipe's is fixed (1.2x and more here); the H200 gave 1.13x to 1.50x over 18 runs of this test.
+  EXPECT_GT(double(fragments), (dev.isCpu() ? 1.2 : 1.05) * double(covered)) << "a city view has overdraw";
   // A CPU rasteriser runs both pipelines identically. On a GPU, "passed the depth test when it ran" depends on the
   // order in which fragments of one pixel run, which is not fixed between pipelines (H100: 0.24% of the pixels
   // differ): allowed at 1% of the pixels, and the totals within 1%.
