@@ -71,9 +71,9 @@ void FrameHistory::finished(const FramePlan& plan, const FrameOptions& options, 
     const bool costsMore = cost.rasterMsPerObject > 0.0 && cost.pyramidMs > kPyramidPayFactor * saved;
     const bool useless = occlusionCulled == 0 || costsMore;
     pyramidSkipFrames = options.skipUselessPyramid && drawsEarly > 0 && useless ? kPyramidProbeInterval : 0;
-  }
-  else if (pyramidSkipFrames > 0)
+  } else if (pyramidSkipFrames > 0) {
     --pyramidSkipFrames;
+  }
 }
 
 }  // namespace visbuf

@@ -42,7 +42,11 @@ struct SceneFacts {
 
 // A pyramid or micro-raster that did nothing is skipped for this many frames, then probed again.
 inline constexpr uint32_t kPyramidProbeInterval = 16;
-// ... and so is a pyramid that cost more than this many times what the raster would have paid for the objects it hid.
+inline constexpr uint32_t kSwProbeInterval = 16;
+// Auto on a GPU: the micro-raster pays for its two full-screen merges from about this many triangles.
+inline constexpr uint64_t kGpuSwMinTriangles = 262144;
+// A pyramid that hid something is skipped too when it cost more than this many times what the raster would have paid
+// for the objects it hid.
 inline constexpr double kPyramidPayFactor = 2.0;
 
 // A finished frame's GPU times, as far as the pyramid's worth goes: the pyramid pass, and the raster's time (hardware
@@ -51,9 +55,6 @@ struct PyramidCost {
   double pyramidMs = 0.0;
   double rasterMsPerObject = 0.0;
 };
-inline constexpr uint32_t kSwProbeInterval = 16;
-// Auto on a GPU: the micro-raster pays for its two full-screen merges from about this many triangles.
-inline constexpr uint64_t kGpuSwMinTriangles = 262144;
 
 // What earlier frames left that a frame's plan depends on.
 struct FrameHistory {
