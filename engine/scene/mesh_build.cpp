@@ -94,6 +94,70 @@ void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std:
   }
 }
 
+// A simplified level that may join the LOD chain: its indices and measured error (object-space units).
+struct LevelCandidate {
+  std::vector<uint32_t> indices;
+  float error = 0.0f;
+};
+
+// Picks at most `budget` of the candidates as the chain's levels after an anchor level (anchorIndices indices,
+// anchorError): only candidates on the Pareto front (no other has fewer triangles and no more error), the
+// coarsest always, and among them the set that draws the fewest triangles for an instance whose pixel threshold
+// is log-uniform: a level is drawn between its own error and the next level's, so it costs its triangles times
+// log(next error / its error). Each level keeps at most minReduction of the previous one's triangles. Exact by
+// dynamic programming. Returns the indices into `candidates`, finest first.
+std::vector<size_t> fineLevels(size_t anchorIndices, float anchorError, const std::vector<LevelCandidate>& candidates,
+                               size_t budget, double minReduction) {
+  std::vector<size_t> order(candidates.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const auto& ca = candidates[a];
+    const auto& cb = candidates[b];
+    return ca.indices.size() != cb.indices.size() ? ca.indices.size() < cb.indices.size() : ca.error < cb.error;
+  });
+  std::vector<size_t> front;  // fewest triangles first, then strictly falling error
+  float best = INFINITY;
+  for (size_t i : order)
+    if (candidates[i].error < best && double(candidates[i].indices.size()) <= double(anchorIndices) * minReduction) {
+      front.push_back(i);
+      best = candidates[i].error;
+    }
+  std::reverse(front.begin(), front.end());  // finest first: triangles falling, error rising
+  if (front.empty() || budget == 0) return {};
+  const size_t n = front.size();
+  // Point 0 is the anchor; points 1..n the front. Errors floored so the anchor's log term stays finite.
+  std::vector<double> count(n + 1), logError(n + 1);
+  const double floor = std::max(double(candidates[front[0]].error) * 0.5, 1e-12);
+  count[0] = double(anchorIndices);
+  logError[0] = std::log(std::max(double(anchorError), floor));
+  for (size_t i = 0; i < n; ++i) {
+    count[i + 1] = double(candidates[front[i]].indices.size());
+    logError[i + 1] = std::log(std::max(double(candidates[front[i]].error), floor));
+  }
+  const size_t levels = std::min(budget, n);
+  // cost[k][j]: least cost of a chain whose k-th level is point j; from[k][j] the level before it.
+  std::vector<std::vector<double>> cost(levels + 1, std::vector<double>(n + 1, INFINITY));
+  std::vector<std::vector<size_t>> from(levels + 1, std::vector<size_t>(n + 1, 0));
+  cost[0][0] = 0.0;
+  for (size_t k = 1; k <= levels; ++k)
+    for (size_t j = 1; j <= n; ++j)
+      for (size_t i = 0; i < j; ++i) {
+        if (!std::isfinite(cost[k - 1][i]) || count[j] > count[i] * minReduction) continue;
+        const double c = cost[k - 1][i] + count[i] * (logError[j] - logError[i]);
+        if (c < cost[k][j]) {
+          cost[k][j] = c;
+          from[k][j] = i;
+        }
+      }
+  size_t bestK = 1;
+  for (size_t k = 1; k <= levels; ++k)
+    if (cost[k][n] < cost[bestK][n]) bestK = k;
+  std::vector<size_t> picked;
+  for (size_t k = bestK, j = n; k > 0; j = from[k][j], --k) picked.push_back(front[j - 1]);
+  std::reverse(picked.begin(), picked.end());
+  return picked;
+}
+
 // The source's JOINTS_0 / WEIGHTS_0 (+ JOINTS_1 / WEIGHTS_1) streams as SkinVertex records (empty when the mesh
 // is not skinned), in canonical form: slots with weight 0 get joint 0, so equal influences compare equal byte for
 // byte.
@@ -291,16 +355,25 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   // The recorded error is the measured two-sided deviation from the full surface (meshoptimizer's estimate,
   // in particular simplifySloppy's, can be far below what the silhouette really loses), never less than the
   // simplifier's own figure; object-space units.
+  const TriangleGrid fullGrid(positions, lod0);
   auto measure = [&](const std::vector<uint32_t>& level, size_t count, float estimate) {
-    double measured = measureSimplificationError(positions, lod0, std::span(level.data(), count));
+    double measured = measureSimplificationError(fullGrid, positions, lod0, std::span(level.data(), count));
     return std::max(float(measured), estimate * scale);
   };
   std::vector<uint32_t> sloppy(indexCount);
+  auto addLevel = [&](std::vector<uint32_t>& level, size_t count, float error) {
+    repairCornerAttributes(mesh.vertices, positionShadow, level.data(), count);
+    meshopt_optimizeVertexCache(level.data(), level.data(), count, unique);
+    mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
+    mesh.indices.insert(mesh.indices.end(), level.begin(), level.begin() + std::ptrdiff_t(count));
+  };
+  // Coarse levels (above fineBelowTriangles): each aims at lodRatio of the previous one.
   size_t previous = indexCount;
   float previousError = 0.0f;
-  while (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
-    const double ratio = previous / 3 > options.fineBelowTriangles ? options.lodRatio : options.fineLodRatio;
-    size_t target = std::max<size_t>(size_t(double(previous / 3) * ratio) * 3, size_t(options.minTriangles) * 3);
+  while (mesh.lods.size() < options.maxLods && previous / 3 > options.fineBelowTriangles &&
+         previous / 3 > options.minTriangles) {
+    size_t target = std::max<size_t>(size_t(double(previous / 3) * options.lodRatio) * 3,
+                                     size_t(options.minTriangles) * 3);
     float err = 0.0f;
     size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
                                     &err);
@@ -310,9 +383,8 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     const bool stalled = count == 0 || count > previous * options.minReduction;
     float error = stalled ? INFINITY : measure(scratch, count, err);
     // Topology-preserving simplification either stalled (small islands, a handle it may not close) or paid
-    // for its reduction with a jump in error (the Kitten at 904 triangles: 8x the previous level's error,
-    // where the sloppy simplifier loses half as much with fewer triangles): try meshopt_simplifySloppy too
-    // and keep whichever candidate deviates less from the full surface.
+    // for its reduction with a jump in error: try meshopt_simplifySloppy too and keep whichever candidate
+    // deviates less from the full surface.
     if (stalled || error > 2.5f * std::max(previousError, 1e-12f)) {
       float sloppyEstimate = 0.0f;
       size_t sloppyCount = meshopt_simplifySloppy(sloppy.data(), lod0.data(), indexCount, pos, unique, stride,
@@ -327,8 +399,6 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
       }
     }
     if (!std::isfinite(error)) break;  // no candidate reduces the mesh: the chain ends
-    repairCornerAttributes(mesh.vertices, positionShadow, scratch.data(), count);
-    meshopt_optimizeVertexCache(scratch.data(), scratch.data(), count, unique);
     if (error <= previousError && mesh.lods.size() > 1) {
       // Fewer triangles for no more error than the previous level: that level would never be chosen (the
       // cull pass takes the coarsest level under the threshold), so this one replaces it.
@@ -337,10 +407,63 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
       previousError = mesh.lods.back().error;  // (not the replaced level's: this one may lose less than it did)
     }
     error = std::max(error, previousError);  // non-decreasing along the chain
-    mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
-    mesh.indices.insert(mesh.indices.end(), scratch.begin(), scratch.begin() + std::ptrdiff_t(count));
+    addLevel(scratch, count, error);
     previous = count;
     previousError = error;
+  }
+  // Fine levels (what distant instances draw): a dense sweep of candidates, both simplifiers at each target,
+  // measured; the chain takes the levels of the best trade of triangles against error (fineLevels).
+  if (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
+    std::vector<LevelCandidate> candidates;
+    for (double t = double(previous / 3) * options.fineLodRatio;; t *= options.fineLodRatio) {
+      const size_t target = std::max<size_t>(size_t(t), options.minTriangles) * 3;
+      float err = 0.0f;
+      size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
+                                      &err);
+      if (count > target * 2)  // stalled at a seam: let it cross welded seams
+        count = meshopt_simplify(scratch.data(), shadow.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
+                                 &err);
+      if (count > 0 && count < previous)
+        candidates.push_back({{scratch.begin(), scratch.begin() + std::ptrdiff_t(count)}, measure(scratch, count, err)});
+      float sloppyEstimate = 0.0f;
+      size_t sloppyCount = meshopt_simplifySloppy(sloppy.data(), lod0.data(), indexCount, pos, unique, stride,
+                                                  target, 1.0f, &sloppyEstimate);
+      if (sloppyCount > 0 && sloppyCount < previous)
+        candidates.push_back({{sloppy.begin(), sloppy.begin() + std::ptrdiff_t(sloppyCount)},
+                              measure(sloppy, sloppyCount, sloppyEstimate)});
+      // Clustered (sloppy) at twice the target, then edge collapses down to it: where the topology-preserving
+      // simplifier stalls (the Kitten below ~870 triangles), this keeps more of the shape than sloppy alone.
+      for (double looser : {1.5, 2.5}) {
+        const size_t looseTarget = std::min(size_t(double(target) * looser) / 3 * 3, indexCount);
+        if (looseTarget <= target) continue;
+        float e1 = 0.0f;
+        size_t coarse = meshopt_simplifySloppy(sloppy.data(), lod0.data(), indexCount, pos, unique, stride,
+                                               looseTarget, 1.0f, &e1);
+        if (coarse <= target) continue;  // (already at the target: the sloppy candidate above)
+        float e2 = 0.0f;
+        size_t refined = meshopt_simplify(scratch.data(), sloppy.data(), coarse, pos, unique, stride, target, 1.0f, 0,
+                                          &e2);
+        if (refined > 0 && refined < previous)
+          candidates.push_back({{scratch.begin(), scratch.begin() + std::ptrdiff_t(refined)},
+                                measure(scratch, refined, e1)});
+      }
+      if (target <= size_t(options.minTriangles) * 3) break;
+    }
+    // A candidate with no more error than the last coarse level and fewer triangles makes that level useless.
+    auto leastError = [&] {
+      float e = INFINITY;
+      for (const LevelCandidate& c : candidates) e = std::min(e, c.error);
+      return e;
+    };
+    while (mesh.lods.size() > 1 && leastError() <= mesh.lods.back().error) {
+      mesh.indices.resize(mesh.lods.back().firstIndex);
+      mesh.lods.pop_back();
+    }
+    const float anchorError = mesh.lods.back().error;
+    for (LevelCandidate& c : candidates) c.error = std::max(c.error, anchorError);
+    for (size_t i : fineLevels(mesh.lods.back().indexCount, anchorError, candidates,
+                               options.maxLods - mesh.lods.size(), options.minReduction))
+      addLevel(candidates[i].indices, candidates[i].indices.size(), candidates[i].error);
   }
 
   // Each level's triangles in meshlet order: the clusters of the cull pass (scene/clusters.h).

@@ -72,7 +72,7 @@ glm::ivec3 TriangleGrid::cellOf(const glm::dvec3& p) const {
   return c;
 }
 
-double TriangleGrid::distance(const glm::dvec3& p) const {
+double TriangleGrid::distance(const glm::dvec3& p, double enough) const {
   // Search shells of cells around p's (clamped) cell until the nearest hit is closer than any
   // unvisited cell can be.
   const glm::ivec3 home = cellOf(p);
@@ -95,6 +95,7 @@ double TriangleGrid::distance(const glm::dvec3& p) const {
             best = std::min(best, pointTriangleDistance(p, glm::dvec3(positions_[indices_[3 * t]]),
                                                         glm::dvec3(positions_[indices_[3 * t + 1]]),
                                                         glm::dvec3(positions_[indices_[3 * t + 2]])));
+            if (best <= enough) return best;
           }
         }
   }
@@ -103,6 +104,11 @@ double TriangleGrid::distance(const glm::dvec3& p) const {
 
 double measureSimplificationError(std::span<const glm::vec3> positions, std::span<const uint32_t> full,
                                   std::span<const uint32_t> simplified) {
+  return measureSimplificationError(TriangleGrid(positions, full), positions, full, simplified);
+}
+
+double measureSimplificationError(const TriangleGrid& fullGrid, std::span<const glm::vec3> positions,
+                                  std::span<const uint32_t> full, std::span<const uint32_t> simplified) {
   if (simplified.empty()) return std::numeric_limits<double>::infinity();
   double error = 0.0;
   TriangleGrid lodGrid(positions, simplified);
@@ -110,13 +116,12 @@ double measureSimplificationError(std::span<const glm::vec3> positions, std::spa
   for (uint32_t i : full) {
     if (seen[i]) continue;
     seen[i] = 1;
-    error = std::max(error, lodGrid.distance(glm::dvec3(positions[i])));
+    error = std::max(error, lodGrid.distance(glm::dvec3(positions[i]), error));
   }
-  TriangleGrid fullGrid(positions, full);
   for (size_t t = 0; t + 2 < simplified.size(); t += 3) {
     glm::dvec3 a(positions[simplified[t]]), b(positions[simplified[t + 1]]), c(positions[simplified[t + 2]]);
     for (const glm::dvec3& s : {(a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5, (a + b + c) / 3.0})
-      error = std::max(error, fullGrid.distance(s));
+      error = std::max(error, fullGrid.distance(s, error));
   }
   return error;
 }

@@ -15,8 +15,10 @@ namespace visbuf {
 class TriangleGrid {
  public:
   TriangleGrid(std::span<const glm::vec3> positions, std::span<const uint32_t> indices);
-  // Exact distance to the nearest triangle (double precision point-triangle distance).
-  double distance(const glm::dvec3& p) const;
+  // Exact distance to the nearest triangle (double precision point-triangle distance). With `enough`, the search
+  // may stop at any triangle within that distance and return its distance (still an upper bound of the nearest
+  // at most `enough`): a maximum over many points needs no more.
+  double distance(const glm::dvec3& p, double enough = -1.0) const;
 
  private:
   glm::ivec3 cellOf(const glm::dvec3& p) const;
@@ -37,5 +39,8 @@ double pointTriangleDistance(const glm::dvec3& p, const glm::dvec3& a, const glm
 // triangle (vertices, edge midpoints, centroid) to the full surface.
 double measureSimplificationError(std::span<const glm::vec3> positions, std::span<const uint32_t> full,
                                   std::span<const uint32_t> simplified);
+// The same with the full mesh's grid built once (TriangleGrid(positions, full)), for many levels of one mesh.
+double measureSimplificationError(const TriangleGrid& fullGrid, std::span<const glm::vec3> positions,
+                                  std::span<const uint32_t> full, std::span<const uint32_t> simplified);
 
 }  // namespace visbuf

@@ -57,11 +57,12 @@ struct MeshBuildOptions {
   uint32_t maxLods = MAX_LODS;     // including the full mesh
   uint32_t minTriangles = 16;      // stop the chain once a level reaches this
   float minReduction = 0.85f;      // a level must keep at most this fraction of the previous one
-  // Each level aims at this fraction of the previous one's triangles, and at fineLodRatio once the previous one
-  // has at most fineBelowTriangles: the levels distant instances draw come in finer steps, so each instance
-  // draws a level closer to its pixel threshold (field, 1M kittens: 18.8M -> 13.1M triangles drawn at 1 px).
+  // Above fineBelowTriangles each level aims at lodRatio of the previous one's triangles. Below it (the levels
+  // distant instances draw) candidates are simplified at targets fineLodRatio apart, by both simplifiers, and
+  // measured; the chain takes the subset that draws the fewest triangles for a log-uniform spread of pixel
+  // thresholds (so each instance draws a level close to its threshold), within maxLods.
   float lodRatio = 0.5f;
-  float fineLodRatio = 0.7f;
+  float fineLodRatio = 0.85f;
   uint32_t fineBelowTriangles = 2048;
 };
 
