@@ -320,7 +320,32 @@ TEST(MeshBuild, KittenChainTakesTheCandidateWithTheSmallerMeasuredError) {
   EXPECT_TRUE(coarseAndClose) << "no level of <= 1,000 triangles within 0.06 mesh units";
 }
 
-// The levels distant instances draw come in steps finer than halving (MeshBuildOptions::fineLodRatio), so an
+// The fine levels are chosen from measured candidates (the topology-preserving simplifier, the clustering one, and
+// clustering then edge collapses): the Kitten's chain offers a level of at most 450 triangles within 0.035 units and
+// one of at most 150 within 0.06, each error measured here. The chain that stepped by a triangle ratio had 577
+// triangles at 0.042 and 149 at 0.079: every instance between those bounds drew up to twice the triangles.
+TEST(MeshBuild, KittenFineLevelsAreChosenFromMeasuredCandidates) {
+  const std::filesystem::path kitten = test::assetPath("Kitten/kitten.glb");
+  REQUIRE_ASSET(kitten);
+  Result<Mesh> mesh = importAndBuildMesh(kitten);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  const Mesh& m = *mesh;
+  std::vector<glm::vec3> positions(m.vertices.size());
+  for (uint32_t v = 0; v < m.vertices.size(); ++v) positions[v] = m.position(v);
+  const std::span<const uint32_t> full(m.indices.data() + m.lods[0].firstIndex, m.lods[0].indexCount);
+  double best450 = INFINITY, best150 = INFINITY;
+  for (size_t l = 1; l < m.lods.size(); ++l) {
+    const std::span<const uint32_t> level(m.indices.data() + m.lods[l].firstIndex, m.lods[l].indexCount);
+    const double measured = measureSimplificationError(positions, full, level);
+    if (m.triangleCount(l) <= 450) best450 = std::min(best450, measured);
+    if (m.triangleCount(l) <= 150) best150 = std::min(best150, measured);
+    EXPECT_LE(m.lods[l].indexCount, m.lods[l - 1].indexCount * 0.85) << "level " << l << " must really reduce";
+  }
+  EXPECT_LE(best450, 0.035);
+  EXPECT_LE(best150, 0.06);
+}
+
+// The levels distant instances draw come in steps finer than halving (candidates MeshBuildOptions::fineLodRatio apart), so an
 // instance finds one close to its pixel threshold: the Kitten offers at least 7 levels between 40 and 2,048
 // triangles (halving steps gave 5: 1808, 829, 346, 149, 50), and the chain still ends within tens of triangles.
 TEST(MeshBuild, KittenCoarseLevelsComeInFineSteps) {
@@ -335,7 +360,7 @@ TEST(MeshBuild, KittenCoarseLevelsComeInFineSteps) {
   EXPECT_GE(coarse, 7u);
   EXPECT_LE(m.triangleCount(m.lods.size() - 1), 50u);
   EXPECT_LE(m.lods.size(), size_t(MAX_LODS));
-  // The steps are the options': halving all the way down offers fewer such levels.
+  // The candidates' spacing is the options': targets half apart offer fewer such levels.
   Result<MeshSource> source = importGltfMesh(kitten.string());
   ASSERT_TRUE(source.ok());
   Result<Mesh> halving = buildMesh(*source, {.fineLodRatio = 0.5f});
