@@ -415,6 +415,10 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   // measured; the chain takes the levels of the best trade of triangles against error (fineLevels).
   if (mesh.lods.size() < options.maxLods && previous / 3 > options.minTriangles) {
     std::vector<LevelCandidate> candidates;
+    auto offer = [&](const std::vector<uint32_t>& level, size_t count, float estimate) {
+      if (count > 0 && count < previous)
+        candidates.push_back({{level.begin(), level.begin() + std::ptrdiff_t(count)}, measure(level, count, estimate)});
+    };
     for (double t = double(previous / 3) * options.fineLodRatio;; t *= options.fineLodRatio) {
       const size_t target = std::max<size_t>(size_t(t), options.minTriangles) * 3;
       float err = 0.0f;
@@ -423,15 +427,12 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
       if (count > target * 2)  // stalled at a seam: let it cross welded seams
         count = meshopt_simplify(scratch.data(), shadow.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
                                  &err);
-      if (count > 0 && count < previous)
-        candidates.push_back({{scratch.begin(), scratch.begin() + std::ptrdiff_t(count)}, measure(scratch, count, err)});
+      offer(scratch, count, err);
       float sloppyEstimate = 0.0f;
       size_t sloppyCount = meshopt_simplifySloppy(sloppy.data(), lod0.data(), indexCount, pos, unique, stride,
                                                   target, 1.0f, &sloppyEstimate);
-      if (sloppyCount > 0 && sloppyCount < previous)
-        candidates.push_back({{sloppy.begin(), sloppy.begin() + std::ptrdiff_t(sloppyCount)},
-                              measure(sloppy, sloppyCount, sloppyEstimate)});
-      // Clustered (sloppy) at twice the target, then edge collapses down to it: where the topology-preserving
+      offer(sloppy, sloppyCount, sloppyEstimate);
+      // Clustered (sloppy) at 1.5x and 2.5x the target, then edge collapses down to it: where the topology-preserving
       // simplifier stalls (the Kitten below ~870 triangles), this keeps more of the shape than sloppy alone.
       for (double looser : {1.5, 2.5}) {
         const size_t looseTarget = std::min(size_t(double(target) * looser) / 3 * 3, indexCount);
@@ -443,19 +444,14 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
         float e2 = 0.0f;
         size_t refined = meshopt_simplify(scratch.data(), sloppy.data(), coarse, pos, unique, stride, target, 1.0f, 0,
                                           &e2);
-        if (refined > 0 && refined < previous)
-          candidates.push_back({{scratch.begin(), scratch.begin() + std::ptrdiff_t(refined)},
-                                measure(scratch, refined, e1)});
+        offer(scratch, refined, e1);
       }
       if (target <= size_t(options.minTriangles) * 3) break;
     }
     // A candidate with no more error than the last coarse level and fewer triangles makes that level useless.
-    auto leastError = [&] {
-      float e = INFINITY;
-      for (const LevelCandidate& c : candidates) e = std::min(e, c.error);
-      return e;
-    };
-    while (mesh.lods.size() > 1 && leastError() <= mesh.lods.back().error) {
+    float leastError = INFINITY;
+    for (const LevelCandidate& c : candidates) leastError = std::min(leastError, c.error);
+    while (mesh.lods.size() > 1 && leastError <= mesh.lods.back().error) {
       mesh.indices.resize(mesh.lods.back().firstIndex);
       mesh.lods.pop_back();
     }
