@@ -12,6 +12,8 @@
 // (PYRAMID_FIRST_TESTED_LEVEL). Each later dispatch reads the last level written. 1024x768 takes four dispatches
 // (levels 0-3, 4-6, 7-9, 10) instead of eleven.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
 #include "shared/types.h"
 
 layout(local_size_x = PYRAMID_TILE, local_size_y = PYRAMID_TILE) in;
@@ -25,6 +27,8 @@ layout(set = 0, binding = 0) uniform sampler2D source;  // the depth image, or t
 // Slot j: the level source + j (slot 0, the source's own level, is written only by the copying dispatch).
 layout(set = 0, binding = 1, r32f) uniform writeonly image2D levels[PYRAMID_DISPATCH_LEVELS];
 layout(push_constant) uniform Push { PyramidConstants pc; };
+// The micro-raster's 64-bit words as (low, high) pairs: high, the depth bits.
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SwVisibility { uvec2 words[]; };
 
 const int BLOCK = 1 << PYRAMID_REDUCTIONS;
 
@@ -36,7 +40,12 @@ float sourceDepth(ivec2 s) {
   for (int i = 1; i < textureSamples(source); ++i) d = min(d, texelFetch(source, s, i).r);
   return d;
 #else
-  return texelFetch(source, s, 0).r;
+  float d = texelFetch(source, s, 0).r;
+  if (pc.swResolve != 0u) {  // the micro-raster's fragment, not merged into the depth: the nearer of the two
+    SwVisibility sw = SwVisibility(uvec2(pc.swVisibilityLow, pc.swVisibilityHigh));
+    d = max(d, uintBitsToFloat(sw.words[uint(s.y) * pc.srcWidth + uint(s.x)].y));
+  }
+  return d;
 #endif
 }
 

@@ -133,7 +133,7 @@ void main() {
                gl_LocalInvocationIndex;
   if (entry >= list.words[3]) return;
   uint pixel = list.words[COVERED_PIXELS_HEADER + entry];
-  ivec2 p = ivec2(pixel & 0xffffu, pixel >> 16);
+  ivec2 p = ivec2(pixel & 0x7fffu, pixel >> 16);
 #else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
 #endif
@@ -141,7 +141,14 @@ void main() {
   shadeMultisampledPixel(p);
 #else
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
+#if SW_RESOLVE && COVERED  // (the list says where the micro-raster's unmerged fragment wins)
+  uvec2 raw = (pixel & COVERED_PIXEL_MICRO_RASTER) != 0u ? microRasterId(microRasterWord(p).x)
+                                                         : texelFetch(visibility, p, 0).xy;
+#elif SW_RESOLVE
+  uvec2 raw = resolvedVisibility(p);
+#else
   uvec2 raw = texelFetch(visibility, p, 0).xy;
+#endif
   uint slot, tri;
   if (!decodeVisibility(raw, slot, tri)) return;
 #if CLASSIFIED

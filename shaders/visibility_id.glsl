@@ -8,6 +8,9 @@
 #ifndef MSAA
 #define MSAA 0
 #endif
+#ifndef SW_RESOLVE  // 1: the variants of frames whose micro-raster was not merged (FramePlan::swResolved)
+#define SW_RESOLVE 0
+#endif
 
 layout(std430, set = 1, binding = SHADE_BINDING_DRAWS) readonly buffer DrawBlock { DrawCommand draws[]; };
 layout(set = 1, binding = SHADE_BINDING_DRAW_TEXELS) uniform usamplerBuffer drawTexels;  // five words per DrawCommand
@@ -31,6 +34,43 @@ void drawAt(uint slot, out uint firstIndex, out uint vertexOffset, out uint obje
 }
 #if !MSAA  // (the MSAA shading variant reads the multisampled target: msaa_samples.glsl)
 layout(set = 1, binding = SHADE_BINDING_VISIBILITY) uniform usampler2D visibility;
+#endif
+#if !MSAA && SW_RESOLVE
+layout(set = 1, binding = SHADE_BINDING_DEPTH) uniform sampler2D visibilityDepth;
+
+// The micro-raster's buffer (FrameData.swVisibility*) as (low, high) word pairs: high, the depth bits (0: nothing);
+// low, the complemented payload (equal depths keep the lowest payload).
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SwVisibilityRef { uvec2 words[]; };
+uvec2 microRasterWord(ivec2 p) {
+  return SwVisibilityRef(uvec2(frame.swVisibilityLow, frame.swVisibilityHigh))
+      .words[uint(p.y) * uint(frame.viewport.x) + uint(p.x)];
+}
+uint microRasterDepthBits(ivec2 p) {  // (the high word alone: lavapipe loads what is named, lane by lane)
+  return SwVisibilityRef(uvec2(frame.swVisibilityLow, frame.swVisibilityHigh))
+      .words[uint(p.y) * uint(frame.viewport.x) + uint(p.x)].y;
+}
+
+// Whether the micro-raster's fragment (depth bits, 0: none) is nearer than the raster's at p (drawn: the raster drew
+// p): the rule of the merge this replaces (sw_merge.frag, depth test GREATER, reverse-Z), so the raster's fragment
+// keeps an equal depth. Reads the depth only where both drew.
+bool microRasterNearer(ivec2 p, uint depthBits, bool drawn) {
+  if (depthBits == 0u) return false;
+  return !drawn || uintBitsToFloat(depthBits) > texelFetch(visibilityDepth, p, 0).r;
+}
+
+// The micro-raster's complemented payload as a raw ID of the target's encoding (as sw_merge.frag writes it).
+uvec2 microRasterId(uint complemented) {
+  uint payload = ~complemented;
+  if (frame.wideIds == 0u) return uvec2(payload, 0u);
+  return uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));
+}
+
+// The raw ID at p: the target's, or where the micro-raster's fragment is nearer, the micro-raster's.
+uvec2 resolvedVisibility(ivec2 p) {
+  uvec2 raw = texelFetch(visibility, p, 0).xy;
+  uvec2 sw = microRasterWord(p);
+  return microRasterNearer(p, sw.y, raw.x != VIS_NOTHING) ? microRasterId(sw.x) : raw;
+}
 #endif
 
 // The draw slot and the triangle in its LOD of a visibility texel; false where nothing was drawn.

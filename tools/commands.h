@@ -43,6 +43,7 @@ struct RenderCommand {
   std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
   std::optional<float> swRasterPixels;  // its object size bound in pixels (FrameOptions::swRasterPixels)
   bool noClusters = false;  // FrameOptions::clusters off
+  std::string swResolve = "auto";  // FrameOptions::swResolve
   bool noEarlyClusterOcclusion = false;  // FrameOptions::earlyClusterOcclusion off
   bool alwaysPyramid = false;            // FrameOptions::skipUselessPyramid off
   double moving = 0.0;  // fraction of the movable objects moved every frame (SceneMotion)

@@ -109,6 +109,12 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--sw-raster-px", c.swRasterPixels, "--sw-raster: the object size bound in pixels (0, 94]; default 94 on a CPU device, 64 on a GPU")
       ->check(finiteNumber(0.0, 94.0, true, false))
       ->capture_default_str();
+  sub->add_option("--sw-resolve", c.swResolve,
+                  "where the micro-raster's fragments meet the raster's: merge (into the ID target and depth) | shading "
+                  "(the pyramid and the shading take the nearer per pixel; frames that read IDs, cull lights or draw "
+                  "transparency merge anyway) | auto (shading on a GPU, merge on a CPU device)")
+      ->check(CLI::IsMember({"auto", "merge", "shading"}))
+      ->capture_default_str();
   sub->add_flag("--no-clusters", c.noClusters,
                 "draw every hardware-raster object whole (default: as its clusters that survive the frustum, their "
                 "back-face cone and the depth pyramid)");
@@ -348,6 +354,7 @@ int runRender(const RenderCommand& c) {
   fo.swRaster = parseSwRasterMode(c.swRaster);
   fo.swRasterPixels = c.swRasterPixels;
   fo.clusters = !c.noClusters;
+  fo.swResolve = parseSwResolve(c.swResolve);
   fo.earlyClusterOcclusion = !c.noEarlyClusterOcclusion;
   fo.skipUselessPyramid = !c.alwaysPyramid;
   // Renders c.frames frames; the returned stats hold medians over the frames after the first (warm-up).

@@ -33,8 +33,9 @@ std::string formatStats(const FrameStats& s) {
                        s.cull.clusters.backfacing, s.cull.clusters.occluded, s.cull.clusters.draws,
                        s.cull.clusters.deferred, s.cull.clusters.recovered);
   if (s.sw.on)
-    out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take\n", s.sw.draws,
-                       s.sw.triangles, s.sw.oversize);
+    out += fmt::format("micro-raster  {} draws, {} triangles in compute; {} triangles it could not take; {}\n",
+                       s.sw.draws, s.sw.triangles, s.sw.oversize,
+                       s.sw.resolved ? "resolved by the pyramid and the shading" : "merged into the IDs and depth");
   if (s.transparent.draws)
     out += fmt::format("transparent   {} objects, {} triangles (sorted back to front)\n", s.transparent.draws,
                        s.transparent.triangles);
@@ -122,7 +123,8 @@ nlohmann::json statsToJson(const FrameStats& s) {
   j["trianglesDrawn"] = s.trianglesDrawn;
   j["coveredPixels"] = s.coveredPixels;
   if (s.coveredPixels > 0) j["trianglesPerCoveredPixel"] = double(s.trianglesDrawn) / s.coveredPixels;
-  j["swRaster"] = {{"on", s.sw.on}, {"draws", s.sw.draws}, {"triangles", s.sw.triangles}, {"oversize", s.sw.oversize}};
+  j["swRaster"] = {{"on", s.sw.on}, {"draws", s.sw.draws}, {"triangles", s.sw.triangles}, {"oversize", s.sw.oversize},
+                  {"resolved", s.sw.resolved}};
   const CullStats::Clusters& c = s.cull.clusters;
   j["clusters"] = {{"objects", c.objects},       {"tested", c.tested},     {"frustumCulled", c.frustumCulled},
                    {"backfacing", c.backfacing}, {"occluded", c.occluded}, {"draws", c.draws},

@@ -16,6 +16,13 @@
 #include "covered_pixels.comp.h"
 #include "shade_covered.comp.h"
 #include "shade_covered_textured.comp.h"
+#include "shade_resolve.comp.h"
+#include "shade_resolve_textured.comp.h"
+#include "shade_covered_resolve.comp.h"
+#include "shade_covered_resolve_textured.comp.h"
+#include "shade_attributes_resolve.comp.h"
+#include "shade_attributes_resolve_textured.comp.h"
+#include "covered_pixels_resolve.comp.h"
 #include "sw_merge.frag.h"
 #include "sw_merge.vert.h"
 #include "sw_merge_wide.frag.h"
@@ -103,6 +110,13 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("shade_covered.comp", spv_shade_covered_comp)
   VB_SHADER("shade_covered_textured.comp", spv_shade_covered_textured_comp)
   VB_SHADER("covered_pixels.comp", spv_covered_pixels_comp)
+  VB_SHADER("shade_resolve.comp", spv_shade_resolve_comp)
+  VB_SHADER("shade_resolve_textured.comp", spv_shade_resolve_textured_comp)
+  VB_SHADER("shade_covered_resolve.comp", spv_shade_covered_resolve_comp)
+  VB_SHADER("shade_covered_resolve_textured.comp", spv_shade_covered_resolve_textured_comp)
+  VB_SHADER("shade_attributes_resolve.comp", spv_shade_attributes_resolve_comp)
+  VB_SHADER("shade_attributes_resolve_textured.comp", spv_shade_attributes_resolve_textured_comp)
+  VB_SHADER("covered_pixels_resolve.comp", spv_covered_pixels_resolve_comp)
   VB_SHADER("shade_attributes.comp", spv_shade_attributes_comp)
   VB_SHADER("skin.comp", spv_skin_comp)
   VB_SHADER("skin_bounds.comp", spv_skin_bounds_comp)

@@ -153,10 +153,19 @@ void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisa
   }
 }
 
-void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled, bool writeLevel0) const {
+void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled, bool writeLevel0,
+                              VkDeviceAddress microRaster) const {
   for (size_t i = 0; i < dispatches_.size(); ++i) {
     const Dispatch& d = dispatches_[i];
-    gpu::PyramidConstants pc{d.width, d.height, d.source == 0 && writeLevel0 ? 1u : 0u, d.reductions, 0, 0, 0, 0};
+    const bool fromMicroRaster = d.source == 0 && microRaster != 0;
+    gpu::PyramidConstants pc{d.width,
+                             d.height,
+                             d.source == 0 && writeLevel0 ? 1u : 0u,
+                             d.reductions,
+                             fromMicroRaster ? 1u : 0u,
+                             fromMicroRaster ? uint32_t(microRaster) : 0u,
+                             fromMicroRaster ? uint32_t(microRaster >> 32) : 0u,
+                             0};
     const bool msaa = multisampled && i == 0;
     if (i <= 1) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (msaa ? msaaPipeline_ : pipeline_).handle());
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, msaa ? &msaaSet_ : &sets_[i], 0,

@@ -33,7 +33,10 @@ class DepthPyramidPass {
   void resize(const gpu::Image& depth, const gpu::Image* multisampledDepth = nullptr);
   // writeLevel0: also copy the depth into level 0 (the occlusion tests never read it: PYRAMID_FIRST_TESTED_LEVEL;
   // only a read-back of every level needs it).
-  void record(VkCommandBuffer cmd, bool multisampled = false, bool writeLevel0 = false) const;
+  // microRaster: the device address of the micro-raster's buffer where it was not merged into the depth (level 0 is
+  // then the nearer of the two per pixel); 0: the depth alone.
+  void record(VkCommandBuffer cmd, bool multisampled = false, bool writeLevel0 = false,
+              VkDeviceAddress microRaster = 0) const;
   const gpu::Image& pyramid() const { return pyramid_; }
   uint32_t levels() const { return levels_; }
 

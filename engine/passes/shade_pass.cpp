@@ -15,7 +15,8 @@ std::vector<gpu::DescriptorBinding> shadeBindings() {
           {SHADE_BINDING_DRAW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
           {SHADE_BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
           {SHADE_BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {SHADE_BINDING_ATTRIBUTES, storage}};
+          {SHADE_BINDING_ATTRIBUTES, storage},
+          {SHADE_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
 }
 
 void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
@@ -25,7 +26,8 @@ void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
       .texels(SHADE_BINDING_DRAW_TEXELS, in.drawTexels)
       .image(SHADE_BINDING_VISIBILITY, in.ids->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler)
       .image(SHADE_BINDING_COLOR, in.color->view(), VK_IMAGE_LAYOUT_GENERAL)
-      .buffer(SHADE_BINDING_ATTRIBUTES, in.attributes->handle());
+      .buffer(SHADE_BINDING_ATTRIBUTES, in.attributes->handle())
+      .image(SHADE_BINDING_DEPTH, in.depth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler);
 }
 
 ShadePass ShadePass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec) {
@@ -45,6 +47,15 @@ void ShadePass::createMsaa(gpu::Device& device, gpu::Specialization spec) {
   sampleIdsPipeline = gpu::createComputePipeline(device, layout.pipelineLayout(), "msaa_ids.comp", spec);
 }
 
+void ShadePass::createResolve(gpu::Device& device, gpu::Specialization spec) {
+  if (resolvePipeline.handle()) return;
+  const VkPipelineLayout l = layout.pipelineLayout();
+  resolvePipeline = gpu::createComputePipeline(device, l, "shade_resolve.comp", spec);
+  resolveAttributesPipeline = gpu::createComputePipeline(device, l, "shade_attributes_resolve.comp", spec);
+  resolveCoveredPipeline = gpu::createComputePipeline(device, l, "shade_covered_resolve.comp", spec);
+  resolveCoveredPixelsPipeline = gpu::createComputePipeline(device, l, "covered_pixels_resolve.comp", spec);
+}
+
 void ShadePass::bind(const ShadeInputs& in) const {
   gpu::DescriptorWriter w = layout.writer();
   writeShadeBindings(w, in);
@@ -59,20 +70,23 @@ void ShadePass::dispatchPixels(VkCommandBuffer cmd, VkDescriptorSet scene, const
 }
 
 void ShadePass::record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height,
-                       Variant variant) const {
-  dispatchPixels(cmd, scene, variant == Msaa ? msaaPipeline : variant == Attributes ? attributesPipeline : pipeline,
-                 width, height);
+                       Variant variant, bool resolved) const {
+  const gpu::Pipeline& p = variant == Msaa         ? msaaPipeline
+                           : variant == Attributes ? (resolved ? resolveAttributesPipeline : attributesPipeline)
+                                                   : (resolved ? resolvePipeline : pipeline);
+  dispatchPixels(cmd, scene, p, width, height);
 }
 
 void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& pixels, uint32_t width,
-                              uint32_t height) const {
+                              uint32_t height, bool resolved) const {
   const uint32_t tileCount = ((width + SHADE_TILE_X - 1) / SHADE_TILE_X) * ((height + SHADE_TILE_Y - 1) / SHADE_TILE_Y);
   // (The previous frame's reads of the list are behind the frame graph's frame boundary.)
   vkCmdFillBuffer(cmd, pixels.handle(), 0, COVERED_PIXELS_HEADER * sizeof(uint32_t), 0);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredPixelsPipeline.handle());
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE,
+                    (resolved ? resolveCoveredPixelsPipeline : coveredPixelsPipeline).handle());
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
   gpu::PassConstants pc{};
   layout.push(cmd, pc);
@@ -86,7 +100,7 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const 
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, coveredPipeline.handle());
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (resolved ? resolveCoveredPipeline : coveredPipeline).handle());
   vkCmdDispatchIndirect(cmd, pixels.handle(), 0);
 }
 

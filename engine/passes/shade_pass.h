@@ -21,6 +21,8 @@ struct ShadeInputs {
   VkSampler sampler = VK_NULL_HANDLE;       // for the IDs (nearest)
   const gpu::Image* color = nullptr;        // rgba16f, GENERAL
   const gpu::Buffer* attributes = nullptr;  // the attribute record / sample-ID copy
+  const gpu::Image* depth = nullptr;        // the single-sampled depth, shader-read layout (read where the frame
+                                            // resolves the micro-raster instead of merging it: FrameData.swResolve)
 };
 std::vector<gpu::DescriptorBinding> shadeBindings();
 void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in);
@@ -37,15 +39,21 @@ struct ShadePass {
   gpu::Pipeline sampleIdsPipeline;
   gpu::Pipeline coveredPipeline;        // one thread per listed pixel (shade.comp COVERED)
   gpu::Pipeline coveredPixelsPipeline;  // covered_pixels.comp: the list and its indirect dispatch
+  // The same four for frames whose micro-raster was not merged (SW_RESOLVE: they read its buffer and the depth),
+  // created by createResolve (the first frame that may resolve).
+  gpu::Pipeline resolvePipeline, resolveAttributesPipeline, resolveCoveredPipeline, resolveCoveredPixelsPipeline;
   static ShadePass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec);
   void createMsaa(gpu::Device& device, gpu::Specialization spec);
+  void createResolve(gpu::Device& device, gpu::Specialization spec);
   void bind(const ShadeInputs& in) const;
-  void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height, Variant variant) const;
+  // resolved: the SW_RESOLVE variant (Plain and Attributes; the depth in SHADER_READ_ONLY_OPTIMAL).
+  void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height, Variant variant,
+              bool resolved = false) const;
   // The ubershader over the covered pixels only: covered_pixels.comp lists the pixels whose IDs show anything into
   // `pixels` (FrameData.coveredPixels* holds its address) and writes the indirect dispatch, then one thread per
   // listed pixel shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
   void recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& pixels, uint32_t width,
-                     uint32_t height) const;
+                     uint32_t height, bool resolved = false) const;
   void recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const;
 
  private:

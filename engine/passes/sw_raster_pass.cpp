@@ -41,7 +41,8 @@ void SwRasterPass::resetBuffer(gpu::Device& device) {
 bool SwRasterPass::ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height) {
   if (sized_) return false;
   buffer = gpu::Buffer(device, VkDeviceSize(width) * height * 8,
-                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                           VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
                        gpu::MemoryUse::DeviceLocal);
   sized_ = true;
   return true;

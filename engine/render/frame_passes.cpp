@@ -39,6 +39,11 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
   f.clusterCull = plan.clusters ? 1u : 0u;
   f.earlyClusterOcclusion = plan.earlyClusterOcclusion ? 1u : 0u;
+  if (plan.swResolved) {
+    const VkDeviceAddress a = swRaster.buffer.address();
+    f.swVisibilityLow = uint32_t(a);
+    f.swVisibilityHigh = uint32_t(a >> 32);
+  }
   if (plan.coveredPixels) {
     const VkDeviceAddress a = coveredPixels.address();
     f.coveredPixelsLow = uint32_t(a);
@@ -297,8 +302,9 @@ void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const Fram
 }
 
 // The software micro-raster of a phase: the routed draws into the 64-bit buffer (cleared by the first phase),
-// then merged into the IDs and depth the raster left as attachments.
-void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear) {
+// then (merge) merged into the IDs and depth the raster left as attachments. Without the merge the pyramid and the
+// shading read the buffer themselves (FramePlan::swResolved).
+void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear, bool merge) {
   const bool late = phase == CULL_PHASE_LATE;
   Graph::Pass& raster = g.pass(late ? "micro-raster late" : "micro-raster", late ? "sw raster late" : "sw raster");
   if (clear)
@@ -307,6 +313,7 @@ void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint3
   raster.step({Graph::writes(r.sw, access::computeReadWrite), Graph::writes(r.stats, access::computeReadWrite | access::indirect),
                Graph::reads(r.draws, access::computeRead), Graph::reads(r.scene, access::computeRead)},
               [this, phase](VkCommandBuffer cmd) { swRaster.recordRaster(cmd, sceneSet, phase, stats); });
+  if (!merge) return;
   const gpu::Access swRead{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT};
   g.pass(late ? "micro-raster merge late" : "micro-raster merge", late ? "sw merge late" : "sw merge")
       .step({Graph::reads(r.sw, swRead), Graph::reads(r.stats, access::indirect),
@@ -314,12 +321,16 @@ void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint3
             [this, phase](VkCommandBuffer cmd) { swRaster.recordMerge(cmd, sceneSet, ids, depth, stats, phase); });
 }
 
-void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa, bool writeLevel0) {
-  g.pass("depth pyramid", "depth pyramid")
-      .step({Graph::reads(r.depth, access::computeSampled),
-             Graph::overwrites(r.pyramid, access::inLayout(access::computeStorageImage | access::computeSampled,
-                                                          VK_IMAGE_LAYOUT_GENERAL))},
-            [this, msaa, writeLevel0](VkCommandBuffer cmd) { pyramid.record(cmd, msaa, writeLevel0); });
+void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa, bool writeLevel0, bool microRaster) {
+  std::vector<Graph::Use> uses = {Graph::reads(r.depth, access::computeSampled),
+                                  Graph::overwrites(r.pyramid, access::inLayout(access::computeStorageImage |
+                                                                                     access::computeSampled,
+                                                                                 VK_IMAGE_LAYOUT_GENERAL))};
+  if (microRaster) uses.push_back(Graph::reads(r.sw, access::computeRead));
+  const VkDeviceAddress sw = microRaster ? swRaster.buffer.address() : 0;
+  g.pass("depth pyramid", "depth pyramid").step(std::move(uses), [this, msaa, writeLevel0, sw](VkCommandBuffer cmd) {
+    pyramid.record(cmd, msaa, writeLevel0, sw);
+  });
 }
 
 // Tile light lists from the final depth.
@@ -363,6 +374,10 @@ void Renderer::Impl::declareShade(Graph& g, const FrameResources& r, const Frame
                                   Graph::writes(r.stats, access::computeReadWrite)};
   if (options.readAttributes) uses.push_back(Graph::writes(r.attributes, access::computeReadWrite));
   if (plan.lightsCulled) uses.push_back(Graph::reads(r.lightTiles, access::computeRead));
+  if (plan.swResolved) {  // the micro-raster's fragments, and the depth they are compared with
+    uses.push_back(Graph::reads(r.sw, access::computeRead));
+    uses.push_back(Graph::reads(r.depth, access::computeSampled));
+  }
   if (plan.shading == ShadingMode::Classified)
     uses.push_back(Graph::reads(r.classification, access::computeRead | access::indirect));
   if (plan.coveredPixels)
@@ -372,12 +387,13 @@ void Renderer::Impl::declareShade(Graph& g, const FrameResources& r, const Frame
     if (plan.shading == ShadingMode::Classified)
       classify.recordShade(cmd, sceneSet);
     else if (plan.coveredPixels)
-      shade.recordCovered(cmd, sceneSet, coveredPixels, w, h);
+      shade.recordCovered(cmd, sceneSet, coveredPixels, w, h, plan.swResolved);
     else
       shade.record(cmd, sceneSet, w, h,
                    plan.msaa      ? passes::ShadePass::Msaa
                    : attributesToo ? passes::ShadePass::Attributes
-                                   : passes::ShadePass::Plain);
+                                   : passes::ShadePass::Plain,
+                   plan.swResolved);
   });
 }
 

@@ -15,11 +15,15 @@ bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts) {
          facts.microRasterLists && facts.microRasterFits;
 }
 
+bool microRasterResolves(const FrameOptions& options, const SceneFacts& facts) {
+  return options.swResolve == SwResolve::Auto ? !facts.cpuDevice : options.swResolve == SwResolve::Shading;
+}
+
 bool lightsCulled(const FrameOptions& options, const SceneFacts& facts) {
   return options.path == RenderPath::Visbuf && options.tiledLights && facts.pointLights;
 }
 
-FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const FrameHistory& history) {
+FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const FrameHistory& history, bool handsOn) {
   FramePlan p;
   p.gpuCulled = options.path != RenderPath::Forward;  // visbuf and G-buffer: cull pass + draw lists
   p.frozen = p.gpuCulled && options.freezeCulling && history.haveDraws;
@@ -36,6 +40,10 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.coveredPixels = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
   p.clusters = p.gpuCulled && !p.frozen && options.clusters && facts.clusters && p.cull != CullMode::None;
   p.earlyClusterOcclusion = p.clusters && p.usePyramid && options.earlyClusterOcclusion && history.pyramidBuilt;
+  // Merge-free micro-raster: what its merges wrote is read only by the pyramid and the shading, which resolve it.
+  p.swResolved = p.swOn && microRasterResolves(options, facts) && options.path == RenderPath::Visbuf && !p.msaa &&
+                 p.shading != ShadingMode::Classified && !p.lightsCulled && !facts.transparency && !options.readIds &&
+                 !handsOn;
   return p;
 }
 

@@ -29,6 +29,10 @@ struct FramePlan {
   // The early phase's cluster dispatch tests against the pyramid the previous frame built and defers what it hides
   // to the late phase's retest (CULL_CLUSTER_RETEST).
   bool earlyClusterOcclusion = false;
+  // The micro-raster's fragments are not merged into the ID target and depth: the pyramid and the shading take the
+  // nearer of the two per pixel (FrameData.swResolve). Only where nothing else reads the target or the depth: no
+  // IDs read back or handed to a host, no light culling, transparency or classification, single-sampled.
+  bool swResolved = false;
 };
 
 // What the renderer's scene and device are, as far as a plan depends on them.
@@ -38,6 +42,7 @@ struct SceneFacts {
   bool microRasterFits = false;   // its 64-bit per-pixel buffer fits one storage-buffer range at this size
   bool pointLights = false;       // the scene has punctual lights
   bool clusters = false;          // some LOD level has clusters and some draw list a cluster reserve
+  bool transparency = false;      // the scene has BLEND objects (the transparency pass tests against the depth)
 };
 
 // A pyramid or micro-raster that did nothing is skipped for this many frames, then probed again.
@@ -85,9 +90,14 @@ ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts)
 // Whether a frame with these options may route small objects to the micro-raster: asked for (Auto: on), the visbuf
 // path, single-sampled, no overdraw count (it counts hardware raster writes), a list it may take, a buffer that fits.
 bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts);
+// Whether the micro-raster of a frame with these options is resolved rather than merged where the frame allows it
+// (FrameOptions::swResolve; FramePlan::swResolved says whether the frame does).
+bool microRasterResolves(const FrameOptions& options, const SceneFacts& facts);
 // Whether a frame builds tile light lists: visbuf path, tiled lights asked for, punctual lights to cull.
 bool lightsCulled(const FrameOptions& options, const SceneFacts& facts);
 
-FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const FrameHistory& history);
+// handsOn: the frame's IDs and depth go to a host (Renderer::record), which may read them.
+FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const FrameHistory& history,
+                    bool handsOn = false);
 
 }  // namespace visbuf

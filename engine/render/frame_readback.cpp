@@ -136,6 +136,7 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
       st.sw.draws += listSwDrawn(s, CULL_PHASE_EARLY, l) + listSwDrawn(s, CULL_PHASE_LATE, l);
     }
     st.sw.on = swOn;
+    st.sw.resolved = swOn && slot.plan.swResolved;
     st.sw.triangles = s[STAT_SW_TRIANGLES];
     st.sw.oversize = s[STAT_SW_OVERSIZE];
     st.cull.drawsAppended = s[STAT_DRAW_COUNT] + s[STAT_DRAW_COUNT_LATE];

@@ -60,6 +60,13 @@ SwRasterMode parseSwRasterMode(const std::string& name) {
   return name == "on" ? SwRasterMode::On : name == "off" ? SwRasterMode::Off : SwRasterMode::Auto;
 }
 
+const char* swResolveName(SwResolve mode) {
+  return mode == SwResolve::Auto ? "auto" : mode == SwResolve::Merge ? "merge" : "shading";
+}
+SwResolve parseSwResolve(const std::string& name) {
+  return name == "merge" ? SwResolve::Merge : name == "shading" ? SwResolve::Shading : SwResolve::Auto;
+}
+
 const char* skinBoundsName(SkinBounds bounds) { return bounds == SkinBounds::Gpu ? "gpu" : "joints"; }
 
 std::string IdEncoding::describe() const {
@@ -128,6 +135,7 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
   if (resolveShading(options, facts()) == ShadingMode::Classified) ensureClassify();
   if (microRasterAllowed(options, facts()) && swRaster.ensureBuffer(device, config.width, config.height))
     writeDescriptors();
+  if (microRasterAllowed(options, facts()) && microRasterResolves(options, facts())) shade.createResolve(device, textured);
   const uint32_t w = config.width, h = config.height;
   const bool readAttributes = options.readAttributes && options.path != RenderPath::Forward;
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);
@@ -213,7 +221,7 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
     const bool deferred = options.path == RenderPath::GBuffer, occlusion = plan.cull == CullMode::Occlusion;
     auto rasterPhase = [&](uint32_t phase, bool clear, const char* name) {
       declareRaster(g, r, options, plan, phase, clear, name);
-      if (plan.swOn && !deferred) declareMicroRaster(g, r, phase, clear);
+      if (plan.swOn && !deferred) declareMicroRaster(g, r, phase, clear, !plan.swResolved);
     };
     const char* rasterOnly = deferred ? "gbuffer" : "visibility";
     const char* rasterEarly = deferred ? "gbuffer early" : "raster early";
@@ -227,7 +235,8 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
     } else {
       declareCull(g, r, plan, CULL_PHASE_EARLY, "cull early");
       rasterPhase(CULL_PHASE_EARLY, true, rasterEarly);
-      declarePyramid(g, r, plan.msaa, options.readPyramid);  // dropped when the late cull does not test against it
+      // (dropped when the late cull does not test against it)
+      declarePyramid(g, r, plan.msaa, options.readPyramid, plan.swResolved);
       declareCull(g, r, plan, CULL_PHASE_LATE, "cull late");
       rasterPhase(CULL_PHASE_LATE, false, rasterLate);
     }
@@ -315,7 +324,7 @@ Result<RecordedFrame> Renderer::Impl::record(const FrameInputs& inputs) {
   FrameSlot& slot = beginFrame();
   // Skinned scenes: the joint and instance buffers are single, so a new pose waits for the frames still queued.
   if (animation && animation->wouldUpdate(options.animationTime) && slots.size() > 1) vkDeviceWaitIdle(device.device());
-  const FramePlan plan = planFrame(options, facts(), frameHistory);
+  const FramePlan plan = planFrame(options, facts(), frameHistory, /*handsOn=*/true);
   RecordedFrame out;
   out.index = frameCounter;
   const uint32_t used = recordFrame(inputs.camera, options, plan, slot, nullptr, nullptr, &inputs);

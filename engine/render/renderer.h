@@ -89,6 +89,10 @@ struct SkinnedInstanceReadback {
 enum class SwRasterMode { Auto, On, Off };
 const char* swRasterModeName(SwRasterMode mode);
 SwRasterMode parseSwRasterMode(const std::string& name);  // "on" | "off" | anything else: Auto
+// Where the micro-raster's fragments meet the raster's (FrameOptions::swResolve).
+enum class SwResolve { Auto, Merge, Shading };
+const char* swResolveName(SwResolve mode);
+SwResolve parseSwResolve(const std::string& name);  // "merge" | "shading" | anything else: Auto
 
 struct FrameOptions {
   RenderPath path = RenderPath::Visbuf;
@@ -123,6 +127,13 @@ struct FrameOptions {
   // Auto: on, and on a GPU only while it takes enough triangles to pay for its merges (renderer.cpp,
   // defaultSwRaster); On: whenever it takes anything. A frame in which it did not pay skips it for 16 frames.
   SwRasterMode swRaster = SwRasterMode::Auto;
+  // Where the micro-raster's fragments meet the hardware raster's: merged into the ID target and depth (two
+  // full-screen passes), or resolved by the pyramid and the shading, which take the nearer fragment per pixel
+  // themselves (the same image). Resolved only where nothing else reads the target or the depth: frames that read
+  // IDs back, hand them to a host (record()), cull lights, draw transparency, classify materials or use MSAA always
+  // merge. Auto: resolved on a GPU, merged on a CPU device (lavapipe: the resolve's per-pixel reads cost about what
+  // the merges do; docs/benchmarks.md).
+  SwResolve swResolve = SwResolve::Auto;
   // (0, SW_RASTER_MAX_EXTENT - 2]; unset: the device's (defaultSwRasterPixels): on lavapipe its hardware raster
   // costs about 4x the micro-raster per triangle, so the largest bound pays there (the peer view, 1024x768: 10k
   // kittens 37-39 ms against 40-41 at 64 px, 100k 123 against 133, 1M 247 against 262-274).
@@ -184,6 +195,7 @@ struct SwRasterStats {
   bool on = false;          // this frame routed small objects to the micro-raster
   uint32_t draws = 0;       // of CullStats::drawsRendered: the micro-raster's
   uint64_t triangles = 0;   // of FrameStats::trianglesDrawn: the micro-raster's
+  bool resolved = false;    // its fragments were resolved by the pyramid and the shading, not merged (swResolve)
   uint32_t oversize = 0;    // triangles it could not take (box over SW_RASTER_MAX_EXTENT or behind the near plane:
                             // only a frozen frame's moved camera can cause it); reported, never silent
 };

@@ -270,7 +270,8 @@ struct Renderer::Impl {
     return {device.isCpu(), swListMask != 0,
             VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange,
             hasPointLights(),
-            std::any_of(listClusterReserve.begin(), listClusterReserve.end(), [](uint32_t r) { return r > 0; })};
+            std::any_of(listClusterReserve.begin(), listClusterReserve.end(), [](uint32_t r) { return r > 0; }),
+            !blendObjects.empty()};
   }
   FrameHistory frameHistory;  // what earlier frames left that later plans depend on
 
@@ -321,8 +322,9 @@ struct Renderer::Impl {
   void declareCull(Graph& g, const FrameResources& r, const FramePlan& plan, uint32_t phase, const char* name);
   void declareRaster(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan,
                      uint32_t phase, bool clear, const char* name);
-  void declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear);
-  void declarePyramid(Graph& g, const FrameResources& r, bool msaa, bool writeLevel0);  // (level 0: read back)
+  void declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear, bool merge);
+  // (level 0: read back; microRaster: the micro-raster was not merged, and the pyramid reads its buffer too)
+  void declarePyramid(Graph& g, const FrameResources& r, bool msaa, bool writeLevel0, bool microRaster);
   void declareLightCull(Graph& g, const FrameResources& r, bool msaa);
   void declareClassify(Graph& g, const FrameResources& r);
   void declareShade(Graph& g, const FrameResources& r, const FrameOptions& options, const FramePlan& plan);

@@ -110,7 +110,7 @@ void Renderer::Impl::bindPasses() {
   if (gbuffer.created()) gbuffer.bind(overdraw);
   // MSAA frames: the shading reads the multisampled IDs.
   const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
-                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes};
+                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes, &depth};
   shade.bind(shading);
   if (classify.created()) classify.bind(shading);
   // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.

@@ -12,5 +12,6 @@
 #define SHADE_BINDING_COLOR (LIGHTING_BINDINGS + 3)       // rgba16f output image
 // float[ATTRIBUTE_FLOATS] per pixel: the attributes variant's reconstruction; the sample-ID copy (msaa_ids.comp).
 #define SHADE_BINDING_ATTRIBUTES (LIGHTING_BINDINGS + 4)
+#define SHADE_BINDING_DEPTH (LIGHTING_BINDINGS + 5)       // sampler2D: the depth (the SW_RESOLVE variants read it)
 
 #endif

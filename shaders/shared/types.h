@@ -189,7 +189,12 @@ struct FrameData {
   uint coveredTilesX;
   uint clusterCull;        // 1: the cull pass expands hardware-raster objects into clusters (CULL_CLUSTERS)
   uint earlyClusterOcclusion;  // 1: the early cluster dispatch defers what the previous frame's pyramid hides
-  uint framePad0, framePad1, framePad2;  // (a multiple of 16 bytes)
+  // Frames whose micro-raster was not merged into the ID target and depth (FramePlan::swResolved): the device
+  // address of its 64-bit buffer (depth bits << 32 | complemented payload, 0: nothing), which the shading's SW_RESOLVE
+  // variants read (visibility_id.glsl resolvedVisibility). 0 otherwise.
+  uint swVisibilityLow;
+  uint swVisibilityHigh;
+  uint framePad0;  // (a multiple of 16 bytes)
 };
 
 // A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;
@@ -255,7 +260,12 @@ struct PyramidConstants {
   uint srcWidth, srcHeight;
   uint copySource;
   uint reductions;
-  uint pad0, pad1, pad2, pad3;
+  // The first dispatch of a frame whose micro-raster was not merged (FrameData.swResolve): each source texel is the
+  // nearer (the maximum, reverse-Z) of the depth and the micro-raster's depth at the device address (64-bit words,
+  // srcWidth per row).
+  uint swResolve;
+  uint swVisibilityLow, swVisibilityHigh;
+  uint pad0;
 };
 
 #ifdef __cplusplus

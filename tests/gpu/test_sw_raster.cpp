@@ -206,6 +206,70 @@ TEST(SwRaster, IdImageUnchangedByCulling) {
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
+// Resolved by the pyramid and the shading instead of merged (SwResolve::Shading): the same frames give the same
+// colour, depth pyramid and attribute record, bit for bit, with both shading dispatches (every pixel, and the
+// covered-pixel list that marks the micro-raster's pixels), and record no merge pass. A frame that reads IDs back
+// merges anyway. Two renderers, so that each frame's occlusion history is its own path's.
+TEST(SwRaster, ResolvedInShadingMatchesMerged) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  Scene scene = smallObjectField(20000);
+  auto merged = Renderer::create(dev, scene, {.width = 480, .height = 270});
+  auto resolved = Renderer::create(dev, scene, {.width = 480, .height = 270});
+  ASSERT_TRUE(merged.ok() && resolved.ok());
+  auto hasMerge = [](const FrameResult& f) {
+    return std::any_of(f.stats.graph.passMs.begin(), f.stats.graph.passMs.end(),
+                       [](const auto& p) { return p.first.rfind("sw merge", 0) == 0; });
+  };
+  size_t swFrames = 0, frames = 0;
+  for (ShadingMode shading : {ShadingMode::Covered, ShadingMode::Uber}) {
+    for (int i = 0; i < 6; ++i) {
+      FrameOptions m;
+      m.swRaster = SwRasterMode::On;
+      m.swRasterPixels = 48.0f;
+      m.shading = shading;
+      m.readPyramid = true;
+      m.readAttributes = shading == ShadingMode::Uber && i % 2 == 1;  // (the ubershader's attribute variant)
+      m.swResolve = SwResolve::Merge;
+      FrameOptions r = m;
+      r.swResolve = SwResolve::Shading;
+      const Camera cam = outsideCamera(i / 6.0);
+      auto a = (*merged)->renderFrame(cam, m);
+      auto b = (*resolved)->renderFrame(cam, r);
+      ASSERT_TRUE(a.ok() && b.ok());
+      ASSERT_TRUE(a->stats.sw.on && b->stats.sw.on);
+      EXPECT_FALSE(a->stats.sw.resolved);
+      EXPECT_TRUE(b->stats.sw.resolved);
+      EXPECT_TRUE(hasMerge(a.value()));
+      EXPECT_FALSE(hasMerge(b.value()));
+      EXPECT_EQ(a->stats.shade.mode, shading);
+      EXPECT_EQ(a->stats.trianglesDrawn, b->stats.trianglesDrawn);
+      EXPECT_EQ(a->stats.coveredPixels, b->stats.coveredPixels);
+      ASSERT_EQ(a->color.size(), b->color.size());
+      size_t colourDiffs = 0;
+      for (size_t k = 0; k < a->color.size(); ++k) colourDiffs += a->color[k] != b->color[k];
+      EXPECT_EQ(colourDiffs, 0u) << shadingModeName(shading) << " frame " << i;
+      ASSERT_EQ(a->pyramid.size(), b->pyramid.size());
+      ASSERT_FALSE(a->pyramid.empty());
+      for (size_t l = 0; l < a->pyramid.size(); ++l)
+        EXPECT_TRUE(a->pyramid[l].depth == b->pyramid[l].depth) << "pyramid level " << l << " frame " << i;
+      EXPECT_TRUE(a->attributes == b->attributes) << "frame " << i;
+      swFrames += b->stats.sw.triangles > 0;
+      ++frames;
+    }
+  }
+  EXPECT_EQ(swFrames, frames) << "every frame's micro-raster drew something";
+  FrameOptions ids;
+  ids.swRaster = SwRasterMode::On;
+  ids.swResolve = SwResolve::Shading;
+  ids.readIds = true;
+  auto f = (*resolved)->renderFrame(outsideCamera(0.3), ids);
+  ASSERT_TRUE(f.ok());
+  EXPECT_FALSE(f->stats.sw.resolved) << "IDs read back: merged";
+  EXPECT_TRUE(hasMerge(f.value()));
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
+
 // Off, or a frame it does not apply to (MSAA, the overdraw count), records no micro-raster pass; an impossible size
 // bound is refused with a clear error.
 TEST(SwRaster, SkippedWhereItDoesNotApplyAndRefusesImpossibleBounds) {

@@ -222,3 +222,36 @@ TEST(DepthPyramid, DispatchesWriteEveryLevelOnce) {
     EXPECT_EQ(dispatches.size(), levels == 1 ? 1u : (levels - 1 + PYRAMID_REDUCTIONS - 1) / PYRAMID_REDUCTIONS);
   }
 }
+
+// The micro-raster is resolved by the pyramid and the shading (no merges) only where nothing else reads the ID target
+// or the depth; Auto resolves on a GPU and merges on a CPU device.
+TEST(FramePlan, MicroRasterResolvedOnlyWhereNothingElseReadsTheTarget) {
+  SceneFacts gpu = gpuFacts();
+  gpu.pointLights = false;
+  SceneFacts cpu = gpu;
+  cpu.cpuDevice = true;
+  const FrameHistory none;
+  FrameOptions fo;
+  EXPECT_TRUE(planFrame(fo, gpu, none).swResolved) << "Auto on a GPU";
+  EXPECT_FALSE(planFrame(fo, cpu, none).swResolved) << "Auto on a CPU device";
+  fo.swResolve = SwResolve::Shading;
+  EXPECT_TRUE(planFrame(fo, cpu, none).swResolved);
+  EXPECT_FALSE(planFrame(fo, gpu, none, /*handsOn=*/true).swResolved) << "record(): the host reads IDs and depth";
+  auto with = [&](auto change, const SceneFacts& facts) {
+    FrameOptions o = fo;
+    change(o);
+    return planFrame(o, facts, none).swResolved;
+  };
+  EXPECT_FALSE(with([](FrameOptions& o) { o.swResolve = SwResolve::Merge; }, gpu));
+  EXPECT_FALSE(with([](FrameOptions& o) { o.readIds = true; }, gpu)) << "IDs read back from the target";
+  EXPECT_FALSE(with([](FrameOptions& o) { o.shading = ShadingMode::Classified; }, gpu)) << "classify reads the IDs";
+  EXPECT_FALSE(with([](FrameOptions& o) { o.swRaster = SwRasterMode::Off; }, gpu)) << "nothing to resolve";
+  EXPECT_TRUE(with([](FrameOptions& o) { o.readAttributes = true; }, gpu)) << "the ubershader resolves too";
+  EXPECT_TRUE(with([](FrameOptions& o) { o.readPyramid = true; }, gpu)) << "the pyramid resolves";
+  SceneFacts lights = gpu;
+  lights.pointLights = true;
+  EXPECT_FALSE(with([](FrameOptions&) {}, lights)) << "the light cull reads the depth";
+  SceneFacts blend = gpu;
+  blend.transparency = true;
+  EXPECT_FALSE(with([](FrameOptions&) {}, blend)) << "the transparency pass tests against the depth";
+}
