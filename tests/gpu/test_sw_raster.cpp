@@ -208,22 +208,25 @@ TEST(SwRaster, IdImageUnchangedByCulling) {
 
 // Resolved by the pyramid and the shading instead of merged (SwResolve::Shading): the same frames give the same
 // colour, depth pyramid and attribute record, bit for bit, with both shading dispatches (every pixel, and the
-// covered-pixel list that marks the micro-raster's pixels), and record no merge pass. A frame that reads IDs back
-// merges anyway. Two renderers, so that each frame's occlusion history is its own path's.
+// covered-pixel list that marks the micro-raster's pixels), with 32- and 64-bit IDs, and record no merge pass. A
+// frame that reads IDs back merges anyway. Two renderers per ID width, so that each frame's occlusion history is its
+// own path's.
 TEST(SwRaster, ResolvedInShadingMatchesMerged) {
   gpu::Device& dev = test::testDevice();
   const uint32_t before = dev.validationMessages();
   Scene scene = smallObjectField(20000);
-  auto merged = Renderer::create(dev, scene, {.width = 480, .height = 270});
-  auto resolved = Renderer::create(dev, scene, {.width = 480, .height = 270});
-  ASSERT_TRUE(merged.ok() && resolved.ok());
   auto hasMerge = [](const FrameResult& f) {
     return std::any_of(f.stats.graph.passMs.begin(), f.stats.graph.passMs.end(),
                        [](const auto& p) { return p.first.rfind("sw merge", 0) == 0; });
   };
   size_t swFrames = 0, frames = 0;
+  for (bool wide : {false, true})
   for (ShadingMode shading : {ShadingMode::Covered, ShadingMode::Uber}) {
-    for (int i = 0; i < 6; ++i) {
+    const RendererConfig config{.width = 480, .height = 270, .forceWideIds = wide};
+    auto merged = Renderer::create(dev, scene, config);
+    auto resolved = Renderer::create(dev, scene, config);
+    ASSERT_TRUE(merged.ok() && resolved.ok());
+    for (int i = 0; i < (wide ? 3 : 6); ++i) {
       FrameOptions m;
       m.swRaster = SwRasterMode::On;
       m.swRasterPixels = 48.0f;
@@ -243,12 +246,13 @@ TEST(SwRaster, ResolvedInShadingMatchesMerged) {
       EXPECT_TRUE(hasMerge(a.value()));
       EXPECT_FALSE(hasMerge(b.value()));
       EXPECT_EQ(a->stats.shade.mode, shading);
+      EXPECT_EQ(b->stats.ids.wide, wide);
       EXPECT_EQ(a->stats.trianglesDrawn, b->stats.trianglesDrawn);
       EXPECT_EQ(a->stats.coveredPixels, b->stats.coveredPixels);
       ASSERT_EQ(a->color.size(), b->color.size());
       size_t colourDiffs = 0;
       for (size_t k = 0; k < a->color.size(); ++k) colourDiffs += a->color[k] != b->color[k];
-      EXPECT_EQ(colourDiffs, 0u) << shadingModeName(shading) << " frame " << i;
+      EXPECT_EQ(colourDiffs, 0u) << shadingModeName(shading) << (wide ? " wide" : "") << " frame " << i;
       ASSERT_EQ(a->pyramid.size(), b->pyramid.size());
       ASSERT_FALSE(a->pyramid.empty());
       for (size_t l = 0; l < a->pyramid.size(); ++l)
@@ -259,6 +263,8 @@ TEST(SwRaster, ResolvedInShadingMatchesMerged) {
     }
   }
   EXPECT_EQ(swFrames, frames) << "every frame's micro-raster drew something";
+  auto resolved = Renderer::create(dev, scene, {.width = 480, .height = 270});
+  ASSERT_TRUE(resolved.ok());
   FrameOptions ids;
   ids.swRaster = SwRasterMode::On;
   ids.swResolve = SwResolve::Shading;
