@@ -14,6 +14,8 @@
 #include "cull_occlusion.comp.h"
 #include "object_scatter.comp.h"
 #include "covered_pixels.comp.h"
+#include "clear_ids.comp.h"
+#include "clear_ids_wide.comp.h"
 #include "shade_covered.comp.h"
 #include "shade_covered_textured.comp.h"
 #include "shade_resolve.comp.h"
@@ -110,6 +112,8 @@ std::span<const uint32_t> findShader(const std::string& name) {
   VB_SHADER("shade_covered.comp", spv_shade_covered_comp)
   VB_SHADER("shade_covered_textured.comp", spv_shade_covered_textured_comp)
   VB_SHADER("covered_pixels.comp", spv_covered_pixels_comp)
+  VB_SHADER("clear_ids.comp", spv_clear_ids_comp)
+  VB_SHADER("clear_ids_wide.comp", spv_clear_ids_wide_comp)
   VB_SHADER("shade_resolve.comp", spv_shade_resolve_comp)
   VB_SHADER("shade_resolve_textured.comp", spv_shade_resolve_textured_comp)
   VB_SHADER("shade_covered_resolve.comp", spv_shade_covered_resolve_comp)

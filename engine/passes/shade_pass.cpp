@@ -16,7 +16,8 @@ std::vector<gpu::DescriptorBinding> shadeBindings() {
           {SHADE_BINDING_VISIBILITY, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
           {SHADE_BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {SHADE_BINDING_ATTRIBUTES, storage},
-          {SHADE_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+          {SHADE_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {SHADE_BINDING_IDS_STORAGE, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
 }
 
 void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
@@ -27,7 +28,8 @@ void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
       .image(SHADE_BINDING_VISIBILITY, in.ids->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler)
       .image(SHADE_BINDING_COLOR, in.color->view(), VK_IMAGE_LAYOUT_GENERAL)
       .buffer(SHADE_BINDING_ATTRIBUTES, in.attributes->handle())
-      .image(SHADE_BINDING_DEPTH, in.depth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler);
+      .image(SHADE_BINDING_DEPTH, in.depth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler)
+      .image(SHADE_BINDING_IDS_STORAGE, in.singleIds->view(), VK_IMAGE_LAYOUT_GENERAL);
 }
 
 ShadePass ShadePass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec) {
@@ -38,6 +40,8 @@ ShadePass ShadePass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayo
   p.attributesPipeline = gpu::createComputePipeline(device, layout, "shade_attributes.comp", spec);
   p.coveredPipeline = gpu::createComputePipeline(device, layout, "shade_covered.comp", spec);
   p.coveredPixelsPipeline = gpu::createComputePipeline(device, layout, "covered_pixels.comp", spec);
+  p.clearIdsPipeline[0] = gpu::createComputePipeline(device, layout, "clear_ids.comp");
+  p.clearIdsPipeline[1] = gpu::createComputePipeline(device, layout, "clear_ids_wide.comp");
   return p;
 }
 
@@ -102,6 +106,11 @@ void ShadePass::recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const 
                      VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (resolved ? resolveCoveredPipeline : coveredPipeline).handle());
   vkCmdDispatchIndirect(cmd, pixels.handle(), 0);
+}
+
+void ShadePass::recordClearIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height,
+                               bool wide) const {
+  dispatchPixels(cmd, scene, clearIdsPipeline[wide ? 1 : 0], width, height);
 }
 
 void ShadePass::recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const {

@@ -21,6 +21,7 @@ struct ShadeInputs {
   VkSampler sampler = VK_NULL_HANDLE;       // for the IDs (nearest)
   const gpu::Image* color = nullptr;        // rgba16f, GENERAL
   const gpu::Buffer* attributes = nullptr;  // the attribute record / sample-ID copy
+  const gpu::Image* singleIds = nullptr;    // the single-sampled ID target, GENERAL (clear_ids.comp stores into it)
   const gpu::Image* depth = nullptr;        // the single-sampled depth, shader-read layout (read where the frame
                                             // resolves the micro-raster instead of merging it: FrameData.swResolve)
 };
@@ -42,6 +43,7 @@ struct ShadePass {
   // The same four for frames whose micro-raster was not merged (SW_RESOLVE: they read its buffer and the depth),
   // created by createResolve (the first frame that may resolve).
   gpu::Pipeline resolvePipeline, resolveAttributesPipeline, resolveCoveredPipeline, resolveCoveredPixelsPipeline;
+  gpu::Pipeline clearIdsPipeline[2];  // clear_ids.comp: r32ui, rg32ui
   static ShadePass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec);
   void createMsaa(gpu::Device& device, gpu::Specialization spec);
   void createResolve(gpu::Device& device, gpu::Specialization spec);
@@ -54,6 +56,9 @@ struct ShadePass {
   // listed pixel shades. Reads the IDs (SHADER_READ_ONLY_OPTIMAL); the background was cleared before.
   void recordCovered(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& pixels, uint32_t width,
                      uint32_t height, bool resolved = false) const;
+  // The single-sampled ID target cleared to VIS_NOTHING by a compute store (GENERAL layout): on a GPU the raster's
+  // attachment clear of it was slow (clear_ids.comp).
+  void recordClearIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height, bool wide) const;
   void recordSampleIds(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height) const;
 
  private:

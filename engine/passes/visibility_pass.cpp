@@ -54,13 +54,14 @@ VisibilityPass VisibilityPass::create(gpu::Device& device, VkDescriptorSetLayout
 }
 
 void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
-                    bool load, const gpu::Image* second, VkClearColorValue secondClear, const gpu::Image* resolve) {
+                    bool load, const gpu::Image* second, VkClearColorValue secondClear, const gpu::Image* resolve,
+                    bool loadColor) {
   VkRenderingAttachmentInfo cas[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
                                       {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
   for (int i = 0; i < 2; ++i) {
     cas[i].imageView = i == 0 ? color.view() : second ? second->view() : VK_NULL_HANDLE;
     cas[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    cas[i].loadOp = load ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
+    cas[i].loadOp = load || loadColor ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
     cas[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     cas[i].clearValue.color = i == 0 ? clear : secondClear;
   }
@@ -96,7 +97,7 @@ void VisibilityPass::record(VkCommandBuffer cmd, VkDescriptorSet scene, const Vi
   VkClearColorValue nothing{};
   nothing.uint32[0] = VIS_NOTHING;
   nothing.uint32[1] = VIS_NOTHING;
-  beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear);
+  beginRendering(cmd, *in.ids, nothing, *in.depth, !in.clear, nullptr, {}, nullptr, in.idsCleared);
   const bool isWide = in.ids->format() == VK_FORMAT_R32G32_UINT;
   const Variant variant = in.countOverdraw ? (isWide ? WideOverdraw : NarrowOverdraw) : (isWide ? Wide : Narrow);
   layout.bind(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene);

@@ -39,6 +39,7 @@ struct VisibilityInputs {
   VkBuffer drawCount = VK_NULL_HANDLE;
   std::vector<VisibilityList> lists;  // drawn in this order (opaque first: masked fragments then fail depth early)
   bool clear = true;      // early/only phase clears IDs and depth; the late phase loads them
+  bool idsCleared = false;  // the IDs were cleared before the pass (ShadePass::recordClearIds): loaded, depth cleared
   bool countOverdraw = false;  // debug: the variant that counts raster writes into the overdraw image
 };
 
@@ -61,6 +62,6 @@ struct VisibilityPass {
 // averaged into at the end of the rendering (hardware MSAA resolve; COLOR_ATTACHMENT_OPTIMAL).
 void beginRendering(VkCommandBuffer cmd, const gpu::Image& color, VkClearColorValue clear, const gpu::Image& depth,
                     bool load = false, const gpu::Image* second = nullptr, VkClearColorValue secondClear = {},
-                    const gpu::Image* resolve = nullptr);
+                    const gpu::Image* resolve = nullptr, bool loadColor = false);
 
 }  // namespace visbuf::passes

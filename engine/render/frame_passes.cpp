@@ -267,16 +267,25 @@ void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const Fram
                                    const FramePlan& plan, uint32_t phase, bool clear, const char* name) {
   const bool deferred = options.path == RenderPath::GBuffer;
   auto target = [&](Graph::Resource res, gpu::Access a) { return clear ? Graph::overwrites(res, a) : Graph::writes(res, a); };
+  // On a GPU the single-sampled IDs are cleared by a compute store, and the raster loads them (its attachment clear
+  // of them took 0.29 of 0.56 ms at 1080p on the H100).
+  const bool computeClear = clear && !deferred && !plan.msaa && !facts().cpuDevice;
+  Graph::Pass& pass = g.pass(name, name);
+  if (computeClear)
+    pass.step({Graph::overwrites(r.ids, access::inLayout(access::computeStorageImage, VK_IMAGE_LAYOUT_GENERAL))},
+              [this](VkCommandBuffer cmd) {
+                shade.recordClearIds(cmd, sceneSet, config.width, config.height, encoding.wide);
+              });
   std::vector<Graph::Use> uses = {Graph::reads(r.draws, access::indirect | access::rasterRead),
                                   Graph::reads(r.stats, access::indirect), Graph::reads(r.scene, access::rasterRead),
                                   target(r.depth, access::depthAttachment)};
   if (deferred)
     for (Graph::Resource t : r.gbuffer) uses.push_back(target(t, access::colorAttachment));
   else
-    uses.push_back(target(r.ids, access::colorAttachment));
+    uses.push_back(computeClear ? Graph::writes(r.ids, access::colorAttachment) : target(r.ids, access::colorAttachment));
   if (options.countOverdraw)
     uses.push_back(Graph::writes(r.overdraw, access::inLayout(access::rasterReadWrite, VK_IMAGE_LAYOUT_GENERAL)));
-  g.pass(name, name).step(std::move(uses), [this, phase, clear, deferred, msaa = plan.msaa,
+  pass.step(std::move(uses), [this, phase, clear, deferred, computeClear, msaa = plan.msaa,
                                             overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
     auto common = [&](auto& in) {
       in.depth = deferred ? &depth : msaa ? &depthMs : &depth;
@@ -296,6 +305,7 @@ void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const Fram
       passes::VisibilityInputs in;
       in.ids = msaa ? &idsMs : &ids;
       common(in);
+      in.idsCleared = computeClear;
       (msaa ? visibilityMs : visibility).record(cmd, sceneSet, in);
     }
   });

@@ -39,7 +39,8 @@ void Renderer::Impl::createTargets(uint32_t width, uint32_t height) {
   vkDeviceWaitIdle(device.device());
   const VkFormat idFormat = encoding.wide ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32_UINT;
   ids = gpu::Image(device, idFormat, width, height,
-                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                       VK_IMAGE_USAGE_STORAGE_BIT,
                    VK_IMAGE_ASPECT_COLOR_BIT);
   depth = gpu::Image(device, VK_FORMAT_D32_SFLOAT, width, height,
                      VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
@@ -110,7 +111,7 @@ void Renderer::Impl::bindPasses() {
   if (gbuffer.created()) gbuffer.bind(overdraw);
   // MSAA frames: the shading reads the multisampled IDs.
   const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
-                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes, &depth};
+                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes, &ids, &depth};
   shade.bind(shading);
   if (classify.created()) classify.bind(shading);
   // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.

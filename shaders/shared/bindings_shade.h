@@ -13,5 +13,6 @@
 // float[ATTRIBUTE_FLOATS] per pixel: the attributes variant's reconstruction; the sample-ID copy (msaa_ids.comp).
 #define SHADE_BINDING_ATTRIBUTES (LIGHTING_BINDINGS + 4)
 #define SHADE_BINDING_DEPTH (LIGHTING_BINDINGS + 5)       // sampler2D: the depth (the SW_RESOLVE variants read it)
+#define SHADE_BINDING_IDS_STORAGE (LIGHTING_BINDINGS + 6) // the single-sampled ID target as a storage image (clear_ids.comp)
 
 #endif
