@@ -99,12 +99,12 @@ bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2
 }
 
 // Software micro-raster routing: the object's screen box (rect: screenRect's) is at most frame.swMaxPixels per
-// side, its triangles are small (SW_RASTER_MAX_AREA_PER_TRIANGLE) and it lies wholly beyond the near plane
+// side, its triangles are small (FrameData.swMaxAreaPerTriangle) and it lies wholly beyond the near plane
 // (sw_raster.comp needs no clipping and keeps its edge functions within 32 bits).
 bool smallOnScreen(bool rect, vec2 lo, vec2 hi, uint triangles) {
   vec2 extent = (hi - lo) * 0.5 * frame.viewport.xy;
   return rect && max(extent.x, extent.y) <= frame.swMaxPixels &&
-         extent.x * extent.y <= SW_RASTER_MAX_AREA_PER_TRIANGLE * float(triangles);
+         extent.x * extent.y <= frame.swMaxAreaPerTriangle * float(triangles);
 }
 
 // The farthest depth the pyramid holds over the pixels [a, b] (reverse-Z: the minimum of the level's texels over

@@ -42,6 +42,7 @@ struct RenderCommand {
   uint32_t msaa = 1;            // samples per pixel: 1, 2, 4 (FrameOptions::msaa)
   std::string swRaster = "auto";  // software micro-raster of small objects: auto | on | off (FrameOptions::swRaster)
   std::optional<float> swRasterPixels;  // its object size bound in pixels (FrameOptions::swRasterPixels)
+  std::optional<float> swRasterArea;    // its bound on screen box area per triangle (FrameOptions::swRasterArea)
   bool noClusters = false;  // FrameOptions::clusters off
   std::string swResolve = "auto";  // FrameOptions::swResolve
   bool noEarlyClusterOcclusion = false;  // FrameOptions::earlyClusterOcclusion off

@@ -109,6 +109,11 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--sw-raster-px", c.swRasterPixels, "--sw-raster: the object size bound in pixels (0, 94]; default 94 on a CPU device, 64 on a GPU")
       ->check(finiteNumber(0.0, 94.0, true, false))
       ->capture_default_str();
+  sub->add_option("--sw-raster-area", c.swRasterArea,
+                  "--sw-raster: the bound on an object's (or cluster's) screen box area per triangle in pixels (0, 9216]; "
+                  "default 128 on a CPU device, 32 on a GPU")
+      ->check(finiteNumber(0.0, 9216.0, true, false))
+      ->capture_default_str();
   sub->add_option("--sw-resolve", c.swResolve,
                   "where the micro-raster's fragments meet the raster's: merge (into the ID target and depth) | shading "
                   "(the pyramid and the shading take the nearer per pixel; frames that read IDs, cull lights or draw "
@@ -353,6 +358,7 @@ int runRender(const RenderCommand& c) {
   fo.shading = parseShadingMode(c.shading);
   fo.swRaster = parseSwRasterMode(c.swRaster);
   fo.swRasterPixels = c.swRasterPixels;
+  fo.swRasterArea = c.swRasterArea;
   fo.clusters = !c.noClusters;
   fo.swResolve = parseSwResolve(c.swResolve);
   fo.earlyClusterOcclusion = !c.noEarlyClusterOcclusion;

@@ -51,6 +51,8 @@ ShadingMode parseShadingMode(const std::string& name) {
 // ms at 10k kittens).
 ShadingMode defaultShadingFor(bool cpuDevice) { return cpuDevice ? ShadingMode::Covered : ShadingMode::Uber; }
 float defaultSwRasterPixels(bool cpuDevice) { return cpuDevice ? float(SW_RASTER_MAX_EXTENT - 2) : 64.0f; }
+float defaultSwRasterArea(bool cpuDevice) { return cpuDevice ? 128.0f : 32.0f; }
+static_assert(kMaxSwRasterArea == float(SW_RASTER_MAX_EXTENT * SW_RASTER_MAX_EXTENT));
 ShadingMode defaultShading(const gpu::Device& device) { return defaultShadingFor(device.isCpu()); }
 
 const char* swRasterModeName(SwRasterMode mode) {
@@ -131,6 +133,10 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
       !(*options.swRasterPixels > 0.0f && *options.swRasterPixels <= SW_RASTER_MAX_EXTENT - 2))
     return makeError(ErrorCode::InvalidArgument, fmt::format("micro-raster size bound {} px outside (0, {}]",
                                                              *options.swRasterPixels, SW_RASTER_MAX_EXTENT - 2));
+  if (options.swRaster != SwRasterMode::Off && options.swRasterArea &&
+      !(*options.swRasterArea > 0.0f && *options.swRasterArea <= kMaxSwRasterArea))
+    return makeError(ErrorCode::InvalidArgument, fmt::format("micro-raster area bound {} px per triangle outside (0, {}]",
+                                                             *options.swRasterArea, kMaxSwRasterArea));
   prepareMsaa(options);  // once per sample count (and size)
   if (resolveShading(options, facts()) == ShadingMode::Classified) ensureClassify();
   if (microRasterAllowed(options, facts()) && swRaster.ensureBuffer(device, config.width, config.height))

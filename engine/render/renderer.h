@@ -50,6 +50,11 @@ ShadingMode defaultShadingFor(bool cpuDevice);  // the same, by device type
 // The micro-raster's object size bound (pixels per side) when FrameOptions::swRasterPixels is unset: 94 on a CPU
 // device, 64 on a GPU.
 float defaultSwRasterPixels(bool cpuDevice);
+// The micro-raster's bound on screen box area per triangle (pixels) when FrameOptions::swRasterArea is unset: 128 on a
+// CPU device, 32 on a GPU.
+float defaultSwRasterArea(bool cpuDevice);
+// FrameOptions::swRasterArea's upper limit: a triangle's box of SW_RASTER_MAX_EXTENT pixels per side.
+inline constexpr float kMaxSwRasterArea = 9216.0f;
 
 // Culling bounds of skinned instances: Joints = a sphere from the joints' reach (CPU, double precision,
 // provably containing every skinned vertex: animation.h); Gpu = from the skinned vertices themselves, reduced
@@ -138,6 +143,12 @@ struct FrameOptions {
   // costs about 4x the micro-raster per triangle, so the largest bound pays there (the peer view, 1024x768: 10k
   // kittens 37-39 ms against 40-41 at 64 px, 100k 123 against 133, 1M 247 against 262-274).
   std::optional<float> swRasterPixels;
+  // (0, kMaxSwRasterArea]: an object (or cluster) goes to the micro-raster only while its screen box area divided by
+  // its triangles is at most this many pixels, since a lane loops over a triangle's box serially. Unset: the device's
+  // (defaultSwRasterArea): on lavapipe 128, where the hardware raster's per-triangle setup costs more than the
+  // micro-raster's longer loops (peer view, 1024x768, interleaved pairs against 32: 10k kittens 0.83x, 100k 0.93x,
+  // 1M 0.86x the frame time, the same image bar edge ties); on a GPU 32.
+  std::optional<float> swRasterArea;
   // Cluster culling (visbuf and G-buffer paths, culled frames): an object the hardware raster would draw whole, whose
   // LOD level has more than CLUSTER_TRIANGLES triangles, is drawn as its clusters that survive the frustum, their
   // back-face cone and (late phase) the depth pyramid; the small ones go to the micro-raster. Skinned instances are

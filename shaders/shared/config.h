@@ -260,10 +260,6 @@
 // The most triangles of a draw it takes: one invocation rasterises a whole draw, and lavapipe's JIT stops any loop
 // after 65,535 iterations (gallivm's loop limiter): a 28,800-triangle draw lost its last ~7,000 triangles.
 #define SW_RASTER_MAX_TRIANGLES 2048u
-// ... and only draws whose triangles are small: screen box area / triangles at most this many pixels (a lane loops
-// over a triangle's pixels serially, so large triangles belong to the hardware raster; a 12-triangle box of 64 px
-// has ~340 px per triangle, a kitten at 64 px ~2.3).
-#define SW_RASTER_MAX_AREA_PER_TRIANGLE 32.0
 // G-buffer baseline (gbuffer_pass, gbuffer_lighting_pass): the raster's attribute targets, read back by the
 // lighting pass with texelFetch (constant indices only: lavapipe has no dynamic sampled-image indexing).
 #define GBUFFER_TARGETS 4       // base colour + alpha, octahedral normal, metallic/roughness/occlusion, emissive

@@ -194,7 +194,9 @@ struct FrameData {
   // variants read (visibility_id.glsl resolvedVisibility). 0 otherwise.
   uint swVisibilityLow;
   uint swVisibilityHigh;
-  uint framePad0;  // (a multiple of 16 bytes)
+  // The micro-raster's bound on an object's (or cluster's) screen box area per triangle, in pixels (a lane loops over
+  // a triangle's box serially, so large triangles belong to the hardware raster): FrameOptions::swRasterArea.
+  float swMaxAreaPerTriangle;
 };
 
 // A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;
