@@ -111,7 +111,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->capture_default_str();
   sub->add_option("--sw-raster-area", c.swRasterArea,
                   "--sw-raster: the bound on an object's (or cluster's) screen box area per triangle in pixels (0, 9216]; "
-                  "default 128 on a CPU device, 32 on a GPU")
+                  "default 128")
       ->check(finiteNumber(0.0, 9216.0, true, false))
       ->capture_default_str();
   sub->add_option("--sw-resolve", c.swResolve,

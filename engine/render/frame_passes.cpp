@@ -35,7 +35,7 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.msaaSamples = options.msaa;
   f.swRaster = plan.swOn ? 1u : 0u;
   f.swMaxPixels = options.swRasterPixels.value_or(defaultSwRasterPixels(facts().cpuDevice));
-  f.swMaxAreaPerTriangle = options.swRasterArea.value_or(defaultSwRasterArea(facts().cpuDevice));
+  f.swMaxAreaPerTriangle = options.swRasterArea.value_or(kDefaultSwRasterArea);
   f.swTriangleBits = encoding.wide ? 32u - std::min(encoding.slotBits, 31u) : encoding.triangleBits;
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
   f.clusterCull = plan.clusters ? 1u : 0u;

@@ -51,7 +51,6 @@ ShadingMode parseShadingMode(const std::string& name) {
 // ms at 10k kittens).
 ShadingMode defaultShadingFor(bool cpuDevice) { return cpuDevice ? ShadingMode::Covered : ShadingMode::Uber; }
 float defaultSwRasterPixels(bool cpuDevice) { return cpuDevice ? float(SW_RASTER_MAX_EXTENT - 2) : 64.0f; }
-float defaultSwRasterArea(bool cpuDevice) { return cpuDevice ? 128.0f : 32.0f; }
 static_assert(kMaxSwRasterArea == float(SW_RASTER_MAX_EXTENT * SW_RASTER_MAX_EXTENT));
 ShadingMode defaultShading(const gpu::Device& device) { return defaultShadingFor(device.isCpu()); }
 

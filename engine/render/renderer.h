@@ -50,9 +50,9 @@ ShadingMode defaultShadingFor(bool cpuDevice);  // the same, by device type
 // The micro-raster's object size bound (pixels per side) when FrameOptions::swRasterPixels is unset: 94 on a CPU
 // device, 64 on a GPU.
 float defaultSwRasterPixels(bool cpuDevice);
-// The micro-raster's bound on screen box area per triangle (pixels) when FrameOptions::swRasterArea is unset: 128 on a
-// CPU device, 32 on a GPU.
-float defaultSwRasterArea(bool cpuDevice);
+// The micro-raster's bound on screen box area per triangle (pixels) when FrameOptions::swRasterArea is unset, on
+// either device type.
+inline constexpr float kDefaultSwRasterArea = 128.0f;
 // FrameOptions::swRasterArea's upper limit: a triangle's box of SW_RASTER_MAX_EXTENT pixels per side.
 inline constexpr float kMaxSwRasterArea = 9216.0f;
 
@@ -145,9 +145,10 @@ struct FrameOptions {
   std::optional<float> swRasterPixels;
   // (0, kMaxSwRasterArea]: an object (or cluster) goes to the micro-raster only while its screen box area divided by
   // its triangles is at most this many pixels, since a lane loops over a triangle's box serially. Unset: the device's
-  // (defaultSwRasterArea): on lavapipe 128, where the hardware raster's per-triangle setup costs more than the
-  // micro-raster's longer loops (peer view, 1024x768, interleaved pairs against 32: 10k kittens 0.83x, 100k 0.93x,
-  // 1M 0.86x the frame time, the same image bar edge ties); on a GPU 32.
+  // (kDefaultSwRasterArea): 128, where the hardware raster's per-triangle setup costs more than the micro-raster's
+  // longer loops: against 32, lavapipe's peer view (1024x768, interleaved pairs) took 0.83x / 0.90x / 0.91x the frame
+  // time at 10k / 100k / 1M kittens, an H200's 0.92x at 100k, 0.88x at 1M and 0.955x for 1M at 1920x1080 in the
+  // field view (the same image bar edge ties).
   std::optional<float> swRasterArea;
   // Cluster culling (visbuf and G-buffer paths, culled frames): an object the hardware raster would draw whole, whose
   // LOD level has more than CLUSTER_TRIANGLES triangles, is drawn as its clusters that survive the frustum, their
