@@ -144,8 +144,8 @@ struct FrameOptions {
   // kittens 37-39 ms against 40-41 at 64 px, 100k 123 against 133, 1M 247 against 262-274).
   std::optional<float> swRasterPixels;
   // (0, kMaxSwRasterArea]: an object (or cluster) goes to the micro-raster only while its screen box area divided by
-  // its triangles is at most this many pixels, since a lane loops over a triangle's box serially. Unset: the device's
-  // (kDefaultSwRasterArea): 128, where the hardware raster's per-triangle setup costs more than the micro-raster's
+  // its triangles is at most this many pixels, since a lane loops over a triangle's box serially. Unset:
+  // kDefaultSwRasterArea, 128, where the hardware raster's per-triangle setup costs more than the micro-raster's
   // longer loops: against 32, lavapipe's peer view (1024x768, interleaved pairs) took 0.83x / 0.90x / 0.91x the frame
   // time at 10k / 100k / 1M kittens, an H200's 0.92x at 100k, 0.88x at 1M and 0.955x for 1M at 1920x1080 in the
   // field view (the same image bar edge ties).
