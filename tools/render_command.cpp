@@ -110,9 +110,10 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(finiteNumber(0.0, 94.0, true, false))
       ->capture_default_str();
   sub->add_option("--sw-raster-area", c.swRasterArea,
-                  "--sw-raster: the bound on an object's (or cluster's) screen box area per triangle in pixels (0, 9216]; "
-                  "default 128")
-      ->check(finiteNumber(0.0, 9216.0, true, false))
+                  fmt::format("--sw-raster: the bound on an object's (or cluster's) screen box area per triangle in "
+                              "pixels (0, {}]; default {}",
+                              kMaxSwRasterArea, kDefaultSwRasterArea))
+      ->check(finiteNumber(0.0, kMaxSwRasterArea, true, false))
       ->capture_default_str();
   sub->add_option("--sw-resolve", c.swResolve,
                   "where the micro-raster's fragments meet the raster's: merge (into the ID target and depth) | shading "
