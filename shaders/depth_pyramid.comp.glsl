@@ -12,8 +12,6 @@
 // (PYRAMID_FIRST_TESTED_LEVEL). Each later dispatch reads the last level written. 1024x768 takes four dispatches
 // (levels 0-3, 4-6, 7-9, 10) instead of eleven.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_buffer_reference_uvec2 : require
 #include "shared/types.h"
 
 layout(local_size_x = PYRAMID_TILE, local_size_y = PYRAMID_TILE) in;
@@ -27,8 +25,10 @@ layout(set = 0, binding = 0) uniform sampler2D source;  // the depth image, or t
 // Slot j: the level source + j (slot 0, the source's own level, is written only by the copying dispatch).
 layout(set = 0, binding = 1, r32f) uniform writeonly image2D levels[PYRAMID_DISPATCH_LEVELS];
 layout(push_constant) uniform Push { PyramidConstants pc; };
-// The micro-raster's 64-bit words as (low, high) pairs: high, the depth bits.
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SwVisibility { uvec2 words[]; };
+#if !MSAA
+// The micro-raster's 64-bit words as RG32UI texels: y, the depth bits (passes::SwRasterPass::texels).
+layout(set = 0, binding = 2) uniform usamplerBuffer microRaster;
+#endif
 
 const int BLOCK = 1 << PYRAMID_REDUCTIONS;
 
@@ -41,10 +41,8 @@ float sourceDepth(ivec2 s) {
   return d;
 #else
   float d = texelFetch(source, s, 0).r;
-  if (pc.swResolve != 0u) {  // the micro-raster's fragment, not merged into the depth: the nearer of the two
-    SwVisibility sw = SwVisibility(uvec2(pc.swVisibilityLow, pc.swVisibilityHigh));
-    d = max(d, uintBitsToFloat(sw.words[uint(s.y) * pc.srcWidth + uint(s.x)].y));
-  }
+  if (pc.swResolve != 0u)  // the micro-raster's fragment, not merged into the depth: the nearer of the two
+    d = max(d, uintBitsToFloat(texelFetch(microRaster, s.y * int(pc.srcWidth) + s.x).y));
   return d;
 #endif
 }

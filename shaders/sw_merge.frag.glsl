@@ -4,11 +4,10 @@
 // hardware raster left, and its ID in the target's encoding -- so the pyramid, the late phase, the shading and the
 // transparency pass see one target. On equal depth the hardware fragment stays.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "common.glsl"
 #include "shared/bindings_sw_raster.h"
 
-layout(std430, set = 1, binding = SW_RASTER_BINDING_VISIBILITY) readonly buffer SwBlock { uint64_t swVisibility[]; };
+layout(set = 1, binding = SW_RASTER_BINDING_VISIBILITY_TEXELS) uniform usamplerBuffer swTexels;
 #if WIDE_IDS
 layout(location = 0) out uvec2 outId;
 #else
@@ -17,10 +16,11 @@ layout(location = 0) out uint outId;
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
-  uint64_t v = swVisibility[uint(p.y) * uint(frame.viewport.x) + uint(p.x)];
-  uint depthBits = uint(v >> 32);
+  // (x: the complemented payload, y: the depth bits; through the texel view, bindings_sw_raster.h)
+  uvec2 v = texelFetch(swTexels, p.y * int(frame.viewport.x) + p.x).xy;
+  uint depthBits = v.y;
   if (depthBits == 0u) discard;
-  uint payload = ~uint(v & 0xffffffffUL);  // (stored complemented: equal depths keep the lowest payload)
+  uint payload = ~v.x;  // (stored complemented: equal depths keep the lowest payload)
   gl_FragDepth = uintBitsToFloat(depthBits);
 #if WIDE_IDS
   outId = uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));

@@ -38,17 +38,12 @@ layout(set = 1, binding = SHADE_BINDING_VISIBILITY) uniform usampler2D visibilit
 #if !MSAA && SW_RESOLVE
 layout(set = 1, binding = SHADE_BINDING_DEPTH) uniform sampler2D visibilityDepth;
 
-// The micro-raster's buffer (FrameData.swVisibility*) as (low, high) word pairs: high, the depth bits (0: nothing);
-// low, the complemented payload (equal depths keep the lowest payload).
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SwVisibilityRef { uvec2 words[]; };
-uvec2 microRasterWord(ivec2 p) {
-  return SwVisibilityRef(uvec2(frame.swVisibilityLow, frame.swVisibilityHigh))
-      .words[uint(p.y) * uint(frame.viewport.x) + uint(p.x)];
-}
-uint microRasterDepthBits(ivec2 p) {  // (the high word alone: lavapipe loads what is named, lane by lane)
-  return SwVisibilityRef(uvec2(frame.swVisibilityLow, frame.swVisibilityHigh))
-      .words[uint(p.y) * uint(frame.viewport.x) + uint(p.x)].y;
-}
+// The micro-raster's buffer as (low, high) word pairs: high, the depth bits (0: nothing); low, the complemented
+// payload (equal depths keep the lowest payload). Through its RG32UI texel view: on lavapipe one vector load for the
+// batch, where a storage-buffer read is a bounds-checked scalar load per lane and word.
+layout(set = 1, binding = SHADE_BINDING_SW_TEXELS) uniform usamplerBuffer swTexels;
+uvec2 microRasterWord(ivec2 p) { return texelFetch(swTexels, p.y * int(frame.viewport.x) + p.x).xy; }
+uint microRasterDepthBits(ivec2 p) { return microRasterWord(p).y; }
 
 // Whether the micro-raster's fragment (depth bits, 0: none) is nearer than the raster's at p (drawn: the raster drew
 // p): the rule of the merge this replaces (sw_merge.frag, depth test GREATER, reverse-Z), so the raster's fragment

@@ -118,7 +118,7 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
   sub->add_option("--sw-resolve", c.swResolve,
                   "where the micro-raster's fragments meet the raster's: merge (into the ID target and depth) | shading "
                   "(the pyramid and the shading take the nearer per pixel; frames that read IDs, cull lights or draw "
-                  "transparency merge anyway) | auto (shading on a GPU, merge on a CPU device)")
+                  "transparency merge anyway) | auto (shading)")
       ->check(CLI::IsMember({"auto", "merge", "shading"}))
       ->capture_default_str();
   sub->add_flag("--no-clusters", c.noClusters,

@@ -37,11 +37,12 @@ void DepthPyramidPass::releaseViews() {
 void DepthPyramidPass::create(gpu::Device& device) {
   device_ = &device;
   VkDevice dev = device.device();
-  VkDescriptorSetLayoutBinding b[2] = {
+  VkDescriptorSetLayoutBinding b[3] = {
       {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, PYRAMID_DISPATCH_LEVELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, PYRAMID_DISPATCH_LEVELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {2, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr}};
   VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  lci.bindingCount = 2;
+  lci.bindingCount = 3;
   lci.pBindings = b;
   VK_CHECK(vkCreateDescriptorSetLayout(dev, &lci, nullptr, &setLayout_));
   VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu::PyramidConstants)};
@@ -53,12 +54,13 @@ void DepthPyramidPass::create(gpu::Device& device) {
   VK_CHECK(vkCreatePipelineLayout(dev, &pci, nullptr, &layout_));
   // One set per dispatch, plus the multisampled first dispatch's.
   constexpr uint32_t maxSets = MAX_PYRAMID_LEVELS / PYRAMID_REDUCTIONS + 2;
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, maxSets},
-                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, maxSets * PYRAMID_DISPATCH_LEVELS}};
+  VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, maxSets},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, maxSets * PYRAMID_DISPATCH_LEVELS},
+                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, maxSets}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
   dpci.maxSets = maxSets;
-  dpci.poolSizeCount = 2;
+  dpci.poolSizeCount = 3;
   dpci.pPoolSizes = sizes;
   VK_CHECK(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
   VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -151,21 +153,36 @@ void DepthPyramidPass::resize(const gpu::Image& depth, const gpu::Image* multisa
     w[1].pImageInfo = dst;
     vkUpdateDescriptorSets(dev, 2, w, 0, nullptr);
   }
+  if (microRaster_) bindMicroRaster(microRaster_);
 }
 
-void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled, bool writeLevel0,
-                              VkDeviceAddress microRaster) const {
+void DepthPyramidPass::bindMicroRaster(VkBufferView texels) {
+  microRaster_ = texels;
+  std::vector<VkDescriptorSet> all = sets_;
+  if (msaaSet_) all.push_back(msaaSet_);
+  std::vector<VkWriteDescriptorSet> writes;
+  for (VkDescriptorSet set : all) {
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstSet = set;
+    w.dstBinding = 2;
+    w.descriptorCount = 1;
+    w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    w.pTexelBufferView = &microRaster_;
+    writes.push_back(w);
+  }
+  vkUpdateDescriptorSets(device_->device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
+}
+
+void DepthPyramidPass::record(VkCommandBuffer cmd, bool multisampled, bool writeLevel0, bool microRaster) const {
   for (size_t i = 0; i < dispatches_.size(); ++i) {
     const Dispatch& d = dispatches_[i];
-    const bool fromMicroRaster = d.source == 0 && microRaster != 0;
+    const bool fromMicroRaster = d.source == 0 && microRaster;
     gpu::PyramidConstants pc{d.width,
                              d.height,
                              d.source == 0 && writeLevel0 ? 1u : 0u,
                              d.reductions,
                              fromMicroRaster ? 1u : 0u,
-                             fromMicroRaster ? uint32_t(microRaster) : 0u,
-                             fromMicroRaster ? uint32_t(microRaster >> 32) : 0u,
-                             0};
+                             {}};
     const bool msaa = multisampled && i == 0;
     if (i <= 1) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, (msaa ? msaaPipeline_ : pipeline_).handle());
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, msaa ? &msaaSet_ : &sets_[i], 0,

@@ -33,10 +33,12 @@ class DepthPyramidPass {
   void resize(const gpu::Image& depth, const gpu::Image* multisampledDepth = nullptr);
   // writeLevel0: also copy the depth into level 0 (the occlusion tests never read it: PYRAMID_FIRST_TESTED_LEVEL;
   // only a read-back of every level needs it).
-  // microRaster: the device address of the micro-raster's buffer where it was not merged into the depth (level 0 is
-  // then the nearer of the two per pixel); 0: the depth alone.
-  void record(VkCommandBuffer cmd, bool multisampled = false, bool writeLevel0 = false,
-              VkDeviceAddress microRaster = 0) const;
+  // microRaster: the micro-raster's buffer (bindMicroRaster) was not merged into the depth: level 0 is then the nearer
+  // of the two per pixel; false: the depth alone.
+  void record(VkCommandBuffer cmd, bool multisampled = false, bool writeLevel0 = false, bool microRaster = false) const;
+  // The micro-raster's buffer as RG32UI texels (passes::SwRasterPass::texels), read where record's microRaster is
+  // set; every set takes it (again after resize). A view must be bound before the first record.
+  void bindMicroRaster(VkBufferView texels);
   const gpu::Image& pyramid() const { return pyramid_; }
   uint32_t levels() const { return levels_; }
 
@@ -55,6 +57,7 @@ class DepthPyramidPass {
   std::vector<VkDescriptorSet> sets_;  // one per dispatch
   std::vector<Dispatch> dispatches_;
   uint32_t width_ = 0, height_ = 0, levels_ = 0;
+  VkBufferView microRaster_ = VK_NULL_HANDLE;
 };
 
 // The dispatches that build the pyramid of a depth image of this size: each reduces up to PYRAMID_REDUCTIONS levels

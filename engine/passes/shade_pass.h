@@ -24,6 +24,7 @@ struct ShadeInputs {
   const gpu::Image* singleIds = nullptr;    // the single-sampled ID target, GENERAL (clear_ids.comp stores into it)
   const gpu::Image* depth = nullptr;        // the single-sampled depth, shader-read layout (read where the frame
                                             // resolves the micro-raster instead of merging it: FrameData.swResolve)
+  VkBufferView swTexels = VK_NULL_HANDLE;   // the micro-raster's buffer as RG32UI texels (read likewise)
 };
 std::vector<gpu::DescriptorBinding> shadeBindings();
 void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in);

@@ -15,7 +15,8 @@ SwRasterPass SwRasterPass::create(gpu::Device& device, VkDescriptorSetLayout sce
   p.layout = gpu::PassLayout(device, sceneLayout,
                              {{SW_RASTER_BINDING_DRAWS, storage},
                               {SW_RASTER_BINDING_DRAW_LISTS, storage},
-                              {SW_RASTER_BINDING_VISIBILITY, storage}},
+                              {SW_RASTER_BINDING_VISIBILITY, storage},
+                              {SW_RASTER_BINDING_VISIBILITY_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
                              VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
   const VkPipelineLayout layout = p.layout.pipelineLayout();
   // lavapipe: no load before each atomic, the back-face queue (sw_raster.comp.glsl SW_CPU)
@@ -33,17 +34,24 @@ SwRasterPass SwRasterPass::create(gpu::Device& device, VkDescriptorSetLayout sce
 }
 
 void SwRasterPass::resetBuffer(gpu::Device& device) {
-  buffer = gpu::Buffer(device, 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+  texels.reset();  // (before its buffer)
+  buffer = gpu::Buffer(device, 8,
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                        gpu::MemoryUse::DeviceLocal);
+  texels = gpu::BufferView(device, buffer, VK_FORMAT_R32G32_UINT, 0, 8);
   sized_ = false;
 }
 
 bool SwRasterPass::ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height) {
   if (sized_) return false;
+  texels.reset();
   buffer = gpu::Buffer(device, VkDeviceSize(width) * height * 8,
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
-                           VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                        gpu::MemoryUse::DeviceLocal);
+  // (SceneFacts::microRasterFits: width x height texels are within maxTexelBufferElements)
+  texels = gpu::BufferView(device, buffer, VK_FORMAT_R32G32_UINT, 0, VK_WHOLE_SIZE);
   sized_ = true;
   return true;
 }
@@ -53,6 +61,7 @@ void SwRasterPass::bind(const gpu::Buffer& draws, const gpu::Buffer& drawLists) 
       .buffer(SW_RASTER_BINDING_DRAWS, draws.handle())
       .buffer(SW_RASTER_BINDING_DRAW_LISTS, drawLists.handle())
       .buffer(SW_RASTER_BINDING_VISIBILITY, buffer.handle())
+      .texels(SW_RASTER_BINDING_VISIBILITY_TEXELS, texels.handle())
       .update();
 }
 

@@ -20,6 +20,7 @@ struct SwRasterPass {
   // The 64-bit per-pixel buffer: an 8-byte stand-in after resetBuffer (creation, resize), the frame's size once
   // ensureBuffer ran; ensureBuffer returns true when it allocated (its set to write again: bind).
   gpu::Buffer buffer;
+  gpu::BufferView texels;  // the same as RG32UI texels (the merge and the shading's SW_RESOLVE variants read it)
   void resetBuffer(gpu::Device& device);
   bool ensureBuffer(gpu::Device& device, uint32_t width, uint32_t height);
   static SwRasterPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, const gpu::Specialization& spec);

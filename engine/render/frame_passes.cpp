@@ -40,11 +40,6 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.swMaxTriangles = encoding.wide ? std::min(1u << f.swTriangleBits, SW_RASTER_MAX_TRIANGLES) : SW_RASTER_MAX_TRIANGLES;
   f.clusterCull = plan.clusters ? 1u : 0u;
   f.earlyClusterOcclusion = plan.earlyClusterOcclusion ? 1u : 0u;
-  if (plan.swResolved) {
-    const VkDeviceAddress a = swRaster.buffer.address();
-    f.swVisibilityLow = uint32_t(a);
-    f.swVisibilityHigh = uint32_t(a >> 32);
-  }
   if (plan.coveredPixels) {
     const VkDeviceAddress a = coveredPixels.address();
     f.coveredPixelsLow = uint32_t(a);
@@ -338,9 +333,8 @@ void Renderer::Impl::declarePyramid(Graph& g, const FrameResources& r, bool msaa
                                                                                      access::computeSampled,
                                                                                  VK_IMAGE_LAYOUT_GENERAL))};
   if (microRaster) uses.push_back(Graph::reads(r.sw, access::computeRead));
-  const VkDeviceAddress sw = microRaster ? swRaster.buffer.address() : 0;
-  g.pass("depth pyramid", "depth pyramid").step(std::move(uses), [this, msaa, writeLevel0, sw](VkCommandBuffer cmd) {
-    pyramid.record(cmd, msaa, writeLevel0, sw);
+  g.pass("depth pyramid", "depth pyramid").step(std::move(uses), [this, msaa, writeLevel0, microRaster](VkCommandBuffer cmd) {
+    pyramid.record(cmd, msaa, writeLevel0, microRaster);
   });
 }
 

@@ -15,8 +15,8 @@ bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts) {
          facts.microRasterLists && facts.microRasterFits;
 }
 
-bool microRasterResolves(const FrameOptions& options, const SceneFacts& facts) {
-  return options.swResolve == SwResolve::Auto ? !facts.cpuDevice : options.swResolve == SwResolve::Shading;
+bool microRasterResolves(const FrameOptions& options) {
+  return options.swResolve != SwResolve::Merge;  // Auto: on both device types (FrameOptions::swResolve)
 }
 
 bool lightsCulled(const FrameOptions& options, const SceneFacts& facts) {
@@ -41,7 +41,7 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.clusters = p.gpuCulled && !p.frozen && options.clusters && facts.clusters && p.cull != CullMode::None;
   p.earlyClusterOcclusion = p.clusters && p.usePyramid && options.earlyClusterOcclusion && history.pyramidBuilt;
   // Merge-free micro-raster: what its merges wrote is read only by the pyramid and the shading, which resolve it.
-  p.swResolved = p.swOn && microRasterResolves(options, facts) && options.path == RenderPath::Visbuf && !p.msaa &&
+  p.swResolved = p.swOn && microRasterResolves(options) && options.path == RenderPath::Visbuf && !p.msaa &&
                  p.shading != ShadingMode::Classified && !p.lightsCulled && !facts.transparency && !options.readIds &&
                  !handsOn;
   return p;

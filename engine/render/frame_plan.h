@@ -39,7 +39,7 @@ struct FramePlan {
 struct SceneFacts {
   bool cpuDevice = false;         // lavapipe and the like: covered-pixel shading by default
   bool microRasterLists = false;  // some draw list the micro-raster may take (opaque, uncapped)
-  bool microRasterFits = false;   // its 64-bit per-pixel buffer fits one storage-buffer range at this size
+  bool microRasterFits = false;   // its 64-bit per-pixel buffer fits one storage-buffer range and texel view at this size
   bool pointLights = false;       // the scene has punctual lights
   bool clusters = false;          // some LOD level has clusters and some draw list a cluster reserve
   bool transparency = false;      // the scene has BLEND objects (the transparency pass tests against the depth)
@@ -92,7 +92,7 @@ ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts)
 bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts);
 // Whether the micro-raster of a frame with these options is resolved rather than merged where the frame allows it
 // (FrameOptions::swResolve; FramePlan::swResolved says whether the frame does).
-bool microRasterResolves(const FrameOptions& options, const SceneFacts& facts);
+bool microRasterResolves(const FrameOptions& options);
 // Whether a frame builds tile light lists: visbuf path, tiled lights asked for, punctual lights to cull.
 bool lightsCulled(const FrameOptions& options, const SceneFacts& facts);
 

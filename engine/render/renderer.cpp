@@ -140,7 +140,7 @@ Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& op
   if (resolveShading(options, facts()) == ShadingMode::Classified) ensureClassify();
   if (microRasterAllowed(options, facts()) && swRaster.ensureBuffer(device, config.width, config.height))
     writeDescriptors();
-  if (microRasterAllowed(options, facts()) && microRasterResolves(options, facts())) shade.createResolve(device, textured);
+  if (microRasterAllowed(options, facts()) && microRasterResolves(options)) shade.createResolve(device, textured);
   const uint32_t w = config.width, h = config.height;
   const bool readAttributes = options.readAttributes && options.path != RenderPath::Forward;
   const VkDeviceSize attributeBytes = VkDeviceSize(w) * h * ATTRIBUTE_FLOATS * sizeof(float);

@@ -136,8 +136,8 @@ struct FrameOptions {
   // full-screen passes), or resolved by the pyramid and the shading, which take the nearer fragment per pixel
   // themselves (the same image). Resolved only where nothing else reads the target or the depth: frames that read
   // IDs back, hand them to a host (record()), cull lights, draw transparency, classify materials or use MSAA always
-  // merge. Auto: resolved on a GPU, merged on a CPU device (lavapipe: the resolve's per-pixel reads cost about what
-  // the merges do; docs/benchmarks.md).
+  // merge. Auto: resolved on both device types (the resolve reads the micro-raster's buffer through a texel view; on
+  // lavapipe that costs less than the two full-screen merges: docs/benchmarks.md).
   SwResolve swResolve = SwResolve::Auto;
   // (0, SW_RASTER_MAX_EXTENT - 2]; unset: the device's (defaultSwRasterPixels): on lavapipe its hardware raster
   // costs about 4x the micro-raster per triangle, so the largest bound pays there (the peer view, 1024x768: 10k

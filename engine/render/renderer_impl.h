@@ -268,7 +268,8 @@ struct Renderer::Impl {
   // What the frame plans depend on, from the scene, the device and the size (frame_plan.h).
   SceneFacts facts() const {
     return {device.isCpu(), swListMask != 0,
-            VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange,
+            VkDeviceSize(config.width) * config.height * 8 <= device.properties().limits.maxStorageBufferRange &&
+                VkDeviceSize(config.width) * config.height <= device.properties().limits.maxTexelBufferElements,
             hasPointLights(),
             std::any_of(listClusterReserve.begin(), listClusterReserve.end(), [](uint32_t r) { return r > 0; }),
             !blendObjects.empty()};

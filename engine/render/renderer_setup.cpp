@@ -103,6 +103,7 @@ void Renderer::Impl::bindPasses() {
   visibility.bind(overdraw);
   if (visibilityMs.layout) visibilityMs.bind(overdraw);
   if (swRaster.created()) swRaster.bind(draws, drawLists);
+  pyramid.bindMicroRaster(swRaster.texels.handle());
   // MSAA frames: the light culling reads the multisampled depth.
   if (hasPointLights()) lightCull.bind(pointLights, descriptorsMsaa ? depthMs : depth, sampler);
   forward.bind(boundLights(), boundLightTiles(), overdraw);
@@ -111,7 +112,8 @@ void Renderer::Impl::bindPasses() {
   if (gbuffer.created()) gbuffer.bind(overdraw);
   // MSAA frames: the shading reads the multisampled IDs.
   const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
-                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes, &ids, &depth};
+                                    descriptorsMsaa ? &idsMs : &ids, sampler,         &color, &attributes,
+                                    &ids,           &depth,                          swRaster.texels.handle()};
   shade.bind(shading);
   if (classify.created()) classify.bind(shading);
   // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.

@@ -14,5 +14,8 @@
 #define SHADE_BINDING_ATTRIBUTES (LIGHTING_BINDINGS + 4)
 #define SHADE_BINDING_DEPTH (LIGHTING_BINDINGS + 5)       // sampler2D: the depth (the SW_RESOLVE variants read it)
 #define SHADE_BINDING_IDS_STORAGE (LIGHTING_BINDINGS + 6) // the single-sampled ID target as a storage image (clear_ids.comp)
+// The micro-raster's buffer as RG32UI texels (bindings_sw_raster.h SW_RASTER_BINDING_VISIBILITY_TEXELS): the SW_RESOLVE
+// variants read it.
+#define SHADE_BINDING_SW_TEXELS (LIGHTING_BINDINGS + 7)
 
 #endif

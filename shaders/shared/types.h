@@ -189,11 +189,8 @@ struct FrameData {
   uint coveredTilesX;
   uint clusterCull;        // 1: the cull pass expands hardware-raster objects into clusters (CULL_CLUSTERS)
   uint earlyClusterOcclusion;  // 1: the early cluster dispatch defers what the previous frame's pyramid hides
-  // Frames whose micro-raster was not merged into the ID target and depth (FramePlan::swResolved): the device
-  // address of its 64-bit buffer (depth bits << 32 | complemented payload, 0: nothing), which the shading's SW_RESOLVE
-  // variants read (visibility_id.glsl resolvedVisibility). 0 otherwise.
-  uint swVisibilityLow;
-  uint swVisibilityHigh;
+  uint framePad0;
+  uint framePad1;
   // The micro-raster's bound on an object's (or cluster's) screen box area per triangle, in pixels (a lane loops over
   // a triangle's box serially, so large triangles belong to the hardware raster): FrameOptions::swRasterArea.
   float swMaxAreaPerTriangle;
@@ -262,12 +259,10 @@ struct PyramidConstants {
   uint srcWidth, srcHeight;
   uint copySource;
   uint reductions;
-  // The first dispatch of a frame whose micro-raster was not merged (FrameData.swResolve): each source texel is the
-  // nearer (the maximum, reverse-Z) of the depth and the micro-raster's depth at the device address (64-bit words,
-  // srcWidth per row).
+  // The first dispatch of a frame whose micro-raster was not merged (FramePlan::swResolved): each source texel is the
+  // nearer (the maximum, reverse-Z) of the depth and the micro-raster's depth (its texel view, srcWidth per row).
   uint swResolve;
-  uint swVisibilityLow, swVisibilityHigh;
-  uint pad0;
+  uint pad[3];
 };
 
 #ifdef __cplusplus

@@ -224,7 +224,7 @@ TEST(DepthPyramid, DispatchesWriteEveryLevelOnce) {
 }
 
 // The micro-raster is resolved by the pyramid and the shading (no merges) only where nothing else reads the ID target
-// or the depth; Auto resolves on a GPU and merges on a CPU device.
+// or the depth; Auto resolves on both device types.
 TEST(FramePlan, MicroRasterResolvedOnlyWhereNothingElseReadsTheTarget) {
   SceneFacts gpu = gpuFacts();
   gpu.pointLights = false;
@@ -233,7 +233,9 @@ TEST(FramePlan, MicroRasterResolvedOnlyWhereNothingElseReadsTheTarget) {
   const FrameHistory none;
   FrameOptions fo;
   EXPECT_TRUE(planFrame(fo, gpu, none).swResolved) << "Auto on a GPU";
-  EXPECT_FALSE(planFrame(fo, cpu, none).swResolved) << "Auto on a CPU device";
+  EXPECT_TRUE(planFrame(fo, cpu, none).swResolved) << "Auto on a CPU device";
+  fo.swResolve = SwResolve::Merge;
+  EXPECT_FALSE(planFrame(fo, cpu, none).swResolved);
   fo.swResolve = SwResolve::Shading;
   EXPECT_TRUE(planFrame(fo, cpu, none).swResolved);
   EXPECT_FALSE(planFrame(fo, gpu, none, /*handsOn=*/true).swResolved) << "record(): the host reads IDs and depth";
