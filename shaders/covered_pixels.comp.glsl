@@ -1,8 +1,9 @@
 #version 460
 // Covered-pixel list (shade_pass, the ubershader's covered-pixel dispatch): one thread per 8x8 shading tile counts
 // the tile's pixels that show something, takes that many entries (one atomic per subgroup) and lists them
-// (x | y << 16, row by row; the SW_RESOLVE variant sets COVERED_PIXEL_MICRO_RASTER where the micro-raster's
-// unmerged fragment wins); then (pc.variant 1, one thread) the shading dispatch's VkDispatchIndirectCommand: one
+// (x | y << 16, row by row; the SW_RESOLVE variant sets COVERED_PIXEL_MICRO_RASTER where the unmerged micro-raster
+// drew, and the shading decides which of its and the raster's fragments is nearer: the depth is read per covered
+// pixel there, not per pixel of the frame here); then (pc.variant 1, one thread) the shading dispatch's VkDispatchIndirectCommand: one
 // workgroup per SHADE_TILE_X x SHADE_TILE_Y listed pixels, in rows of CLASSIFY_DISPATCH_WIDTH. The shading pass then
 // runs one thread per covered pixel: the background (cleared before) costs nothing, and no lane shades a background
 // pixel of a covered tile (lavapipe runs every lane of a batch through the whole shading code, masked or not).
@@ -38,15 +39,15 @@ void main() {
     size = min(ivec2(SHADE_TILE_X, SHADE_TILE_Y), ivec2(frame.viewport.xy) - origin);
   }
 #if SW_RESOLVE
-  // The tile's pixels that show something, and those of them where the micro-raster's fragment wins, as 64-bit masks
-  // in two words (bit y * SHADE_TILE_X + x).
+  // The tile's pixels that show something, and those of them where the micro-raster drew, as 64-bit masks in two
+  // words (bit y * SHADE_TILE_X + x).
   uvec2 shown = uvec2(0u), micro = uvec2(0u);
   for (int y = 0; y < size.y; ++y)
     for (int x = 0; x < size.x; ++x) {
       ivec2 p = origin + ivec2(x, y);
       uint bit = uint(y * SHADE_TILE_X + x), word = bit >> 5u, mask = 1u << (bit & 31u);
       bool drawn = texelFetch(visibility, p, 0).x != VIS_NOTHING;
-      if (microRasterNearer(p, microRasterDepthBits(p), drawn)) micro[word] |= mask;
+      if (microRasterDepthBits(p) != 0u) micro[word] |= mask;
       if (drawn) shown[word] |= mask;
     }
   shown |= micro;

@@ -165,7 +165,8 @@ Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
   vec4 base = m.baseColor * si.color * texel[TEXTURE_SLOT_BASE_COLOR];
   vec4 mr = texel[TEXTURE_SLOT_METALLIC_ROUGHNESS];
   float occlusion = 1.0;
-  if (m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
+  // (untextured variants: no occlusion texture, and no fetch of its slot per pixel)
+  if (VB_TEXTURED != 0 && m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
     occlusion = 1.0 + m.params.z * (texel[TEXTURE_SLOT_OCCLUSION].r - 1.0);
   vec3 emissive = m.emissive.rgb * texel[TEXTURE_SLOT_EMISSIVE].rgb;
   TextureSlotData ns = m.textures[TEXTURE_SLOT_NORMAL];

@@ -141,9 +141,8 @@ void main() {
   shadeMultisampledPixel(p);
 #else
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
-#if SW_RESOLVE && COVERED  // (the list says where the micro-raster's unmerged fragment wins)
-  uvec2 raw = (pixel & COVERED_PIXEL_MICRO_RASTER) != 0u ? microRasterId(microRasterWord(p).x)
-                                                         : texelFetch(visibility, p, 0).xy;
+#if SW_RESOLVE && COVERED  // (the list says where the unmerged micro-raster drew)
+  uvec2 raw = (pixel & COVERED_PIXEL_MICRO_RASTER) != 0u ? resolvedVisibility(p) : texelFetch(visibility, p, 0).xy;
 #elif SW_RESOLVE
   uvec2 raw = resolvedVisibility(p);
 #else

@@ -303,8 +303,8 @@
 // of CLASSIFY_DISPATCH_WIDTH, as the classified one.
 #define COVERED_PIXELS_HEADER 4u
 #define COVERED_TILES_WORKGROUP 64u  // covered_pixels.comp: shading tiles per workgroup (one thread lists a tile)
-// A listed pixel (x | y << 16, x below 16,384) with this bit set shows the micro-raster's fragment, which was not
-// merged into the ID target (FramePlan::swResolved): the shading reads its ID from the micro-raster's buffer.
+// A listed pixel (x | y << 16, x below 16,384) with this bit set is one where the micro-raster drew and was not
+// merged into the ID target (FramePlan::swResolved): the shading takes the nearer of its fragment and the target's.
 #define COVERED_PIXEL_MICRO_RASTER 0x8000u
 
 // Per-pixel attribute record written by the shade_attributes variant (FrameOptions::readAttributes):
