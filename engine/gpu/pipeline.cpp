@@ -336,11 +336,19 @@ uint32_t TimestampPool::begin(VkCommandBuffer cmd, const std::string& name) {
   if (slot >= max_) vkCheckFailed("TimestampPool::begin (too many passes)", VK_ERROR_TOO_MANY_OBJECTS, __FILE__, __LINE__);
   names_.push_back(name);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, slot * 2);
+  stampNow(cmd);
   return slot;
 }
 
 void TimestampPool::end(VkCommandBuffer cmd, uint32_t slot) {
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, slot * 2 + 1);
+  stampNow(cmd);
+}
+
+void TimestampPool::stampNow(VkCommandBuffer cmd) const {
+  if (!device_.isCpu()) return;
+  VkDependencyInfo none{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};  // (no barrier: lavapipe flushes on any)
+  vkCmdPipelineBarrier2(cmd, &none);
 }
 
 std::vector<std::pair<std::string, double>> TimestampPool::read() {
