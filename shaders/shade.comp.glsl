@@ -143,10 +143,7 @@ void main() {
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
 #if SW_RESOLVE && COVERED  // (the list says where the unmerged micro-raster drew)
   uvec2 raw = texelFetch(visibility, p, 0).xy;
-  if ((pixel & COVERED_PIXEL_MICRO_RASTER) != 0u) {
-    uvec2 sw = microRasterWord(p);
-    if (microRasterNearer(p, sw.y, raw.x != VIS_NOTHING)) raw = microRasterId(sw.x);
-  }
+  if ((pixel & COVERED_PIXEL_MICRO_RASTER) != 0u) raw = resolveMicroRaster(p, raw);
 #elif SW_RESOLVE
   uvec2 raw = resolvedVisibility(p);
 #else

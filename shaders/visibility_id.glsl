@@ -60,12 +60,13 @@ uvec2 microRasterId(uint complemented) {
   return uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));
 }
 
-// The raw ID at p: the target's, or where the micro-raster's fragment is nearer, the micro-raster's.
-uvec2 resolvedVisibility(ivec2 p) {
-  uvec2 raw = texelFetch(visibility, p, 0).xy;
+// The raw ID at p given the target's raw ID there: the micro-raster's where its fragment is nearer.
+uvec2 resolveMicroRaster(ivec2 p, uvec2 raw) {
   uvec2 sw = microRasterWord(p);
   return microRasterNearer(p, sw.y, raw.x != VIS_NOTHING) ? microRasterId(sw.x) : raw;
 }
+// The raw ID at p: the target's, or where the micro-raster's fragment is nearer, the micro-raster's.
+uvec2 resolvedVisibility(ivec2 p) { return resolveMicroRaster(p, texelFetch(visibility, p, 0).xy); }
 #endif
 
 // The draw slot and the triangle in its LOD of a visibility texel; false where nothing was drawn.

@@ -112,8 +112,8 @@ void Renderer::Impl::bindPasses() {
   if (gbuffer.created()) gbuffer.bind(overdraw);
   // MSAA frames: the shading reads the multisampled IDs.
   const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
-                                    descriptorsMsaa ? &idsMs : &ids, sampler,         &color, &attributes,
-                                    &ids,           &depth,                          swRaster.texels.handle()};
+                                    descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes, &ids, &depth,
+                                    swRaster.texels.handle()};
   shade.bind(shading);
   if (classify.created()) classify.bind(shading);
   // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.
