@@ -4,7 +4,7 @@
 // hardware raster left, and its ID in the target's encoding -- so the pyramid, the late phase, the shading and the
 // transparency pass see one target. On equal depth the hardware fragment stays.
 #extension GL_GOOGLE_include_directive : require
-#include "common.glsl"
+#include "sw_payload.glsl"
 #include "shared/bindings_sw_raster.h"
 
 layout(set = 1, binding = SW_RASTER_BINDING_VISIBILITY_TEXELS) uniform usamplerBuffer swTexels;
@@ -20,11 +20,10 @@ void main() {
   uvec2 v = texelFetch(swTexels, p.y * int(frame.viewport.x) + p.x).xy;
   uint depthBits = v.y;
   if (depthBits == 0u) discard;
-  uint payload = ~v.x;  // (stored complemented: equal depths keep the lowest payload)
   gl_FragDepth = uintBitsToFloat(depthBits);
 #if WIDE_IDS
-  outId = uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));
+  outId = microRasterId(v.x);
 #else
-  outId = payload;
+  outId = microRasterId(v.x).x;
 #endif
 }

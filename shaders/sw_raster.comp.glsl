@@ -14,7 +14,7 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
-#include "common.glsl"
+#include "sw_payload.glsl"
 #include "shared/bindings_sw_raster.h"
 
 layout(local_size_x = SW_RASTER_WORKGROUP) in;
@@ -110,7 +110,7 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
     area = -area;
   }
   int bias0 = edgeBias(b, c), bias1 = edgeBias(c, a), bias2 = edgeBias(a, b);
-  uint payload = frame.wideIds != 0u ? (slot << frame.swTriangleBits) | t : ((slot << frame.triangleBits) | t) + 1u;
+  uint payload = microRasterPayload(slot, t);
   // Equal depths keep the lowest payload, the first in draw order (lower slot, then lower triangle), as the
   // hardware raster's depth test keeps the first fragment: atomicMax over the payload's complement.
   uint rank = ~payload;

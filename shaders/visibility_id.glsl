@@ -3,7 +3,7 @@
 #ifndef VISBUF_VISIBILITY_ID_GLSL
 #define VISBUF_VISIBILITY_ID_GLSL
 
-#include "common.glsl"
+#include "sw_payload.glsl"
 #include "shared/bindings_shade.h"
 #ifndef MSAA
 #define MSAA 0
@@ -51,13 +51,6 @@ uint microRasterDepthBits(ivec2 p) { return microRasterWord(p).y; }
 bool microRasterNearer(ivec2 p, uint depthBits, bool drawn) {
   if (depthBits == 0u) return false;
   return !drawn || uintBitsToFloat(depthBits) > texelFetch(visibilityDepth, p, 0).r;
-}
-
-// The micro-raster's complemented payload as a raw ID of the target's encoding (as sw_merge.frag writes it).
-uvec2 microRasterId(uint complemented) {
-  uint payload = ~complemented;
-  if (frame.wideIds == 0u) return uvec2(payload, 0u);
-  return uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));
 }
 
 // The raw ID at p given the target's raw ID there: the micro-raster's where its fragment is nearer.
