@@ -10,6 +10,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#include "uniform_branch.glsl"
 #include "visibility_id.glsl"
 
 layout(local_size_x = COVERED_TILES_WORKGROUP) in;
@@ -19,7 +20,7 @@ layout(std430, set = 0, binding = SCENE_BINDING_STATS) buffer StatsBlock { uint 
 
 void main() {
   CoveredPixels list = CoveredPixels(uvec2(frame.coveredPixelsLow, frame.coveredPixelsHigh));
-  if (pc.variant == 1u) {  // the indirect dispatch, once every pixel is listed
+  if (uniformBranch(pc.variant) == 1u) {  // the indirect dispatch, once every pixel is listed
     if (gl_GlobalInvocationID.x != 0u) return;
     uint groups = (list.words[3] + SHADE_TILE_X * SHADE_TILE_Y - 1u) / (SHADE_TILE_X * SHADE_TILE_Y);
     list.words[0] = min(groups, CLASSIFY_DISPATCH_WIDTH);

@@ -7,15 +7,17 @@
 #include "common.glsl"
 
 // Triangle t of draw `slot`. Lower payloads are earlier in draw order (lower slot, then lower triangle).
+// (Selects, not branches, on the frame's values: lavapipe 22 recompiles a shader at every bind whose branch
+// conditions are uniform values alone -- docs/benchmarks.md, "Uniform branches on lavapipe".)
 uint microRasterPayload(uint slot, uint t) {
-  return frame.wideIds != 0u ? (slot << frame.swTriangleBits) | t : ((slot << frame.triangleBits) | t) + 1u;
+  return mix(((slot << frame.triangleBits) | t) + 1u, (slot << frame.swTriangleBits) | t, frame.wideIds != 0u);
 }
 
 // The raw ID (x, y as the target stores them; narrow IDs: y is 0) of a complemented payload.
 uvec2 microRasterId(uint complemented) {
   uint payload = ~complemented;
-  if (frame.wideIds == 0u) return uvec2(payload, 0u);
-  return uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));
+  uvec2 wide = uvec2((payload >> frame.swTriangleBits) + 1u, payload & ((1u << frame.swTriangleBits) - 1u));
+  return mix(uvec2(payload, 0u), wide, bvec2(frame.wideIds != 0u));
 }
 
 #endif

@@ -67,14 +67,10 @@ bool decodeVisibility(uvec2 raw, out uint slot, out uint tri) {
   slot = 0u;
   tri = 0u;
   if (raw.x == VIS_NOTHING) return false;
-  if (frame.wideIds != 0u) {
-    slot = raw.x - 1u;
-    tri = raw.y;
-  } else {
-    uint v = raw.x - 1u;
-    slot = v >> frame.triangleBits;
-    tri = v & ((1u << frame.triangleBits) - 1u);
-  }
+  uint v = raw.x - 1u;  // (selects: see sw_payload.glsl)
+  bool wide = frame.wideIds != 0u;
+  slot = mix(v >> frame.triangleBits, v, wide);
+  tri = mix(v & ((1u << frame.triangleBits) - 1u), raw.y, wide);
   return true;
 }
 
