@@ -7,6 +7,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shared/types.h"
 #include "shared/bindings_classify.h"
+#include "uniform_branch.glsl"
 
 layout(local_size_x = CLASSIFY_SCAN_WORKGROUP) in;
 layout(push_constant) uniform Push { PassConstants pc; };  // material: the scene's material count
@@ -23,9 +24,10 @@ void main() {
   const uint lane = gl_LocalInvocationIndex;
   if (lane == 0u) carry = present = 0u;
   barrier();
-  for (uint base = 0u; base < pc.material; base += CLASSIFY_SCAN_WORKGROUP) {
+  const uint materials = uniformBranch(pc.material);
+  for (uint base = 0u; base < materials; base += CLASSIFY_SCAN_WORKGROUP) {
     const uint i = base + lane;
-    const uint tiles = i < pc.material ? materialTiles[i].tiles : 0u;
+    const uint tiles = i < materials ? materialTiles[i].tiles : 0u;
     if (tiles > 0u) atomicAdd(present, 1u);
     sums[lane] = tiles;
     barrier();
@@ -35,7 +37,7 @@ void main() {
       sums[lane] += add;
       barrier();
     }
-    if (i < pc.material) {
+    if (i < materials) {
       materialTiles[i].first = carry + sums[lane] - tiles;
       materialTiles[i].groupsX = min(tiles, CLASSIFY_DISPATCH_WIDTH);
       materialTiles[i].groupsY = (tiles + CLASSIFY_DISPATCH_WIDTH - 1u) / CLASSIFY_DISPATCH_WIDTH;

@@ -8,6 +8,7 @@
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "material.glsl"
+#include "uniform_branch.glsl"
 #include "shared/barycentrics.h"
 #include "visibility_id.glsl"
 #include "shared/bindings_classify.h"
@@ -66,7 +67,7 @@ vec3 shadeVisible(uvec2 raw, ivec2 p, vec2 at) {
   drawAt(slot, firstIndex, vertexOffset, object);
   ObjectData o = objectAt(object);
 #if CLASSIFIED
-  o.materialIndex = pc.material;  // the same value (main() checked it), now known to be uniform over the dispatch
+  o.materialIndex = uniformBranch(pc.material);  // the value main() checked, known to be uniform over the dispatch
 #endif
   uint base = firstIndex + 3u * tri;
   uvec3 local = triangleIndices(base);
