@@ -27,7 +27,7 @@ vec2 standardSamplePosition(uint samples, uint i) {
 
 // Resolves pixel p; true when its samples differ (the per-sample path).
 bool resolvePixel(ivec2 p) {
-  const uint n = frame.msaaSamples;
+  const uint n = uniformBranch(frame.msaaSamples);  // (uniform_branch.glsl)
   uvec2 ids[MAX_MSAA_SAMPLES];
   bool same = true;
   for (uint i = 0u; i < n; ++i) {
