@@ -7,8 +7,7 @@
 #include "common.glsl"
 
 // Triangle t of draw `slot`. Lower payloads are earlier in draw order (lower slot, then lower triangle).
-// (Selects, not branches, on the frame's values: lavapipe 22 recompiles a shader at every bind whose branch
-// conditions are uniform values alone -- docs/benchmarks.md, "Uniform branches on lavapipe".)
+// (Selects, not branches, on the frame's values: uniform_branch.glsl says why.)
 uint microRasterPayload(uint slot, uint t) {
   return mix(((slot << frame.triangleBits) | t) + 1u, (slot << frame.swTriangleBits) | t, frame.wideIds != 0u);
 }
