@@ -3,8 +3,9 @@
 // the tile's pixels that show something, takes that many entries (one atomic per subgroup) and lists them
 // (x | y << 16, row by row; the SW_RESOLVE variant sets COVERED_PIXEL_MICRO_RASTER where the unmerged micro-raster
 // drew, and the shading decides which of its and the raster's fragments is nearer: the depth is read per covered
-// pixel there, not per pixel of the frame here); then (pc.variant 1, one thread) the shading dispatch's VkDispatchIndirectCommand: one
-// workgroup per SHADE_TILE_X x SHADE_TILE_Y listed pixels, in rows of CLASSIFY_DISPATCH_WIDTH. The shading pass then
+// pixel there, not per pixel of the frame here); then (pc.variant 1, one thread) the shading dispatch's
+// VkDispatchIndirectCommand: one workgroup per SHADE_TILE_X x SHADE_TILE_Y listed pixels, in rows of
+// CLASSIFY_DISPATCH_WIDTH. The shading pass then
 // runs one thread per covered pixel: the background (cleared before) costs nothing, and no lane shades a background
 // pixel of a covered tile (lavapipe runs every lane of a batch through the whole shading code, masked or not).
 #extension GL_GOOGLE_include_directive : require

@@ -67,7 +67,7 @@ bool decodeVisibility(uvec2 raw, out uint slot, out uint tri) {
   slot = 0u;
   tri = 0u;
   if (raw.x == VIS_NOTHING) return false;
-  uint v = raw.x - 1u;  // (selects: see sw_payload.glsl)
+  uint v = raw.x - 1u;  // (selects, not a branch: uniform_branch.glsl says why)
   bool wide = frame.wideIds != 0u;
   slot = mix(v >> frame.triangleBits, v, wide);
   tri = mix(v & ((1u << frame.triangleBits) - 1u), raw.y, wide);
