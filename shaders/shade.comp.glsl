@@ -32,6 +32,13 @@ layout(std430, set = 1, binding = CLASSIFY_BINDING_TILE_LIST) readonly buffer Ti
 #endif
 #if COVERED  // (buffer references: common.glsl)
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer CoveredPixelList { uint words[]; };
+layout(set = 1, binding = SHADE_BINDING_COVERED_TEXELS) uniform usamplerBuffer coveredTexels;
+// Word i of the covered-pixel list: through its texel view where VB_TEXELS (on lavapipe a buffer-reference read is a
+// scalar load per lane, about 4.6 ms a read per pixel at 100k kittens; a texel, one load for the batch).
+uint coveredWord(uint i) {
+  if (VB_TEXELS != 0u) return texelFetch(coveredTexels, int(i)).x;
+  return CoveredPixelList(uvec2(frame.coveredPixelsLow, frame.coveredPixelsHigh)).words[i];
+}
 #endif
 #if WRITE_ATTRIBUTES
 layout(std430, set = 1, binding = SHADE_BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
@@ -129,11 +136,10 @@ void main() {
   ivec2 p = ivec2(tile & 0xffffu, tile >> 16) * ivec2(SHADE_TILE_X, SHADE_TILE_Y) + ivec2(gl_LocalInvocationID.xy);
 #elif COVERED
   // One thread per covered pixel (covered_pixels.comp listed them; workgroups in rows of CLASSIFY_DISPATCH_WIDTH).
-  CoveredPixelList list = CoveredPixelList(uvec2(frame.coveredPixelsLow, frame.coveredPixelsHigh));
   uint entry = (gl_WorkGroupID.y * CLASSIFY_DISPATCH_WIDTH + gl_WorkGroupID.x) * (SHADE_TILE_X * SHADE_TILE_Y) +
                gl_LocalInvocationIndex;
-  if (entry >= list.words[3]) return;
-  uint pixel = list.words[COVERED_PIXELS_HEADER + entry];
+  if (entry >= coveredWord(3u)) return;
+  uint pixel = coveredWord(COVERED_PIXELS_HEADER + entry);
   ivec2 p = ivec2(pixel & 0x7fffu, pixel >> 16);
 #else
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);

@@ -18,7 +18,8 @@ std::vector<gpu::DescriptorBinding> shadeBindings() {
           {SHADE_BINDING_ATTRIBUTES, storage},
           {SHADE_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
           {SHADE_BINDING_IDS_STORAGE, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {SHADE_BINDING_SW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}};
+          {SHADE_BINDING_SW_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+          {SHADE_BINDING_COVERED_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}};
 }
 
 void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
@@ -31,7 +32,8 @@ void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in) {
       .buffer(SHADE_BINDING_ATTRIBUTES, in.attributes->handle())
       .image(SHADE_BINDING_DEPTH, in.depth->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, in.sampler)
       .image(SHADE_BINDING_IDS_STORAGE, in.singleIds->view(), VK_IMAGE_LAYOUT_GENERAL)
-      .texels(SHADE_BINDING_SW_TEXELS, in.swTexels);
+      .texels(SHADE_BINDING_SW_TEXELS, in.swTexels)
+      .texels(SHADE_BINDING_COVERED_TEXELS, in.coveredTexels);
 }
 
 ShadePass ShadePass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec) {

@@ -25,6 +25,7 @@ struct ShadeInputs {
   const gpu::Image* depth = nullptr;        // the single-sampled depth, shader-read layout (read where the frame
                                             // resolves the micro-raster instead of merging it: FrameData.swResolve)
   VkBufferView swTexels = VK_NULL_HANDLE;   // the micro-raster's buffer as RG32UI texels (read likewise)
+  VkBufferView coveredTexels = VK_NULL_HANDLE;  // the covered-pixel list as R32UI texels
 };
 std::vector<gpu::DescriptorBinding> shadeBindings();
 void writeShadeBindings(gpu::DescriptorWriter& w, const ShadeInputs& in);

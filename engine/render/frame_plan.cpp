@@ -4,7 +4,8 @@ namespace visbuf {
 
 ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts) {
   if (options.path != RenderPath::Visbuf || options.readAttributes || options.msaa > 1) return ShadingMode::Uber;
-  return options.shading == ShadingMode::Auto ? defaultShadingFor(facts.cpuDevice) : options.shading;
+  const ShadingMode mode = options.shading == ShadingMode::Auto ? defaultShadingFor(facts.cpuDevice) : options.shading;
+  return mode == ShadingMode::Covered && !facts.coveredListFits ? ShadingMode::Uber : mode;
 }
 
 bool microRasterAllowed(const FrameOptions& options, const SceneFacts& facts) {

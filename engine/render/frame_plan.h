@@ -43,6 +43,7 @@ struct SceneFacts {
   bool pointLights = false;       // the scene has punctual lights
   bool clusters = false;          // some LOD level has clusters and some draw list a cluster reserve
   bool transparency = false;      // the scene has BLEND objects (the transparency pass tests against the depth)
+  bool coveredListFits = true;    // the covered-pixel list is readable at this size (its texel view, where used, holds it)
 };
 
 // A pyramid or micro-raster that did nothing is skipped for this many frames, then probed again.

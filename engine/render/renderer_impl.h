@@ -189,6 +189,7 @@ struct Renderer::Impl {
   gpu::Buffer stats;        // uint[STAT_COUNT]
   gpu::Image ids, depth, color;
   gpu::Buffer coveredPixels;  // covered-pixel shading: COVERED_PIXELS_HEADER uints + one per pixel
+  gpu::BufferView coveredTexels;  // the same as R32UI texels (read so where the frame shaders use texel views)
   // MSAA (FrameOptions::msaa > 1): multisampled IDs and depth (visbuf, forward shares the depth) and forward
   // colour, created by the first frame at a count (msaaSamples) and dropped by a resize; the single-sample ids and
   // depth above stay allocated (the descriptor set's stand-ins). Pipelines for that count likewise.
@@ -272,7 +273,9 @@ struct Renderer::Impl {
                 VkDeviceSize(config.width) * config.height <= device.properties().limits.maxTexelBufferElements,
             hasPointLights(),
             std::any_of(listClusterReserve.begin(), listClusterReserve.end(), [](uint32_t r) { return r > 0; }),
-            !blendObjects.empty()};
+            !blendObjects.empty(),
+            textured.texels == 0u || COVERED_PIXELS_HEADER + VkDeviceSize(config.width) * config.height <=
+                                         device.properties().limits.maxTexelBufferElements};
   }
   FrameHistory frameHistory;  // what earlier frames left that later plans depend on
 

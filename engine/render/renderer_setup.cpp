@@ -51,8 +51,14 @@ void Renderer::Impl::createTargets(uint32_t width, uint32_t height) {
                      VK_IMAGE_ASPECT_COLOR_BIT);
   coveredPixels = gpu::Buffer(device, (COVERED_PIXELS_HEADER + VkDeviceSize(width) * height) * sizeof(uint32_t),
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
+                                 VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                              gpu::MemoryUse::DeviceLocal);
+  // (as much of it as one texel view holds: SceneFacts::coveredListFits says whether that is all of it)
+  coveredTexels = gpu::BufferView(device, coveredPixels, VK_FORMAT_R32_UINT, 0,
+                                  std::min<VkDeviceSize>(COVERED_PIXELS_HEADER + VkDeviceSize(width) * height,
+                                                         device.properties().limits.maxTexelBufferElements) *
+                                      sizeof(uint32_t));
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
   colorReadback = gpu::Buffer(device, pixels * 8, VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUse::HostVisible);
   forwardIds.reset();
@@ -113,7 +119,7 @@ void Renderer::Impl::bindPasses() {
   // MSAA frames: the shading reads the multisampled IDs.
   const passes::ShadeInputs shading{&boundLights(), &boundLightTiles(), &draws, drawTexels.handle(),
                                     descriptorsMsaa ? &idsMs : &ids, sampler, &color, &attributes, &ids, &depth,
-                                    swRaster.texels.handle()};
+                                    swRaster.texels.handle(), coveredTexels.handle()};
   shade.bind(shading);
   if (classify.created()) classify.bind(shading);
   // G-buffer targets: until a G-buffer frame creates them (again, after a resize), the depth stands in.

@@ -6,7 +6,7 @@
 
 #include "bindings_shade.h"
 
-#define CLASSIFY_BINDING_MATERIAL_TILES (SHADE_BINDING_SW_TEXELS + 1)    // CLASSIFY_HEADER uints + MaterialTiles[]
-#define CLASSIFY_BINDING_TILE_LIST (SHADE_BINDING_SW_TEXELS + 2)          // uint per (tile, material) pair
+#define CLASSIFY_BINDING_MATERIAL_TILES (SHADE_BINDING_COVERED_TEXELS + 1)    // CLASSIFY_HEADER uints + MaterialTiles[]
+#define CLASSIFY_BINDING_TILE_LIST (SHADE_BINDING_COVERED_TEXELS + 2)          // uint per (tile, material) pair
 
 #endif

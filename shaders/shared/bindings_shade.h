@@ -17,5 +17,7 @@
 // The micro-raster's buffer as RG32UI texels (bindings_sw_raster.h SW_RASTER_BINDING_VISIBILITY_TEXELS): the SW_RESOLVE
 // variants read it.
 #define SHADE_BINDING_SW_TEXELS (LIGHTING_BINDINGS + 7)
+// The covered-pixel list (FrameData.coveredPixels*) as R32UI texels: the covered shading reads it so where VB_TEXELS.
+#define SHADE_BINDING_COVERED_TEXELS (LIGHTING_BINDINGS + 8)
 
 #endif

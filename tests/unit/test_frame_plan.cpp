@@ -28,6 +28,13 @@ TEST(FramePlan, PathsDecideCullingShadingAndLights) {
   p = planFrame(fo, cpu, none);
   EXPECT_EQ(p.shading, ShadingMode::Covered) << "CPU devices shade the covered pixels only";
   EXPECT_TRUE(p.coveredPixels);
+  SceneFacts huge = cpu;
+  huge.coveredListFits = false;  // a frame whose covered-pixel list outgrows its texel view
+  EXPECT_EQ(planFrame(fo, huge, none).shading, ShadingMode::Uber) << "Auto";
+  fo.shading = ShadingMode::Covered;
+  EXPECT_EQ(planFrame(fo, huge, none).shading, ShadingMode::Uber) << "asked for";
+  EXPECT_EQ(planFrame(fo, cpu, none).shading, ShadingMode::Covered);
+  fo.shading = ShadingMode::Auto;
   fo.readAttributes = true;  // the attribute record exists in the ubershader only
   p = planFrame(fo, cpu, none);
   EXPECT_EQ(p.shading, ShadingMode::Uber);
