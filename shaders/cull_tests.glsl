@@ -117,6 +117,14 @@ float farthestDepth(ivec2 a, ivec2 b, int level) {
   return farthest;
 }
 
+// farthestDepth where [a, b] spans at most 2x2 texels of the level: four fetches, no loop (lavapipe runs a loop with
+// per-lane bounds as often as its longest lane needs, and keeps a mask per pass).
+float farthestDepth2x2(ivec2 a, ivec2 b, int level) {
+  ivec2 ta = a >> level, tb = b >> level;
+  return min(min(texelFetch(pyramid, ta, level).r, texelFetch(pyramid, ivec2(tb.x, ta.y), level).r),
+             min(texelFetch(pyramid, ivec2(ta.x, tb.y), level).r, texelFetch(pyramid, tb, level).r));
+}
+
 // 0: visible, 1: occluded by the pyramid, 2: covers no pixel centre, 4: not proved occluded at the coarse level
 // where a finer one exists (to the refinement list; `refine`: the refinement dispatch's test, 0 or 1). rect, v,
 // rr, lo, hi: screenRect's.
@@ -151,7 +159,10 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, b
   // holds one of them).
   int fine = min(max(level - 3, PYRAMID_FIRST_TESTED_LEVEL), top);
   if (refine) return nearest < farthestDepth(a, b, fine) ? 1u : 0u;
-  if (nearest < farthestDepth(a, b, level)) return 1u;
+  bool spans2x2 = all(lessThanEqual((b >> level) - (a >> level), ivec2(1)));  // (not where the top level capped it)
+  float farthest = spans2x2 ? farthestDepth2x2(a, b, level) : 1.0;
+  if (!spans2x2) farthest = farthestDepth(a, b, level);
+  if (nearest < farthest) return 1u;
   return fine < level ? 4u : 0u;
 }
 
