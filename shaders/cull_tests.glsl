@@ -160,9 +160,7 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, b
   int fine = min(max(level - 3, PYRAMID_FIRST_TESTED_LEVEL), top);
   if (refine) return nearest < farthestDepth(a, b, fine) ? 1u : 0u;
   bool spans2x2 = all(lessThanEqual((b >> level) - (a >> level), ivec2(1)));  // (not where the top level capped it)
-  float farthest = spans2x2 ? farthestDepth2x2(a, b, level) : 1.0;
-  if (!spans2x2) farthest = farthestDepth(a, b, level);
-  if (nearest < farthest) return 1u;
+  if (nearest < (spans2x2 ? farthestDepth2x2(a, b, level) : farthestDepth(a, b, level))) return 1u;
   return fine < level ? 4u : 0u;
 }
 

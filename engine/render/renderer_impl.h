@@ -45,6 +45,10 @@ namespace visbuf {
 namespace {
 
 constexpr VkClearColorValue kBackground{{kBackgroundColor[0], kBackgroundColor[1], kBackgroundColor[2], kBackgroundColor[3]}};
+// The covered-pixel list's words at a target size: its header, then one per pixel (covered_pixels.comp).
+constexpr VkDeviceSize coveredListWords(uint32_t width, uint32_t height) {
+  return COVERED_PIXELS_HEADER + VkDeviceSize(width) * height;
+}
 constexpr uint32_t kCommandBuffers = 20;  // one per recorded pass, at most 18: setup, skin, 2 x (cull, raster,
                                           // micro-raster, merge), pyramid, light cull, classify, shade (or G-buffer
                                           // lighting), sample IDs, transparent, counters, readback
@@ -274,7 +278,7 @@ struct Renderer::Impl {
             hasPointLights(),
             std::any_of(listClusterReserve.begin(), listClusterReserve.end(), [](uint32_t r) { return r > 0; }),
             !blendObjects.empty(),
-            textured.texels == 0u || COVERED_PIXELS_HEADER + VkDeviceSize(config.width) * config.height <=
+            textured.texels == 0u || coveredListWords(config.width, config.height) <=
                                          device.properties().limits.maxTexelBufferElements};
   }
   FrameHistory frameHistory;  // what earlier frames left that later plans depend on

@@ -49,14 +49,14 @@ void Renderer::Impl::createTargets(uint32_t width, uint32_t height) {
                      VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
                          VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                      VK_IMAGE_ASPECT_COLOR_BIT);
-  coveredPixels = gpu::Buffer(device, (COVERED_PIXELS_HEADER + VkDeviceSize(width) * height) * sizeof(uint32_t),
+  coveredPixels = gpu::Buffer(device, coveredListWords(width, height) * sizeof(uint32_t),
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
                                  VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                              gpu::MemoryUse::DeviceLocal);
   // (as much of it as one texel view holds: SceneFacts::coveredListFits says whether that is all of it)
   coveredTexels = gpu::BufferView(device, coveredPixels, VK_FORMAT_R32_UINT, 0,
-                                  std::min<VkDeviceSize>(COVERED_PIXELS_HEADER + VkDeviceSize(width) * height,
+                                  std::min<VkDeviceSize>(coveredListWords(width, height),
                                                          device.properties().limits.maxTexelBufferElements) *
                                       sizeof(uint32_t));
   const VkDeviceSize pixels = VkDeviceSize(width) * height;
