@@ -40,6 +40,11 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
                  "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
                  "assigned to objects by hash (material classification's many-material scenes)")
       ->check(unsignedIn(0, UINT32_MAX));
+  app.add_option("--object-order", o.objectOrder,
+                 "spatial: number the objects along a Morton curve of their positions once the scene is built (the "
+                 "same image, faster GPU-driven passes) | as-built: as the generator or the file made them")
+      ->check(CLI::IsMember({"spatial", "as-built"}))
+      ->capture_default_str();
 }
 
 namespace {
@@ -72,6 +77,8 @@ Result<Scene> loadScene(const SceneOptions& o) {
   }
   scatterPointLights(*scene, o.lights, o.seed);
   if (o.noSun) scene->lightIntensity = 0.0f;
+  // Last, so that the materials and lights above (placed by object index) are those of the scene as built.
+  if (o.objectOrder == "spatial") orderObjectsSpatially(*scene);
   return scene;
 }
 

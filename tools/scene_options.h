@@ -21,6 +21,7 @@ struct SceneOptions {
   uint32_t materials = 0;       // generated layouts: replace the materials with N generated ones (applyGeneratedMaterials)
   std::vector<std::string> allowUriRoots;        // glTF: more folders its uris may point into (--allow-uri-root)
   uint64_t maxImagePixels = uint64_t{64} << 20;  // glTF: per-image pixel budget (--max-image-pixels)
+  std::string objectOrder = "spatial";           // spatial (orderObjectsSpatially) | as-built (--object-order)
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -22,6 +24,62 @@ double maxScaleOf(const glm::dmat4& m) {
   for (int i = 0; i < 3; ++i)
     best = std::max(best, std::abs(ata[0][i]) + std::abs(ata[1][i]) + std::abs(ata[2][i]));
   return std::sqrt(best) * (1.0 + 1e-6);
+}
+
+namespace {
+// Bit i of x to bit 3 i (x below 2^21): one coordinate spread out for a 63-bit Morton code.
+uint64_t spreadBits3(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+}  // namespace
+
+std::vector<uint32_t> spatialObjectOrder(const Scene& scene) {
+  const size_t n = scene.objects.size();
+  std::vector<glm::dvec3> centres(n);
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (size_t i = 0; i < n; ++i) {
+    const Object& o = scene.objects[i];  // (an unchecked scene's bad mesh reference: its origin)
+    centres[i] = o.mesh < scene.meshes.size() ? glm::dvec3(objectBoundsWorld(scene, o)) : glm::dvec3(o.transform[3]);
+    lo = glm::min(lo, centres[i]);
+    hi = glm::max(hi, centres[i]);
+  }
+  const double extent = n ? std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) : 0.0;
+  const double cells = double((1u << 21) - 1);
+  const double scale = extent > 0.0 && std::isfinite(extent) ? cells / extent : 0.0;  // (non-finite: one cell)
+  std::vector<std::pair<uint64_t, uint32_t>> keys(n);
+  for (size_t i = 0; i < n; ++i) {
+    auto cell = [&](int a) {
+      const double q = (centres[i][a] - lo[a]) * scale;
+      return std::isfinite(q) ? uint64_t(std::clamp(q, 0.0, cells)) : uint64_t{0};
+    };
+    keys[i] = {spreadBits3(cell(0)) | spreadBits3(cell(1)) << 1 | spreadBits3(cell(2)) << 2, uint32_t(i)};
+  }
+  std::sort(keys.begin(), keys.end());  // (equal codes: the lower index first)
+  std::vector<uint32_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = keys[i].second;
+  return order;
+}
+
+std::vector<uint32_t> orderObjectsSpatially(Scene& scene) {
+  std::vector<uint32_t> order = spatialObjectOrder(scene);
+  std::vector<uint32_t> newIndex(order.size());
+  std::vector<Object> objects(order.size());
+  for (size_t k = 0; k < order.size(); ++k) {
+    objects[k] = scene.objects[order[k]];
+    newIndex[order[k]] = uint32_t(k);
+  }
+  scene.objects = std::move(objects);
+  for (SkinnedObject& so : scene.skinnedObjects)
+    if (so.object < newIndex.size()) so.object = newIndex[so.object];
+  for (RigidObject& ro : scene.rigidObjects)
+    if (ro.object < newIndex.size()) ro.object = newIndex[ro.object];
+  return order;
 }
 
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object) {

@@ -215,6 +215,16 @@ glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object);
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object, double maxScale);
 double maxScaleOf(const glm::dmat4& m);
 
+// The scene's objects in spatial order: sorted along a Morton (Z-order) curve of their bounding spheres' centres,
+// quantised to 2^21 cells on the longest side of the centres' box (ties keep the scene's order). order[k] is the
+// index of the object that goes k-th: a permutation of [0, objects).
+std::vector<uint32_t> spatialObjectOrder(const Scene& scene);
+// Puts the objects in that order, renumbering the skinned and rigid objects' references with them; returns the
+// order (new index -> old index). The GPU-driven passes read the object records by object ID, so objects that are
+// neighbours in space and in ID share cache lines and subgroups: on lavapipe a 1M-kitten field renders ~1.17x
+// faster in spatial order than in a random one (docs/benchmarks.md). The image is the same.
+std::vector<uint32_t> orderObjectsSpatially(Scene& scene);
+
 // Octahedral encoding of a unit normal into 2 x snorm16 (matches octDecode in shaders/common.glsl).
 uint32_t octEncode(glm::vec3 n);
 glm::vec3 octDecode(uint32_t packed);

@@ -402,3 +402,37 @@ TEST(Occlusion, UselessPyramidIsSkippedAndProbedAgain) {
   EXPECT_GE(built, 2u) << "the pyramid is probed again";
   EXPECT_NO_VALIDATION_MESSAGES(before);
 }
+
+// The spatial object order (orderObjectsSpatially) renumbers the objects and changes nothing else: along a path
+// from outside into the field, with occlusion culling, LOD and the micro-raster on (the defaults), every pixel's
+// colour is the same and its ID is the same object (renumbered) and triangle.
+TEST(Culling, SpatialObjectOrderChangesNoPixel) {
+  gpu::Device& dev = test::testDevice();
+  const uint32_t before = dev.validationMessages();
+  const Scene built = fieldScene(3000, true);
+  Scene ordered = built;
+  const std::vector<uint32_t> order = orderObjectsSpatially(ordered);
+  ASSERT_NE(ordered.objects[0].transform, built.objects[0].transform) << "the order must renumber something";
+  auto a = Renderer::create(dev, built, {.width = 256, .height = 192});
+  auto b = Renderer::create(dev, ordered, {.width = 256, .height = 192});
+  ASSERT_TRUE(a.ok() && b.ok());
+  FrameOptions fo;
+  fo.readIds = true;
+  size_t covered = 0;
+  int index = 0;
+  for (const Camera& cam : cameraPath(built, 12, false)) {
+    auto fa = (*a)->renderFrame(cam, fo);
+    auto fb = (*b)->renderFrame(cam, fo);
+    ASSERT_TRUE(fa.ok() && fb.ok());
+    ASSERT_EQ(fa->color, fb->color) << "frame " << index;
+    for (size_t p = 0; p < fa->ids.size(); p += 2) {
+      const uint32_t renumbered = fb->ids[p] ? order.at(fb->ids[p] - 1) + 1 : 0u;
+      ASSERT_EQ(fa->ids[p], renumbered) << "frame " << index << " pixel " << p / 2;
+      ASSERT_EQ(fa->ids[p + 1], fb->ids[p + 1]) << "frame " << index << " pixel " << p / 2;
+      covered += fa->ids[p] != 0;
+    }
+    ++index;
+  }
+  EXPECT_GT(covered, 10000u);
+  EXPECT_NO_VALIDATION_MESSAGES(before);
+}
