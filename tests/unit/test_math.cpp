@@ -392,7 +392,9 @@ TEST(Scene, SpatialObjectOrderFollowsTheMortonCurve) {
   double stepSpatial = 0.0, stepBuilt = 0.0;
   for (size_t k = 1; k < order.size(); ++k) {
     ASSERT_LE(code(order[k - 1]), code(order[k])) << "at " << k;
-    if (code(order[k - 1]) == code(order[k])) EXPECT_LT(order[k - 1], order[k]);
+    if (code(order[k - 1]) == code(order[k])) {
+      EXPECT_LT(order[k - 1], order[k]);
+    }
     stepSpatial += glm::distance(c[order[k - 1]], c[order[k]]);
     stepBuilt += glm::distance(c[k - 1], c[k]);
   }
