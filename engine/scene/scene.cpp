@@ -44,8 +44,11 @@ std::vector<uint32_t> spatialObjectOrder(const Scene& scene) {
   std::vector<glm::dvec3> centres(n);
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
   for (size_t i = 0; i < n; ++i) {
-    const Object& o = scene.objects[i];  // (an unchecked scene's bad mesh reference: its origin)
-    centres[i] = o.mesh < scene.meshes.size() ? glm::dvec3(objectBoundsWorld(scene, o)) : glm::dvec3(o.transform[3]);
+    // objectBoundsWorld's centre, without its radius (maxScaleOf per object); an unchecked scene's bad mesh
+    // reference: the object's origin.
+    const Object& o = scene.objects[i];
+    const glm::dvec3 c = o.mesh < scene.meshes.size() ? glm::dvec3(scene.meshes[o.mesh].boundsSphere) : glm::dvec3(0.0);
+    centres[i] = glm::dvec3(o.transform * glm::dvec4(c, 1.0));
     lo = glm::min(lo, centres[i]);
     hi = glm::max(hi, centres[i]);
   }
