@@ -197,7 +197,11 @@ TEST_F(HostileAssets, TraversalMessageIsTheSameWhetherOrNotTheTargetExists) {
     EXPECT_TRUE(contains(present, "buffer 1: uri '" + uri + "' resolves outside the asset's folder")) << present;
     EXPECT_EQ(present, resized);
     EXPECT_EQ(present, absent);
-    EXPECT_FALSE(contains(present, "512")) << present;
+    // (the size, not digits of the random temporary folder's name, which an absolute uri puts in the message)
+    std::string withoutFolder = present;
+    for (size_t at; (at = withoutFolder.find(dir_.string())) != std::string::npos;)
+      withoutFolder.erase(at, dir_.string().size());
+    EXPECT_FALSE(contains(withoutFolder, "512")) << present;
     EXPECT_FALSE(contains(present, kCanary)) << present;
   }
 }
