@@ -47,6 +47,29 @@ vec2 gridPosition(vec4 clip) {
   precise vec2 window = ndc * half_ + half_;
   return window - 0.5;
 }
+
+#if SW_CPU
+// lavapipe: reads the words at both ends of each pixel row of the draw's box (its bounding sphere's, capped at the
+// micro-raster's extent) before the draw's atomics. On lavapipe each lane's 64-bit atomic is a locked
+// compare-exchange in a loop over the lanes, and a locked instruction waits for the memory operations before it, so
+// the first atomic on each cache line paid a whole miss, one after another (about a fifth of the micro-raster's time
+// in a profile of the 1M-kitten field). Plain loads, one row per lane, miss together. The words read are not used;
+// `refused` takes a bit that no stored word has (the depth bits of max(z, 0) >= 0, the clear is 0) so that the
+// reads stay in the shader.
+void warmPixels(ObjectData o, vec4 sphere, inout uint refused) {
+  vec4 clip = clipPosition(o, sphere.xyz);
+  if (!(clip.w > 0.0)) return;
+  vec2 centre = gridPosition(clip);
+  float radius = min(sphere.w * o.maxScale * frame.lodScale / clip.w, float(SW_RASTER_MAX_EXTENT));
+  ivec2 last = ivec2(frame.viewport.xy) - 1;
+  ivec2 lo = clamp(ivec2(centre - radius), ivec2(0), last), hi = clamp(ivec2(centre + radius), ivec2(0), last);
+  uint width = uint(frame.viewport.x);
+  uint64_t words = 0ul;
+  for (int y = lo.y + int(gl_SubgroupInvocationID); y <= hi.y; y += int(gl_SubgroupSize))
+    words |= swVisibility[uint(y) * width + uint(lo.x)] | swVisibility[uint(y) * width + uint(hi.x)];
+  if ((words >> 63) != 0ul) refused += 1u;
+}
+#endif
 // The same in 1/256 pixel (pixel (i, j)'s centre is (256 i, 256 j)): what coverage is decided on.
 ivec2 snapToGrid(vec2 grid) { return ivec2(roundEven(grid * 256.0)); }
 
@@ -146,8 +169,17 @@ void main() {
   uint c1 = drawLists[1].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 1u], drawLists[1].z) : 0u;
   uint c2 = drawLists[2].w != 0u ? min(stats[STAT_SW_DRAWS + pc.phase * DRAW_LISTS + 2u], drawLists[2].z) : 0u;
   uint total = c0 + c1 + c2;
+#if SW_CPU
+  // lavapipe: each workgroup takes a contiguous run of the list (in object order, which the loaded scene numbers
+  // along a space-filling curve), so that a core's next draws touch the pixels its last ones warmed; the dispatch
+  // is capped (SW_RASTER_MAX_WORKGROUPS) and a grid stride sent each workgroup's next draw elsewhere on the screen.
+  uint perWorkgroup = (total + gl_NumWorkGroups.x - 1u) / gl_NumWorkGroups.x;
+  uint begin = gl_WorkGroupID.x * perWorkgroup, end = min(begin + perWorkgroup, total);
+  for (uint k = begin + gl_SubgroupID; k < end; k += gl_NumSubgroups) {
+#else
   uint stride = gl_NumWorkGroups.x * gl_NumSubgroups;
   for (uint k = gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID; k < total; k += stride) {
+#endif
     uint list = k < c0 ? 0u : k < c0 + c1 ? 1u : 2u;
     uint i = k - (list == 0u ? 0u : list == 1u ? c0 : c0 + c1);
     uvec4 region = drawLists[list];
@@ -170,6 +202,7 @@ void main() {
     bool cullBack = VB_TEXELS != 0u && list != DRAW_LIST_OPAQUE_DOUBLE_SIDED &&
                     (VB_SKINNED == 0u || uvec2(meshes[o.meshIndex].skinnedVertexLow,
                                                meshes[o.meshIndex].skinnedVertexHigh) == uvec2(0u));
+    warmPixels(o, sphere, refused);
     uint queueBase = gl_SubgroupID * SW_RASTER_CHUNK;
     for (uint chunk = 0u; chunk < triangles; chunk += SW_RASTER_CHUNK) {
       uint chunkEnd = min(chunk + SW_RASTER_CHUNK, triangles);
