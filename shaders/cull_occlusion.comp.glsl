@@ -50,7 +50,6 @@ void main() {
   if (subgroupElect()) {
     if (refinedSum > 0u) atomicAdd(stats[STAT_REFINE_TESTED], refinedSum);
     if (refine && occludedSum > 0u) atomicAdd(stats[STAT_REFINE_OCCLUDED], occludedSum);
-    if (occludedSum > 0u) atomicAdd(stats[STAT_OCCLUSION_CULLED], occludedSum);
     if (subpixelSum > 0u) atomicAdd(stats[STAT_SUBPIXEL_CULLED], subpixelSum);
   }
 }

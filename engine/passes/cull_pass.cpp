@@ -58,6 +58,13 @@ void CullPass::recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t 
   vkCmdDispatch(cmd, 1, 1, 1);
 }
 
+void CullPass::recordOcclusionCount(VkCommandBuffer cmd, VkDescriptorSet scene) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, sievePipeline.handle());
+  layout.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
+  layout.push(cmd, {CULL_PHASE_LATE, 0, 2, CULL_LATE_LISTED});  // the sieve's third step (cull_sieve.comp)
+  vkCmdDispatch(cmd, 1, 1, 1);
+}
+
 void CullPass::recordListed(VkCommandBuffer cmd, VkDescriptorSet scene, const gpu::Buffer& lists,
                             VkDeviceSize headerOffset, uint32_t phase, uint32_t variant) const {
   const gpu::Pipeline& p = variant == CULL_CLUSTERS                                 ? clusterPipeline

@@ -30,6 +30,8 @@ struct CullPass {
   // variant CULL_LATE_LISTED at the late list, config.h LATE_LIST_WORD); a second one-thread dispatch sizes the late
   // cull's from the list's count.
   void recordSieve(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t objectCount) const;
+  // After the late phase's occlusion tests (and their refinement): STAT_OCCLUSION_CULLED from the lists' counts.
+  void recordOcclusionCount(VkCommandBuffer cmd, VkDescriptorSet scene) const;
   // An indirect dispatch over a list whose header (at byte `headerOffset` of `lists`) holds the dispatch size: one
   // thread per object of the early phase of occlusion culling over last frame's visible list, of the late phase's
   // occlusion test over the objects inside the frustum (variant CULL_LATE_LISTED), of its refinement dispatch

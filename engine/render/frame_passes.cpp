@@ -233,6 +233,8 @@ void Renderer::Impl::declareCull(Graph& g, const FrameResources& r, const FrameP
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, visibleList, refineListOffset(), CULL_PHASE_LATE, CULL_REFINE);
     });
+  if (occlusion && late)  // how many of the listed objects those tests found occluded
+    p.step(cullUses(), [this](VkCommandBuffer cmd) { cull.recordOcclusionCount(cmd, sceneSet); });
   if (occlusion && late)  // the objects those tests found visible and the early phase did not draw: LOD, routing
     p.step(cullUses(), [this](VkCommandBuffer cmd) {
       cull.recordListed(cmd, sceneSet, visibleList, lateDrawListOffset(), CULL_PHASE_LATE, CULL_LATE_DRAW);
