@@ -96,7 +96,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(CLI::IsMember({"1", "2", "4"}))
       ->capture_default_str();
   sub->add_option("--shading", c.shading,
-                  "visbuf shading: auto (the device type's default: covered on a CPU device, uber on a GPU) | uber (one "
+                  "visbuf shading: auto (the device type's default: covered on a CPU device, uber on a GPU; a CPU "
+                  "device takes uber too once a frame shows something in 65 % of its pixels, until one shows less "
+                  "than 55 %) | uber (one "
                   "dispatch over every pixel) | covered (one workgroup per 8x8 tile that shows anything) | classified "
                   "(per-material tile lists, one indirect dispatch per material); MSAA frames: uber")
       ->check(CLI::IsMember({"auto", "uber", "covered", "classified"}))

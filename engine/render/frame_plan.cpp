@@ -2,9 +2,11 @@
 
 namespace visbuf {
 
-ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts) {
+ShadingMode resolveShading(const FrameOptions& options, const SceneFacts& facts, bool mostlyCovered) {
   if (options.path != RenderPath::Visbuf || options.readAttributes || options.msaa > 1) return ShadingMode::Uber;
-  const ShadingMode mode = options.shading == ShadingMode::Auto ? defaultShadingFor(facts.cpuDevice) : options.shading;
+  ShadingMode mode = options.shading;
+  if (mode == ShadingMode::Auto)
+    mode = facts.cpuDevice && mostlyCovered ? ShadingMode::Uber : defaultShadingFor(facts.cpuDevice);
   return mode == ShadingMode::Covered && !facts.coveredListFits ? ShadingMode::Uber : mode;
 }
 
@@ -37,7 +39,7 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.lightsCulled = lightsCulled(options, facts);
   p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
   p.msaa = options.msaa > 1;
-  p.shading = resolveShading(options, facts);
+  p.shading = resolveShading(options, facts, history.mostlyCovered);
   p.coveredPixels = p.shading == ShadingMode::Covered;  // (resolveShading: visbuf, single-sampled, no attributes)
   p.clusters = p.gpuCulled && !p.frozen && options.clusters && facts.clusters && p.cull != CullMode::None;
   p.earlyClusterOcclusion = p.clusters && p.usePyramid && options.earlyClusterOcclusion && history.pyramidBuilt;
@@ -56,6 +58,15 @@ void FrameHistory::recorded(const FramePlan& plan) {
     lastSwOn = plan.swOn;
     pyramidBuilt = plan.usePyramid;
   }
+}
+
+void FrameHistory::shaded(uint64_t coveredPixels, uint64_t pixels) {
+  if (pixels == 0) return;
+  const double share = double(coveredPixels) / double(pixels);
+  if (share >= kUberFromCoverage)
+    mostlyCovered = true;
+  else if (share < kCoveredBelowCoverage)
+    mostlyCovered = false;
 }
 
 void FrameHistory::finished(const FramePlan& plan, const FrameOptions& options, bool cpuDevice, uint64_t swTriangles,

@@ -123,6 +123,8 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
     const uint32_t* s = static_cast<const uint32_t*>(slot.statsReadback.mapped());
     st.shade.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
     st.coveredPixels = slot.options.path == RenderPath::Visbuf && !msaa ? s[STAT_COVERED_PIXELS] : 0;
+    if (slot.options.path == RenderPath::Visbuf && !msaa)
+      frameHistory.shaded(st.coveredPixels, uint64_t(config.width) * config.height);  // (Auto shading's choice)
     st.cull.objectsTested = gpuScene.objectCount;
     st.cull.frustumCulled = s[STAT_FRUSTUM_CULLED];
     st.cull.occlusionCulled = s[STAT_OCCLUSION_CULLED];

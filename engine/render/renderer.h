@@ -44,7 +44,8 @@ const char* renderPathName(RenderPath path);
 const char* cullModeName(CullMode mode);
 const char* shadingModeName(ShadingMode mode);
 ShadingMode parseShadingMode(const std::string& name);  // "uber", "classified", "covered", anything else: Auto
-// What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs).
+// What Auto resolves to on a device (CPU implementations such as lavapipe, or GPUs) until a frame's coverage is
+// known: a CPU device then takes the ubershader while frames show something in most pixels (FrameHistory).
 ShadingMode defaultShading(const gpu::Device& device);
 ShadingMode defaultShadingFor(bool cpuDevice);  // the same, by device type
 // The micro-raster's object size bound (pixels per side) when FrameOptions::swRasterPixels is unset: 94 on a CPU

@@ -58,6 +58,39 @@ TEST(FramePlan, PathsDecideCullingShadingAndLights) {
   EXPECT_FALSE(planFrame(FrameOptions{}, dark, none).lightsCulled);
 }
 
+// Auto shading on a CPU device follows the last frame's coverage, with a band between the two thresholds where it
+// keeps its choice; a GPU, an explicit mode and the cases only the ubershader serves are not affected.
+TEST(FramePlan, AutoShadingOnACpuFollowsTheLastFramesCoverage) {
+  SceneFacts cpu = gpuFacts();
+  cpu.cpuDevice = true;
+  const FrameOptions fo;
+  FrameHistory h;
+  const uint64_t pixels = 1000;
+  auto shadingAfter = [&](uint64_t covered) {
+    h.shaded(covered, pixels);
+    return planFrame(fo, cpu, h).shading;
+  };
+  EXPECT_EQ(planFrame(fo, cpu, h).shading, ShadingMode::Covered) << "no frame yet";
+  EXPECT_EQ(shadingAfter(200), ShadingMode::Covered);
+  EXPECT_EQ(shadingAfter(640), ShadingMode::Covered) << "below the upper threshold";
+  EXPECT_EQ(shadingAfter(650), ShadingMode::Uber) << "at it";
+  EXPECT_TRUE(planFrame(fo, cpu, h).coveredPixels == false);
+  EXPECT_EQ(shadingAfter(560), ShadingMode::Uber) << "inside the band: kept";
+  EXPECT_EQ(shadingAfter(549), ShadingMode::Covered) << "below the lower threshold";
+  EXPECT_EQ(shadingAfter(600), ShadingMode::Covered) << "inside the band: kept";
+  EXPECT_EQ(shadingAfter(1000), ShadingMode::Uber);
+  h.shaded(0, 0);  // no pixels: nothing learnt
+  EXPECT_TRUE(h.mostlyCovered);
+  EXPECT_EQ(planFrame(fo, gpuFacts(), h).shading, ShadingMode::Uber) << "a GPU: uber whatever the coverage";
+  FrameOptions covered = fo;
+  covered.shading = ShadingMode::Covered;
+  EXPECT_EQ(planFrame(covered, cpu, h).shading, ShadingMode::Covered) << "asked for";
+  EXPECT_EQ(shadingAfter(0), ShadingMode::Covered);
+  FrameOptions msaa = fo;
+  msaa.msaa = 4;
+  EXPECT_EQ(planFrame(msaa, cpu, h).shading, ShadingMode::Uber) << "MSAA: the ubershader only";
+}
+
 TEST(FramePlan, MicroRasterOnlyWhereItCanTakeDraws) {
   const FrameHistory none;
   FrameOptions fo;
