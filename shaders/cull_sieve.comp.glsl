@@ -11,7 +11,8 @@
 // A third step (pc.material == 2, one thread, after the late cull's tests) counts the objects they found occluded:
 // every listed object was found visible (listed for the next frame), covering no pixel centre (counted) or
 // occluded, so the count is the difference, and the late cull keeps no counter of its own for them (on lavapipe an
-// atomic on a word both cores write, in nearly every subgroup of a field view: 8 % of the late cull at 1M kittens).
+// atomic on a word both cores write, in nearly every subgroup of a field view: about 8 % of the late cull at 1M
+// kittens).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require

@@ -74,7 +74,7 @@ TEST(FramePlan, AutoShadingOnACpuFollowsTheLastFramesCoverage) {
   EXPECT_EQ(shadingAfter(200), ShadingMode::Covered);
   EXPECT_EQ(shadingAfter(640), ShadingMode::Covered) << "below the upper threshold";
   EXPECT_EQ(shadingAfter(650), ShadingMode::Uber) << "at it";
-  EXPECT_TRUE(planFrame(fo, cpu, h).coveredPixels == false);
+  EXPECT_FALSE(planFrame(fo, cpu, h).coveredPixels);
   EXPECT_EQ(shadingAfter(560), ShadingMode::Uber) << "inside the band: kept";
   EXPECT_EQ(shadingAfter(549), ShadingMode::Covered) << "below the lower threshold";
   EXPECT_EQ(shadingAfter(600), ShadingMode::Covered) << "inside the band: kept";
