@@ -122,9 +122,9 @@ void Renderer::Impl::collectStats(FrameSlot& slot, bool synchronous) {
   if (gpuCulled) {
     const uint32_t* s = static_cast<const uint32_t*>(slot.statsReadback.mapped());
     st.shade.perSamplePixels = msaa ? s[STAT_PER_SAMPLE_PIXELS] : 0;
-    st.coveredPixels = slot.options.path == RenderPath::Visbuf && !msaa ? s[STAT_COVERED_PIXELS] : 0;
-    if (slot.options.path == RenderPath::Visbuf && !msaa)
-      frameHistory.shaded(st.coveredPixels, uint64_t(config.width) * config.height);  // (Auto shading's choice)
+    const bool pixelsCounted = slot.options.path == RenderPath::Visbuf && !msaa;
+    st.coveredPixels = pixelsCounted ? s[STAT_COVERED_PIXELS] : 0;
+    if (pixelsCounted) frameHistory.shaded(st.coveredPixels, uint64_t(config.width) * config.height);  // (Auto shading)
     st.cull.objectsTested = gpuScene.objectCount;
     st.cull.frustumCulled = s[STAT_FRUSTUM_CULLED];
     st.cull.occlusionCulled = s[STAT_OCCLUSION_CULLED];

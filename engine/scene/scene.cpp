@@ -44,11 +44,8 @@ std::vector<uint32_t> spatialObjectOrder(const Scene& scene) {
   std::vector<glm::dvec3> centres(n);
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
   for (size_t i = 0; i < n; ++i) {
-    // objectBoundsWorld's centre, without its radius (maxScaleOf per object); an unchecked scene's bad mesh
-    // reference: the object's origin.
-    const Object& o = scene.objects[i];
-    const glm::dvec3 c = o.mesh < scene.meshes.size() ? glm::dvec3(scene.meshes[o.mesh].boundsSphere) : glm::dvec3(0.0);
-    centres[i] = glm::dvec3(o.transform * glm::dvec4(c, 1.0));
+    const Object& o = scene.objects[i];  // (an unchecked scene's bad mesh reference: the object's origin)
+    centres[i] = o.mesh < scene.meshes.size() ? objectCentreWorld(scene, o) : glm::dvec3(o.transform[3]);
     lo = glm::min(lo, centres[i]);
     hi = glm::max(hi, centres[i]);
   }
@@ -89,10 +86,12 @@ glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object) {
   return objectBoundsWorld(scene, object, maxScaleOf(object.transform));
 }
 
+glm::dvec3 objectCentreWorld(const Scene& scene, const Object& object) {
+  return glm::dvec3(object.transform * glm::dvec4(glm::dvec3(scene.meshes[object.mesh].boundsSphere), 1.0));
+}
+
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object, double maxScale) {
-  const glm::vec4 s = scene.meshes[object.mesh].boundsSphere;
-  glm::dvec3 c = glm::dvec3(object.transform * glm::dvec4(glm::dvec3(s), 1.0));
-  return {c, double(s.w) * maxScale};
+  return {objectCentreWorld(scene, object), double(scene.meshes[object.mesh].boundsSphere.w) * maxScale};
 }
 
 Status validateScene(const Scene& scene) {

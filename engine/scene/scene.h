@@ -208,6 +208,8 @@ struct MorphedVertex {
 };
 MorphedVertex morphVertex(const Mesh& mesh, uint32_t v, std::span<const double> weights);
 
+// World-space centre of an object's bounding sphere (double precision; its mesh index must be valid).
+glm::dvec3 objectCentreWorld(const Scene& scene, const Object& object);
 // World-space bounding sphere of an object (double precision, conservative: uses the largest
 // column norm of the 3x3 part as the scale).
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object);
@@ -222,7 +224,7 @@ std::vector<uint32_t> spatialObjectOrder(const Scene& scene);
 // Puts the objects in that order, renumbering the skinned and rigid objects' references with them; returns the
 // order (new index -> old index). The GPU-driven passes read the object records by object ID, so objects that are
 // neighbours in space and in ID share cache lines and subgroups: on lavapipe the 1M-kitten field view's frame takes
-// 0.90 of its time in the generator's random order (docs/benchmarks.md). The image is the same.
+// 0.90x the time it takes with the generator's random order (docs/benchmarks.md). The image is the same.
 std::vector<uint32_t> orderObjectsSpatially(Scene& scene);
 
 // Octahedral encoding of a unit normal into 2 x snorm16 (matches octDecode in shaders/common.glsl).
