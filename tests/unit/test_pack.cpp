@@ -1,6 +1,13 @@
 // The pack format (engine/asset/pack_{format,writer,reader}.h): round trips of a generated scene and of real assets,
 // memory-mapped reads, atomic writes, and a bounded fuzz run. Hostile packs: test_pack_reader.cpp; quantised packs
 // and the encoded geometry streams: test_pack_quantize.cpp.
+#include <fcntl.h>
+#include <linux/capability.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+
+#include <cerrno>
+
 #include "pack_test_util.h"
 
 namespace visbuf {
@@ -184,16 +191,95 @@ TEST_F(PackFileTest, DestinationProblemsLeaveNothingBehind) {
   EXPECT_EQ(listing(), std::vector<std::string>{"taken.vbp"});
 }
 
+// What writePack returned where an ordinary user's permissions held, or why it could not be run there (`setup`).
+struct WriteOutcome {
+  bool ok = false;
+  int code = -1;  // ErrorCode, when !ok
+  std::string message;
+  std::string setup;  // non-empty: the run did not happen as intended (a failure of the test, never a skip)
+};
+
+// Whether a file can be created in `dir` by this thread's credentials (it is removed again).
+std::string probeWritable(const fs::path& dir) {
+  const fs::path probe = dir / "probe";
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd >= 0) {
+    ::close(fd);
+    ::unlink(probe.c_str());
+    return "a file could still be created in the read-only directory: the test would prove nothing";
+  }
+  if (errno != EACCES) return std::string("probe: unexpected error ") + std::strerror(errno);
+  return {};
+}
+
+// writePack(scene, path) with the permissions of an ordinary user. As root (CI's containers run as root), whose
+// CAP_DAC_OVERRIDE ignores a directory's mode, a forked child first drops every capability with capset (effective,
+// permitted and inheritable sets emptied: it stays uid 0, the directory's owner, and the owner's mode bits then bind
+// it), checks that it can no longer create a file there, runs writePack, and reports through a pipe and its exit
+// status (_exit: no atexit handlers, no leak check of the copied process). Otherwise writePack runs here, after the
+// same check.
+WriteOutcome writeAsOrdinaryUser(const Scene& scene, const fs::path& dir, const fs::path& path) {
+  WriteOutcome out;
+  if (geteuid() != 0) {
+    out.setup = probeWritable(dir);
+    if (!out.setup.empty()) return out;
+    Status s = writePack(scene, path.string());
+    out.ok = s.ok();
+    if (!s) out.code = int(s.error().code), out.message = s.error().message;
+    return out;
+  }
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) return {false, -1, {}, "pipe failed"};
+  const pid_t pid = ::fork();
+  if (pid < 0) return {false, -1, {}, "fork failed"};
+  if (pid == 0) {
+    ::close(fds[0]);
+    auto report = [&](const std::string& text, int status) {
+      const ssize_t written = ::write(fds[1], text.data(), text.size());
+      ::_exit(written == ssize_t(text.size()) ? status : 4);
+    };
+    __user_cap_header_struct header{_LINUX_CAPABILITY_VERSION_3, 0};
+    __user_cap_data_struct none[_LINUX_CAPABILITY_U32S_3] = {};
+    if (::syscall(SYS_capset, &header, none) != 0) report(std::string("capset: ") + std::strerror(errno), 2);
+    if (std::string probe = probeWritable(dir); !probe.empty()) report(probe, 3);
+    Status s = writePack(scene, path.string());
+    report(s ? std::string("ok") : std::to_string(int(s.error().code)) + " " + s.error().message, 0);
+  }
+  ::close(fds[1]);
+  std::string text;
+  char buffer[512];
+  for (ssize_t n; (n = ::read(fds[0], buffer, sizeof(buffer))) != 0;) {
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) break;
+    text.append(buffer, size_t(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    return {false, -1, {}, "the unprivileged child failed (status " + std::to_string(status) + "): " + text};
+  if (text == "ok") return {true, -1, {}, {}};
+  const size_t space = text.find(' ');
+  const std::string message = space == std::string::npos ? std::string() : text.substr(space + 1);
+  return {false, std::atoi(text.substr(0, space).c_str()), message, {}};
+}
+
+// writePack into a directory it may not write (mode r-x): an IoError, the old pack intact, no temporary file left.
+// Run with an ordinary user's permissions also as root (writeAsOrdinaryUser), so it never skips.
 TEST_F(PackFileTest, UnwritableDirectory) {
-  if (geteuid() == 0)
-    GTEST_SKIP() << "root ignores directory permissions (covered by FailedWriteKeepsTheOldPack)";
   const fs::path path = dir_ / "scene.vbp";
   ASSERT_TRUE(writePack(makeTestScene(16, 6), path.string()));
   const std::vector<uint8_t> before = readBytes(path);
+  const Scene bigger = makeTestScene();
   fs::permissions(dir_, fs::perms::owner_read | fs::perms::owner_exec);
-  Status s = writePack(makeTestScene(), path.string());
+  const WriteOutcome w = writeAsOrdinaryUser(bigger, dir_, path);
   fs::permissions(dir_, fs::perms::owner_all);
-  ASSERT_FALSE(s);
+  ASSERT_TRUE(w.setup.empty()) << w.setup;
+  ASSERT_FALSE(w.ok) << "writePack succeeded in a read-only directory";
+  EXPECT_EQ(w.code, int(ErrorCode::IoError)) << w.message;
+  EXPECT_NE(w.message.find("cannot create the temporary file"), std::string::npos) << w.message;
+  EXPECT_NE(w.message.find(dir_.string()), std::string::npos) << "the message names the path: " << w.message;
   EXPECT_EQ(readBytes(path), before);
   EXPECT_EQ(listing(), std::vector<std::string>{"scene.vbp"});
 }
