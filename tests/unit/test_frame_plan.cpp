@@ -2,6 +2,10 @@
 // finished frames leave for later plans (skip a pyramid or micro-raster that did nothing, redraw frozen lists).
 #include <gtest/gtest.h>
 
+#include <array>
+#include <string>
+#include <vector>
+
 #include "visbuf/passes/depth_pyramid_pass.h"
 #include "visbuf/render/frame_plan.h"
 #include "visbuf/shared/config.h"
@@ -244,22 +248,41 @@ TEST(FramePlan, FrozenFramesRedrawTheListsTheyFroze) {
 }
 
 // The pyramid's dispatches write every level after 0 exactly once, each reading the level the one before stopped
-// at, with that level's valid size (ceil(size / 2^k)).
+// at, with that level's valid size (ceil(size / 2^k)). Derived by hand for PYRAMID_REDUCTIONS = 3 (a dispatch reduces
+// at most 3 levels), halving with rounding up until both sides are 1:
+//   1024x768: 1024x768, 512x384, 256x192, 128x96, 64x48, 32x24, 16x12, 8x6, 4x3, 2x2, 1x1: 11 levels (0..10);
+//     dispatches from level 0 (3 levels), 3 (128x96, 3), 6 (16x12, 3), 9 (2x2, the last 1).
+//   1920x1080: 1920x1080, 960x540, 480x270, 240x135, 120x68, 60x34, 30x17, 15x9, 8x5, 4x3, 2x2, 1x1: 12 levels;
+//     dispatches from 0 (3), 3 (240x135, 3), 6 (30x17, 3), 9 (4x3, the last 2).
+//   1x1: one level, nothing to reduce: one dispatch of 0 reductions (it may still copy the depth into level 0).
+//   3x5: 3x5, 2x3, 1x2, 1x1: 4 levels; one dispatch of 3.
+//   37x11: 37x11, 19x6, 10x3, 5x2, 3x1, 2x1, 1x1: 7 levels; from 0 (3), from 3 (5x2, 3).
+//   32768x1: 2^15 wide: 16 levels; from 0, 3 (4096x1), 6 (512x1), 9 (64x1), 12 (8x1), 3 each.
 TEST(DepthPyramid, DispatchesWriteEveryLevelOnce) {
-  for (auto [w, h] : {std::pair{1024u, 768u}, {1920u, 1080u}, {1u, 1u}, {3u, 5u}, {37u, 11u}, {32768u, 1u}}) {
-    const uint32_t levels = passes::pyramidLevelCount(w, h);
-    const auto dispatches = passes::pyramidDispatches(w, h);
-    ASSERT_FALSE(dispatches.empty());
-    uint32_t next = 0;
-    for (const auto& d : dispatches) {
-      EXPECT_EQ(d.source, next) << w << "x" << h;
-      EXPECT_EQ(d.width, (w + (1u << d.source) - 1) >> d.source);
-      EXPECT_EQ(d.height, (h + (1u << d.source) - 1) >> d.source);
-      EXPECT_LE(d.reductions, uint32_t(PYRAMID_REDUCTIONS));
-      next = d.source + d.reductions;
+  static_assert(PYRAMID_REDUCTIONS == 3, "the dispatches below are derived for 3 reductions per dispatch");
+  struct Case {
+    uint32_t width, height, levels;
+    std::vector<std::array<uint32_t, 4>> dispatches;  // source level, its valid width and height, reductions
+  };
+  const Case cases[] = {
+      {1024, 768, 11, {{0, 1024, 768, 3}, {3, 128, 96, 3}, {6, 16, 12, 3}, {9, 2, 2, 1}}},
+      {1920, 1080, 12, {{0, 1920, 1080, 3}, {3, 240, 135, 3}, {6, 30, 17, 3}, {9, 4, 3, 2}}},
+      {1, 1, 1, {{0, 1, 1, 0}}},
+      {3, 5, 4, {{0, 3, 5, 3}}},
+      {37, 11, 7, {{0, 37, 11, 3}, {3, 5, 2, 3}}},
+      {32768, 1, 16, {{0, 32768, 1, 3}, {3, 4096, 1, 3}, {6, 512, 1, 3}, {9, 64, 1, 3}, {12, 8, 1, 3}}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::to_string(c.width) + "x" + std::to_string(c.height));
+    EXPECT_EQ(passes::pyramidLevelCount(c.width, c.height), c.levels);
+    const auto dispatches = passes::pyramidDispatches(c.width, c.height);
+    ASSERT_EQ(dispatches.size(), c.dispatches.size());
+    for (size_t i = 0; i < dispatches.size(); ++i) {
+      EXPECT_EQ(dispatches[i].source, c.dispatches[i][0]) << "dispatch " << i;
+      EXPECT_EQ(dispatches[i].width, c.dispatches[i][1]) << "dispatch " << i;
+      EXPECT_EQ(dispatches[i].height, c.dispatches[i][2]) << "dispatch " << i;
+      EXPECT_EQ(dispatches[i].reductions, c.dispatches[i][3]) << "dispatch " << i;
     }
-    EXPECT_EQ(next + 1, levels) << w << "x" << h << ": the last level written";
-    EXPECT_EQ(dispatches.size(), levels == 1 ? 1u : (levels - 1 + PYRAMID_REDUCTIONS - 1) / PYRAMID_REDUCTIONS);
   }
 }
 

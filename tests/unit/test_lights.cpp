@@ -5,8 +5,10 @@
 #include <cstring>
 #include <fstream>
 #include <numbers>
+#include <random>
 
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include "visbuf/asset/gltf_import.h"
@@ -93,9 +95,66 @@ TEST(LightsCpu, ScatterFillsTheSceneBounds) {
   for (const PointLight& l : scene.pointLights) {
     EXPECT_LE(glm::length(l.position), std::sqrt(3.0) * (20.0 + 4.0 * 1.0001));  // inside the bounds' box
     EXPECT_GT(l.range, 0.0f);
-    EXPECT_NEAR(l.intensity, 0.5f * l.range * l.range, 1e-3f * l.intensity);
   }
   EXPECT_TRUE(validateScene(scene).ok());
+}
+
+// Range and intensity on a scene whose bounds are known by hand: two objects of one mesh with a bounding sphere of
+// radius 5 at its origin, placed at (0, 0, 0) and (10, 10, 10). The box of their bounds is [-5, 15]^3: 20 units a
+// side, 8000 cubic units.
+//   1000 lights: mean spacing cbrt(8000 / 1000) = 2, range 1.5 x 2 = 3, intensity 0.5 x 3^2 = 4.5.
+//   8 lights: spacing cbrt(8000 / 8) = 10, range 15, intensity 0.5 x 225 = 112.5.
+// Up to the bounds' padding: objectBoundsWorld scales a radius by an upper bound of the transform's scale, 1 + 1e-6
+// for these, so the box's side is 20 + 1e-5 and the spacing, the range and the square root of the intensity grow by
+// 5e-7 relative (bounds below: 1e-6 relative). The header's consequences, by brute force over the 1000 lights: a point at least one range
+// inside the box sees on average (4/3) pi 1.5^3 = 14.14 lights within their range (bound +-3: the lights near the
+// ~2700 sampled cubic units number ~340, whose binomial spread moves the mean by ~5 %); and a light at half its range
+// gives irradiance 4.5 / 1.5^2 x (1 - 0.5^4)^2 = 2 x 0.87890625 = 1.7578125 (the 1/d^2 falloff and its window of
+// light.h).
+TEST(LightsCpu, ScatterRangeAndIntensityFollowTheSpacing) {
+  Scene scene;
+  Mesh mesh;
+  mesh.boundsSphere = {0.0f, 0.0f, 0.0f, 5.0f};
+  scene.meshes.push_back(mesh);
+  scene.objects.push_back({glm::dmat4(1.0), 0, 0});
+  scene.objects.push_back({glm::translate(glm::dmat4(1.0), glm::dvec3(10.0)), 0, 0});
+  Scene few = scene;
+  scatterPointLights(few, 8, 5);
+  ASSERT_EQ(few.pointLights.size(), 8u);
+  for (const PointLight& l : few.pointLights) {
+    EXPECT_NEAR(l.range, 15.0f, 15.0f * 1e-6f);
+    EXPECT_NEAR(l.intensity, 112.5f, 112.5f * 2e-6f);
+  }
+  scatterPointLights(scene, 1000, 3);
+  ASSERT_EQ(scene.pointLights.size(), 1000u);
+  glm::dvec3 mean(0.0);
+  for (const PointLight& l : scene.pointLights) {
+    EXPECT_NEAR(l.range, 3.0f, 3.0f * 1e-6f);
+    EXPECT_NEAR(l.intensity, 4.5f, 4.5f * 2e-6f);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GE(l.position[a], -5.0 - 1e-5);
+      EXPECT_LE(l.position[a], 15.0 + 1e-5);
+    }
+    // A saturated hue: one channel full, one off.
+    EXPECT_EQ(std::max({l.color.r, l.color.g, l.color.b}), 1.0f);
+    EXPECT_EQ(std::min({l.color.r, l.color.g, l.color.b}), 0.0f);
+    mean += l.position / 1000.0;
+  }
+  // Uniform over the box: the mean position within 0.6 per axis (about 3 standard deviations, 20 / sqrt(12 x 1000))
+  // of (5, 5, 5).
+  EXPECT_LT(glm::length(mean - glm::dvec3(5.0)), 0.6 * std::sqrt(3.0)) << mean.x << " " << mean.y << " " << mean.z;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> inside(-2.0, 12.0);  // 3 (one range) from every face of the box
+  size_t seen = 0;
+  const int points = 2000;
+  for (int i = 0; i < points; ++i) {
+    const glm::dvec3 p(inside(rng), inside(rng), inside(rng));
+    for (const PointLight& l : scene.pointLights) seen += glm::length(l.position - p) < double(l.range);
+  }
+  EXPECT_NEAR(double(seen) / points, 4.0 / 3.0 * std::numbers::pi * 1.5 * 1.5 * 1.5, 3.0);
+  const double d = 0.5 * double(scene.pointLights[0].range);
+  const double window = std::pow(1.0 - std::pow(0.5, 4.0), 2.0);
+  EXPECT_NEAR(double(scene.pointLights[0].intensity) * window / (d * d), 1.7578125, 1e-5);
 }
 
 class LightImportTest : public test::TempDirTest {};
