@@ -139,9 +139,7 @@ bool cardFaces(const Object& o, glm::dvec3 eye) {
 
 }  // namespace
 
-TEST(AlphaMask, FoliageCoverageMatchesForwardExactly) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(AlphaMask, FoliageCoverageMatchesForwardExactly) {
   Scene scene = makeFoliage(160, 7);
   auto r = Renderer::create(dev, scene, {.width = 320, .height = 240});
   ASSERT_TRUE(r.ok()) << r.error().message;
@@ -177,15 +175,12 @@ TEST(AlphaMask, FoliageCoverageMatchesForwardExactly) {
     }
   }
   EXPECT_GT(backDoubleSided, 1000u) << "double-sided cards seen from the back must be drawn";
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // One card, seen from the front and from the back: covered pixels are exactly those whose centre's ray hits
 // the kept half (object x >= 0) of the card in a double-precision ray cast, except within 1e-3 card units of
 // an edge or of the cut line (float rounding of the raster and of the interpolated alpha).
-TEST(AlphaMask, CutOutAreaMatchesRayCast) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(AlphaMask, CutOutAreaMatchesRayCast) {
   Scene scene;
   scene.meshes.push_back(buildMesh(makeCard()).value());
   scene.materials = {material(AlphaMode::Mask, true, {0.5f, 0.9f, 0.5f, 1.0f})};
@@ -235,14 +230,11 @@ TEST(AlphaMask, CutOutAreaMatchesRayCast) {
       EXPECT_GT(double(expected), 0.4 * double(whole));
     }
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Each draw list has its own capacity (--draw-capacity applies per list) and overflow is counted exactly: with
 // culling off every object is appended to its list, so the CPU knows what each list keeps and drops.
-TEST(AlphaMask, OverflowCountedPerDrawList) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(AlphaMask, OverflowCountedPerDrawList) {
   Scene scene = makeFoliage(160, 7);
   const uint32_t cap = 20;
   auto r = Renderer::create(dev, scene, {.width = 96, .height = 64, .drawCapacity = cap});
@@ -274,12 +266,9 @@ TEST(AlphaMask, OverflowCountedPerDrawList) {
   std::vector<uint32_t> drawn = f->drawnObjects;
   std::sort(drawn.begin(), drawn.end());
   EXPECT_EQ(std::adjacent_find(drawn.begin(), drawn.end()), drawn.end()) << "no object drawn twice";
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
-TEST(AlphaMask, OpaqueSceneRecordsNothingExtra) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(AlphaMask, OpaqueSceneRecordsNothingExtra) {
   Scene scene = makeFieldScene({.objects = 50, .extent = 20.0}).value();
   auto r = Renderer::create(dev, scene, {.width = 64, .height = 64});
   ASSERT_TRUE(r.ok());
@@ -298,7 +287,6 @@ TEST(AlphaMask, OpaqueSceneRecordsNothingExtra) {
                                    : std::vector<std::string>{"forward"};
     EXPECT_EQ(names, expected);
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 namespace {
@@ -333,9 +321,7 @@ glm::dvec3 over(glm::dvec4 src, glm::dvec3 lit, glm::dvec3 dst) { return src.a *
 // computed on the CPU back to front (glTF BLEND: colour x alpha + (1 - alpha) x behind), in both paths.
 // Tolerance 4e-3: rgba16f rounding of up to three blend steps (half ulp at 1.0 = 4.9e-4 each) and the lighting
 // in float. The reverse order differs from the expected result by more than 0.05 at the overlap.
-TEST(Transparency, BackToFrontMatchesCpuComposite) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Transparency, BackToFrontMatchesCpuComposite) {
   Scene s;
   s.meshes.push_back(plainCard());
   const glm::dvec4 nearColor(1.0, 0.1, 0.1, 0.5), farColor(0.1, 0.2, 1.0, 0.6), backdrop(0.5, 0.5, 0.5, 1.0),
@@ -413,7 +399,6 @@ TEST(Transparency, BackToFrontMatchesCpuComposite) {
       }
     }
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 namespace {
@@ -432,11 +417,9 @@ int materialNamed(const Scene& s, const std::string& name) {
 // materials given a base colour alpha of 0.5 (their alpha is in textures, which maskAlpha() does not sample yet):
 // MatBlend's pixels then lie between the object rendered opaque and what is behind it, and differ from the opaque
 // render; MatCutoff75 (cutoff 0.75 > 0.5) is cut out entirely, MatCutoff25 (0.25) is not.
-TEST(Transparency, AlphaBlendModeTestBlendsAndCutsOut) {
+GPU_TEST(Transparency, AlphaBlendModeTestBlendsAndCutsOut) {
   const std::filesystem::path file = assetPath("AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf");
   REQUIRE_ASSET(file);
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
   Result<ImportedScene> imported = importGltfScene(file.string());
   ASSERT_TRUE(imported) << imported.error().message;
   Result<Scene> loaded = buildImportedScene(*imported);
@@ -509,14 +492,11 @@ TEST(Transparency, AlphaBlendModeTestBlendsAndCutsOut) {
     EXPECT_EQ(blended, contrasting);
     EXPECT_EQ(outside, 0u);
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // A scene of BLEND objects only: no draw list has objects (nothing rasterised into the IDs), and the
 // transparency pass alone draws, the same in both paths.
-TEST(Transparency, OnlyBlendedObjects) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Transparency, OnlyBlendedObjects) {
   Scene s;
   s.meshes.push_back(plainCard());
   s.materials = {material(AlphaMode::Blend, true, {0.9f, 0.5f, 0.1f, 0.4f})};
@@ -536,5 +516,4 @@ TEST(Transparency, OnlyBlendedObjects) {
   size_t tinted = 0;  // pixels the cards changed from the background
   for (size_t p = 0; p < vis->color.size(); p += 4) tinted += std::abs(vis->color[p] - 0.10f) > 0.05f;
   EXPECT_GT(tinted, 200u);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }

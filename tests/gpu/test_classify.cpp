@@ -55,9 +55,7 @@ Scene classificationScene(uint32_t materials) {
   return s;
 }
 
-TEST(Classification, ClassifiedShadingEqualsUbershader) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Classification, ClassifiedShadingEqualsUbershader) {
   constexpr uint32_t kMaterials = 340;
   const Scene s = classificationScene(kMaterials);
   auto r = Renderer::create(dev, s, {.width = 160, .height = 96});
@@ -120,15 +118,12 @@ TEST(Classification, ClassifiedShadingEqualsUbershader) {
     EXPECT_LE(e.maxAbs, 1e-3);  // (measured: 0 on lavapipe)
     EXPECT_EQ(e.differingFraction, 0.0);
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // An untextured scene (only the untextured classified pipeline) equals the ubershader too, with its one material's
 // dispatch over several rows of CLASSIFY_DISPATCH_WIDTH workgroups, the last one partial; Auto resolves per device
 // type, and the attribute record (the ubershader's variant) forces the ubershader.
-TEST(Classification, UntexturedAutoAndAttributes) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Classification, UntexturedAutoAndAttributes) {
   const Scene s = quadGrid();
   auto r = Renderer::create(dev, s, {.width = 161, .height = 97});
   ASSERT_TRUE(r.ok()) << r.error().message;
@@ -162,15 +157,12 @@ TEST(Classification, UntexturedAutoAndAttributes) {
   f = (*r)->renderFrame(s.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
   EXPECT_EQ(f->stats.shade.mode, ShadingMode::Uber);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Covered-pixel shading (covered_pixels.comp, then one thread per listed pixel): the ubershader's image exactly, at a
 // size with partial tiles and more covered pixels than one dispatch row takes, after a resize, and for a frame that
 // shows nothing (no pixel listed: the cleared background).
-TEST(Classification, CoveredPixelsEqualUbershader) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Classification, CoveredPixelsEqualUbershader) {
   const Scene s = classificationScene(40);
   auto r = Renderer::create(dev, s, {.width = 160, .height = 96});
   ASSERT_TRUE(r.ok()) << r.error().message;
@@ -204,7 +196,6 @@ TEST(Classification, CoveredPixelsEqualUbershader) {
       EXPECT_EQ(idPixels, 0u) << "looking away: nothing listed";
     }
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 }  // namespace

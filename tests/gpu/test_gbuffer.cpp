@@ -115,9 +115,7 @@ void compareGBuffer(Renderer& r, const Camera& cam, CullMode cull, const std::st
 
 }  // namespace
 
-TEST(GBuffer, MatchesForwardAndVisbufField) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(GBuffer, MatchesForwardAndVisbufField) {
   FieldParams p;
   p.objects = 400;
   p.seed = 9;
@@ -129,12 +127,9 @@ TEST(GBuffer, MatchesForwardAndVisbufField) {
   cam.position = {0.0, 10.0, 70.0};
   cam.target = {0.0, 0.0, 0.0};
   compareGBuffer(**r, cam, CullMode::Occlusion, "gbuffer_field");
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
-TEST(GBuffer, MatchesForwardAndVisbufCityAfterResize) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(GBuffer, MatchesForwardAndVisbufCityAfterResize) {
   Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
   auto r = Renderer::create(dev, scene, {.width = 400, .height = 300});
   ASSERT_TRUE(r.ok()) << r.error().message;
@@ -145,7 +140,6 @@ TEST(GBuffer, MatchesForwardAndVisbufCityAfterResize) {
   cam.position.y = 0.3;
   cam.target = cam.position + glm::dvec3(0.2, -0.02, -1.0);
   compareGBuffer(**r, cam, CullMode::Frustum, "gbuffer_city_grazing");
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // The bytes-per-pixel figures: the G-buffer raster writes exactly the fragments the visibility raster writes (same
@@ -153,9 +147,7 @@ TEST(GBuffer, MatchesForwardAndVisbufCityAfterResize) {
 // visibility path's own overdraw count and a sum over the read-back counts. The cull pass appends draws with
 // atomics, so their order (and with it which fragments pass the depth test when they run) changes from one cull to
 // the next: the G-buffer frame rasterises the visbuf frame's draw lists (freezeCulling).
-TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
   Scene scene = makeCityScene({.objects = 400, .seed = 5}).value();
   auto r = Renderer::create(dev, scene, {.width = 320, .height = 200});
   ASSERT_TRUE(r.ok());
@@ -202,7 +194,6 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
               double(fragments) / pixels * g->stats.rasterBytesPerFragment + 8.0 * double(covered) / pixels, 1e-6);
   EXPECT_EQ(g->stats.targetBytesPerPixel, g->stats.rasterBytesPerFragment + 8u);
   EXPECT_GT(g->stats.bytesWrittenPerPixel, v->stats.bytesWrittenPerPixel);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // The lighting pass rebuilds the camera-relative position from the D32 depth alone (inverse projection). Reference:
@@ -214,9 +205,7 @@ TEST(GBuffer, BandwidthCountsMatchVisbufRaster) {
 // surfaces: 1.4e-3 on the H100's 8 bits; lavapipe measured 1.2e-5 in all). The neighbours only estimate the local
 // slope (another triangle, the 1/depth curvature): a GPU may exceed it at 0.1% of the pixels (H100: 6 of 61,774);
 // lavapipe at none. A wrong matrix, sign or pixel centre is off by whole pixels, far outside at most pixels.
-TEST(GBuffer, PositionFromDepthMatchesVisbufReconstruction) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(GBuffer, PositionFromDepthMatchesVisbufReconstruction) {
   Scene scene = makeCityScene({.objects = 400, .seed = 3}).value();
   auto r = Renderer::create(dev, scene, {.width = 320, .height = 200});  // w x h below
   ASSERT_TRUE(r.ok());
@@ -268,12 +257,11 @@ TEST(GBuffer, PositionFromDepthMatchesVisbufReconstruction) {
   EXPECT_GT(compared, size_t(w * h / 2));
   EXPECT_EQ(coverageDiffers, 0u);
   EXPECT_LE(double(outside), (dev.isCpu() ? 0.0 : 1e-3) * double(compared));
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
-TEST(GBuffer, RejectsIdReadback) {
+GPU_TEST(GBuffer, RejectsIdReadback) {
   Scene scene = makeFieldScene({.objects = 10}).value();
-  auto r = Renderer::create(test::testDevice(), scene, {.width = 32, .height = 32});
+  auto r = Renderer::create(dev, scene, {.width = 32, .height = 32});
   ASSERT_TRUE(r.ok());
   FrameOptions fo;
   fo.path = RenderPath::GBuffer;

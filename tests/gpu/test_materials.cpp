@@ -70,9 +70,7 @@ Material emissiveMaterial(int32_t texture) {
 // log2(max(|duv/dx|, |duv/dy|) x 256) (the Vulkan formula the shader uses). visbuf's analytic derivatives must
 // match it within 0.05 levels at every pixel (rgba16f output: ~0.01 level); the forward path's hardware (2x2
 // quad) derivatives are reported beside it and bounded at 0.5 levels.
-TEST(Materials, MipSelectionMatchesExactLevelOfDetail) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Materials, MipSelectionMatchesExactLevelOfDetail) {
   Scene s;
   const float tiles = 64.0f;
   s.meshes.push_back(groundQuad(400.0f, 400.0f, tiles));
@@ -148,16 +146,13 @@ TEST(Materials, MipSelectionMatchesExactLevelOfDetail) {
     EXPECT_GT(n, size_t(w) * h / 4) << "the plane must cover a good part of the frame with minified texels";
     EXPECT_LE(maxErr, path == RenderPath::Visbuf ? 0.05 : 0.5) << renderPathName(path);
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // 256 materials on a 16 x 16 grid of tiles, each with its own emissive/base colour factors and its own sampler
 // (wrap S/T, nearest/linear, mip mode), KHR_texture_transform and layer of two texture classes (64^2 checkers,
 // 16^2 noise): visbuf against the forward reference within the textured-scene bounds of the asset test (mip
 // choices from analytic vs quad derivatives), and every material visible.
-TEST(Materials, ManyTexturedMaterialsMatchForward) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Materials, ManyTexturedMaterialsMatchForward) {
   Scene s;
   s.meshes.push_back(groundQuad(1.0f, 1.0f, 3.0f));
   s.textureClasses.push_back(makeClass(64, 4, [](uint32_t l, uint32_t, uint32_t x, uint32_t y, uint32_t n) {
@@ -249,7 +244,6 @@ TEST(Materials, ManyTexturedMaterialsMatchForward) {
   EXPECT_LE(j->forward.meanAbs, 1e-3);
   EXPECT_GE(j->forward.psnr, 38.0);
   EXPECT_GT(j->visbufCloser, j->forwardCloser) << "the analytic derivatives pick the exact texels more often";
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 }  // namespace

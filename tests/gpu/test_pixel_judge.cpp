@@ -42,8 +42,7 @@ Scene knotScene(Camera& cam) {
 
 // Bounds: rgba16f keeps 11 significant bits, so a correct colour near 1 is up to half an ulp (2.4e-4) from the
 // exact one; float interpolation and lighting add a few float ulps. Measured on lavapipe: see the summary printed.
-TEST(PixelJudge, VisbufPathIsExactOnAnUntexturedKnot) {
-  const uint32_t before = test::testDevice().validationMessages();
+GPU_TEST(PixelJudge, VisbufPathIsExactOnAnUntexturedKnot) {
   Camera cam;
   const Scene scene = knotScene(cam);
   const Frames f = renderBoth(scene, cam, 160, 120);
@@ -59,13 +58,12 @@ TEST(PixelJudge, VisbufPathIsExactOnAnUntexturedKnot) {
   EXPECT_LE(j->visbuf.maxAbs, 1e-3);
   EXPECT_GE(j->visbuf.psnr, 80.0);
   ASSERT_EQ(j->heatMap.size(), f.visbuf.color.size());
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // A pixel one path gets wrong: the forward frame's pixel is replaced by the background (what a raster that missed
 // the triangle would show). The ray hits the triangle the visbuf path claims, so the exact colour is its colour
 // and the visbuf path is the closer one; replacing a colour alone (same IDs) blames the changed path too.
-TEST(PixelJudge, BlamesThePathThatIsOff) {
+GPU_TEST(PixelJudge, BlamesThePathThatIsOff) {
   Camera cam;
   const Scene scene = knotScene(cam);
   Frames f = renderBoth(scene, cam, 96, 72);
@@ -87,7 +85,7 @@ TEST(PixelJudge, BlamesThePathThatIsOff) {
   EXPECT_GT(j->heatMap[4 * recoloured], j->heatMap[4 * recoloured + 1]) << "red: the visbuf path is off";
 }
 
-TEST(PixelJudge, RefusesWhatItCannotJudge) {
+GPU_TEST(PixelJudge, RefusesWhatItCannotJudge) {
   Camera cam;
   Scene scene = knotScene(cam);
   Frames f = renderBoth(scene, cam, 32, 24);
@@ -128,8 +126,7 @@ void printJudgement(const char* name, const PixelJudgement& j) {
 // textures with the exact uv derivatives. The visbuf path's analytic derivatives agree with them. Measured on
 // lavapipe (2026-11): visbuf max 1.25e-3, 70.0 dB; forward (quad derivatives) max 5.2e-2, 54.6 dB. Bounds: about
 // twice the visbuf path's largest error, 5 dB under its PSNR; the forward path is not bounded here (Materials.*).
-TEST(PixelJudge, JudgesTexturedMaterials) {
-  const uint32_t before = test::testDevice().validationMessages();
+GPU_TEST(PixelJudge, JudgesTexturedMaterials) {
   Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
   ASSERT_TRUE(applyGeneratedMaterials(scene, 8, 3).ok());
   Camera cam = scene.defaultCamera;
@@ -142,7 +139,6 @@ TEST(PixelJudge, JudgesTexturedMaterials) {
   EXPECT_EQ(j->judged, j->covered);
   EXPECT_LE(j->visbuf.maxAbs, 3e-3);
   EXPECT_GE(j->visbuf.psnr, 65.0);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // A normal-mapped asset with mesh tangents, mirrored uvs and both sidednesses (NormalTangentMirrorTest), its
@@ -150,9 +146,8 @@ TEST(PixelJudge, JudgesTexturedMaterials) {
 // judge's tangent frame and normal map must agree with both paths. Measured on lavapipe (2026-11) at 256x256: visbuf
 // max 1.5e-3, 70.7 dB; forward max 5.8e-3, 70.3 dB. Bounds: twice the visbuf path's largest error, 5 dB under its
 // PSNR.
-TEST(PixelJudge, JudgesANormalMappedAsset) {
-  REQUIRE_IMAGE_DECODING();
-  const uint32_t before = test::testDevice().validationMessages();
+GPU_TEST(PixelJudge, JudgesANormalMappedAsset) {
+  SKIP_WITHOUT_OIIO();
   Result<ImportedScene> imported =
       importGltfScene(test::assetPath("NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf").string());
   ASSERT_TRUE(imported) << imported.error().message;
@@ -171,5 +166,4 @@ TEST(PixelJudge, JudgesANormalMappedAsset) {
   EXPECT_EQ(j->judged, j->covered);
   EXPECT_LE(j->visbuf.maxAbs, 3e-3);
   EXPECT_GE(j->visbuf.psnr, 65.0);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }

@@ -67,9 +67,7 @@ FrameOptions idFrame(CullMode cull) {
 // The test: a 100-frame path at 100k objects, 10 % of them moving every frame, 100 removed, 100 added and
 // 100 hidden every frame (shown again 3 frames later). Two renderers receive the same changes; the one culling
 // with the depth pyramid must give the ID image of the one that culls nothing, every frame.
-TEST(SceneUpdates, MovingObjectsOcclusionEqualsNoCulling) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SceneUpdates, MovingObjectsOcclusionEqualsNoCulling) {
   const Scene scene = cityScene(100000);
   const SceneMotionParams mp{.moving = 0.1, .churn = 0.001, .seed = 3};
   auto motionA = SceneMotion::create(scene, mp), motionB = SceneMotion::create(scene, mp);
@@ -120,15 +118,12 @@ TEST(SceneUpdates, MovingObjectsOcclusionEqualsNoCulling) {
   EXPECT_GT(covered, 0u);
   EXPECT_EQ(added, uint32_t(frames) * 100u);
   EXPECT_EQ(removed, uint32_t(frames) * 100u);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // record() with three frames in flight, the host submitting each frame with its own copy of the colour output
 // and waiting only on the ring's fences; the scene changing every frame. Frame n's colour equals renderFrame's of
 // the same camera and the same changes (a second renderer), and completedStats() reports frame n - 3.
-TEST(SceneUpdates, RecordThreeInFlightMatchesRenderFrame) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SceneUpdates, RecordThreeInFlightMatchesRenderFrame) {
   const Scene scene = fieldScene(3000);
   const SceneMotionParams mp{.moving = 0.3, .churn = 0.01, .seed = 5};
   auto motionA = SceneMotion::create(scene, mp), motionB = SceneMotion::create(scene, mp);
@@ -233,13 +228,10 @@ TEST(SceneUpdates, RecordThreeInFlightMatchesRenderFrame) {
   std::printf("%d frames recorded with %u in flight: every colour image identical to renderFrame's (max %.3g)\n",
               compared, inFlight, worst);
   EXPECT_EQ(compared, frames);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Bad changes are refused whole, with the object named; only changed records are uploaded.
-TEST(SceneUpdates, RefusalsAndUploadedBytes) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SceneUpdates, RefusalsAndUploadedBytes) {
   const Scene scene = fieldScene(200);
   auto r = Renderer::create(dev, scene, {.width = 64, .height = 64, .spareObjects = 2});
   ASSERT_TRUE(r.ok());
@@ -286,18 +278,15 @@ TEST(SceneUpdates, RefusalsAndUploadedBytes) {
   f = R.renderFrame(scene.defaultCamera, fo);
   ASSERT_TRUE(f.ok());
   EXPECT_EQ(f->stats.upload.bytes, 0u);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // glTF node animation goes through the scene-update path: CesiumMilkTruck at t = 0.4 s (its two wheels turned)
 // renders exactly as a static copy of the scene whose wheel objects hold rigidObjectTransform(t) (the CPU's
 // double-precision pose), and a frame at a new time uploads the two wheel records only.
-TEST(SceneUpdates, RigidAnimationEqualsTheSamePoseAsStaticTransforms) {
+GPU_TEST(SceneUpdates, RigidAnimationEqualsTheSamePoseAsStaticTransforms) {
   const std::filesystem::path file =
       std::filesystem::path(VISBUF_ASSETS_DIR) / "CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb";
   REQUIRE_ASSET(file);
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
   GltfImportReport report;
   auto imported = importGltfScene(file.string(), {}, &report);
   ASSERT_TRUE(imported.ok()) << imported.error().message;
@@ -340,5 +329,4 @@ TEST(SceneUpdates, RigidAnimationEqualsTheSamePoseAsStaticTransforms) {
   std::printf("CesiumMilkTruck t=%.1f: identical to the static pose (max %.3g); %.2f%% of pixels differ from t=0\n",
               t, same.maxAbs, 100.0 * turned.differingFraction);
   test::saveOnFailure("rigid_truck", *a, *b);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }

@@ -20,9 +20,7 @@ std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
   return out;
 }
 
-TEST(SceneUpload, ChunkedPoolsEqualTheMeshesByteForByte) {
-  gpu::Device& device = test::testDevice();
-  const uint64_t before = device.validationMessages();
+GPU_TEST(SceneUpload, ChunkedPoolsEqualTheMeshesByteForByte) {
   Scene scene;
   for (uint32_t i = 0; i < 6; ++i) {
     Result<Mesh> mesh = buildMesh(makeTorusKnot(96 + 32 * i, 12 + 2 * i));
@@ -37,7 +35,7 @@ TEST(SceneUpload, ChunkedPoolsEqualTheMeshesByteForByte) {
     scene.objects.push_back({glm::translate(glm::dmat4(1.0), glm::dvec3(3.0 * i, 0.0, 0.0)), i, 0});
   }
   scene.materials.push_back(Material{});
-  Result<GpuScene> g = uploadScene(device, scene);
+  Result<GpuScene> g = uploadScene(dev, scene);
   ASSERT_TRUE(g) << g.error().message;
 
   std::vector<gpu::Vertex> vertices;
@@ -62,9 +60,9 @@ TEST(SceneUpload, ChunkedPoolsEqualTheMeshesByteForByte) {
   EXPECT_LE(g->stagingBytes, uint64_t{8} << 20);
   EXPECT_GE(g->uploadHostBytes, g->stagingBytes);
   const std::vector<uint8_t> v = bytesOf(vertices), i = bytesOf(indices), e = bytesOf(extras);
-  EXPECT_TRUE(gpu::downloadBuffer(device, g->vertices, 0, v.size()) == v) << "vertex pool";
-  EXPECT_TRUE(gpu::downloadBuffer(device, g->indices, 0, i.size()) == i) << "index pool";
-  EXPECT_TRUE(gpu::downloadBuffer(device, g->vertexExtras, 0, e.size()) == e) << "extras pool";
+  EXPECT_TRUE(gpu::downloadBuffer(dev, g->vertices, 0, v.size()) == v) << "vertex pool";
+  EXPECT_TRUE(gpu::downloadBuffer(dev, g->indices, 0, i.size()) == i) << "index pool";
+  EXPECT_TRUE(gpu::downloadBuffer(dev, g->vertexExtras, 0, e.size()) == e) << "extras pool";
   // Each mesh's table entry points at its own data.
   uint32_t vertexOffset = 0, indexOffset = 0;
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
@@ -73,7 +71,6 @@ TEST(SceneUpload, ChunkedPoolsEqualTheMeshesByteForByte) {
     vertexOffset += uint32_t(scene.meshes[m].vertices.size());
     indexOffset += uint32_t(scene.meshes[m].indices.size());
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 }  // namespace

@@ -44,7 +44,6 @@ constexpr double kExactMinPsnrForward = 60.0;
 
 void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint32_t h, const std::string& name) {
   gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
   auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
   auto [vis, fwd] = test::renderBothPaths(**renderer, cam);
@@ -120,12 +119,11 @@ void compareWithForward(const Scene& scene, const Camera& cam, uint32_t w, uint3
   EXPECT_LE(double(j->forward.over8Bit), kMaxDifferingShare * double(j->judged));
   test::saveOnFailure(name, *vis, *fwd);
   if (::testing::Test::HasFailure()) (void)writeColorImage(name + ".judge.png", w, h, j->heatMap);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 }  // namespace
 
-TEST(Shading, MatchesForwardReferenceField) {
+GPU_TEST(Shading, MatchesForwardReferenceField) {
   FieldParams p;
   p.objects = 400;
   p.seed = 9;
@@ -137,7 +135,7 @@ TEST(Shading, MatchesForwardReferenceField) {
   compareWithForward(scene, cam, 480, 270, "shading_field");
 }
 
-TEST(Shading, MatchesForwardReferenceCityGrazing) {
+GPU_TEST(Shading, MatchesForwardReferenceCityGrazing) {
   // Street level, the ground plane seen at a grazing angle (the hardest case for interpolation).
   Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
   Camera cam = scene.defaultCamera;
@@ -146,7 +144,7 @@ TEST(Shading, MatchesForwardReferenceCityGrazing) {
   compareWithForward(scene, cam, 400, 300, "shading_city_grazing");
 }
 
-TEST(Shading, MatchesForwardReferenceCloseUpNonPowerOfTwo) {
+GPU_TEST(Shading, MatchesForwardReferenceCloseUpNonPowerOfTwo) {
   FieldParams p;
   p.objects = 1;
   Scene scene = makeFieldScene(p).value();
@@ -158,12 +156,12 @@ TEST(Shading, MatchesForwardReferenceCloseUpNonPowerOfTwo) {
   compareWithForward(scene, cam, 333, 257, "shading_closeup");
 }
 
-TEST(Renderer, RejectsImpossibleOptions) {
+GPU_TEST(Renderer, RejectsImpossibleOptions) {
   Scene scene = makeFieldScene({.objects = 10}).value();
-  auto r = Renderer::create(test::testDevice(), scene, {.width = 0, .height = 10});
+  auto r = Renderer::create(dev, scene, {.width = 0, .height = 10});
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::InvalidArgument);
-  auto ok = Renderer::create(test::testDevice(), scene, {.width = 16, .height = 16});
+  auto ok = Renderer::create(dev, scene, {.width = 16, .height = 16});
   ASSERT_TRUE(ok.ok());
   Camera bad;
   bad.position = {NAN, 0, 0};
@@ -173,9 +171,7 @@ TEST(Renderer, RejectsImpossibleOptions) {
   EXPECT_FALSE((*ok)->renderFrame(bad, {}).ok());
 }
 
-TEST(Renderer, DrawCapacityOverflowIsReported) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Renderer, DrawCapacityOverflowIsReported) {
   Scene scene = makeFieldScene({.objects = 300, .extent = 20.0}).value();
   auto r = Renderer::create(dev, scene, {.width = 64, .height = 64, .drawCapacity = 50});
   ASSERT_TRUE(r.ok());
@@ -190,12 +186,9 @@ TEST(Renderer, DrawCapacityOverflowIsReported) {
   EXPECT_EQ(f->stats.cull.drawsRendered, 50u);
   EXPECT_EQ(f->stats.cull.drawOverflow, f->stats.cull.drawsAppended - 50u) << "every dropped draw is counted";
   EXPECT_EQ(f->drawnObjects.size(), 50u);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
-TEST(Renderer, WideAndNarrowIdsAgree) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Renderer, WideAndNarrowIdsAgree) {
   Scene scene = makeFieldScene({.objects = 200, .extent = 30.0}).value();
   auto narrow = Renderer::create(dev, scene, {.width = 200, .height = 150});
   auto wide = Renderer::create(dev, scene, {.width = 200, .height = 150, .forceWideIds = true});
@@ -212,14 +205,11 @@ TEST(Renderer, WideAndNarrowIdsAgree) {
   ASSERT_TRUE(a.ok() && b.ok());
   EXPECT_EQ(a->ids, b->ids);
   EXPECT_EQ(a->color, b->color);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // The overdraw debug counter agrees with the IDs: every covered pixel was written at least once,
 // uncovered pixels never, in both paths.
-TEST(Renderer, OverdrawCountsAgreeWithCoverage) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Renderer, OverdrawCountsAgreeWithCoverage) {
   Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
   auto r = Renderer::create(dev, scene, {.width = 160, .height = 120});
   ASSERT_TRUE(r.ok());
@@ -241,5 +231,4 @@ TEST(Renderer, OverdrawCountsAgreeWithCoverage) {
     }
     EXPECT_GT(writes, 160u * 60u);
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }

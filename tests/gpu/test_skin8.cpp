@@ -20,9 +20,7 @@ using namespace visbuf;
 // rows), normals within 2e-4 (octahedral 2 x 16-bit storage ~5e-5 plus float blending). The first 4 influences
 // alone (renormalised) would land at least 0.01 of the radius away at every animated time (measured: 0.016), so
 // the check sees a dropped second set.
-TEST(Skinning, EightInfluencesMatchCpuDoubleSkinning) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(Skinning, EightInfluencesMatchCpuDoubleSkinning) {
   const test::Skin8Fixture f = test::makeSkin8Fixture();
   std::random_device rd;
   const std::filesystem::path dir =
@@ -97,5 +95,4 @@ TEST(Skinning, EightInfluencesMatchCpuDoubleSkinning) {
   EXPECT_LE(maxNormal, 2e-4);
   EXPECT_LE(maxReference, 1e-5);
   EXPECT_GE(minTruncated, 0.01);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }

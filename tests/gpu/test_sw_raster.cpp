@@ -57,9 +57,7 @@ IdDiff compareIds(const FrameResult& a, const FrameResult& b) {
 // each such pixel against the exact geometry); measured on lavapipe: 2 and 4 of 518,400 pixels, 60.2 dB over all
 // pixels (the few pixels showing another object dominate it). Bounds: 0.05 % of pixels with another triangle,
 // 0.01 % with another object, colour PSNR >= 50 dB.
-TEST(SwRaster, MatchesHardwareRaster) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SwRaster, MatchesHardwareRaster) {
   Scene scene = smallObjectField(20000);
   auto renderer = Renderer::create(dev, scene, {.width = 480, .height = 270});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
@@ -102,15 +100,12 @@ TEST(SwRaster, MatchesHardwareRaster) {
   EXPECT_LE(total.otherTriangle, total.pixels / 2000);
   EXPECT_LE(total.otherObject, total.pixels / 10000);
   EXPECT_GE(worstPsnr, 50.0);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Coincident triangles (every triangle of the mesh listed twice, as some exported assets have): the depths tie
 // exactly, and the hardware raster's depth test keeps the first drawn. The micro-raster must keep the same one (the
 // lower triangle of the draw, the lower draw slot): no pixel may show the other copy of the same triangle.
-TEST(SwRaster, CoincidentTrianglesKeepTheFirstInDrawOrder) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SwRaster, CoincidentTrianglesKeepTheFirstInDrawOrder) {
   FieldParams p;
   p.objects = 20000;
   p.seed = 11;
@@ -162,14 +157,11 @@ TEST(SwRaster, CoincidentTrianglesKeepTheFirstInDrawOrder) {
   EXPECT_GT(covered, 3u * 480u * 270u / 8u);
   EXPECT_EQ(copies, 0u);
   EXPECT_LE(other, 3u * 480u * 270u / 2000u);  // edge and depth ties, as in MatchesHardwareRaster
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Culling never changes the micro-raster's IDs either (LOD off): every frame of a path with a cleared history and a
 // resize, frustum and occlusion culling against none, pixel for pixel.
-TEST(SwRaster, IdImageUnchangedByCulling) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SwRaster, IdImageUnchangedByCulling) {
   Scene scene = smallObjectField(6000);
   auto renderer = Renderer::create(dev, scene, {.width = 317, .height = 229});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
@@ -203,7 +195,6 @@ TEST(SwRaster, IdImageUnchangedByCulling) {
               routed, occluded);
   EXPECT_GT(routed, 0u);
   EXPECT_GT(occluded, 0u);
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Resolved by the pyramid and the shading instead of merged (SwResolve::Shading): the same frames give the same
@@ -211,9 +202,7 @@ TEST(SwRaster, IdImageUnchangedByCulling) {
 // covered-pixel list that marks the micro-raster's pixels), with 32- and 64-bit IDs, and record no merge pass. A
 // frame that reads IDs back merges anyway. Two renderers per ID width, so that each frame's occlusion history is its
 // own path's.
-TEST(SwRaster, ResolvedInShadingMatchesMerged) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SwRaster, ResolvedInShadingMatchesMerged) {
   Scene scene = smallObjectField(20000);
   auto hasMerge = [](const FrameResult& f) {
     return std::any_of(f.stats.graph.passMs.begin(), f.stats.graph.passMs.end(),
@@ -273,14 +262,11 @@ TEST(SwRaster, ResolvedInShadingMatchesMerged) {
   ASSERT_TRUE(f.ok());
   EXPECT_FALSE(f->stats.sw.resolved) << "IDs read back: merged";
   EXPECT_TRUE(hasMerge(f.value()));
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // Off, or a frame it does not apply to (MSAA, the overdraw count), records no micro-raster pass; an impossible size
 // bound is refused with a clear error.
-TEST(SwRaster, SkippedWhereItDoesNotApplyAndRefusesImpossibleBounds) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SwRaster, SkippedWhereItDoesNotApplyAndRefusesImpossibleBounds) {
   Scene scene = smallObjectField(2000);
   auto renderer = Renderer::create(dev, scene, {.width = 160, .height = 90});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
@@ -313,14 +299,11 @@ TEST(SwRaster, SkippedWhereItDoesNotApplyAndRefusesImpossibleBounds) {
     EXPECT_EQ(f.error().code, ErrorCode::InvalidArgument);
     EXPECT_NE(f.error().message.find("micro-raster"), std::string::npos);
   }
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
 
 // A frame in which the micro-raster took nothing (no small object) makes the next frames route everything to the
 // hardware raster and record no micro-raster pass, until it probes again; the image never changes.
-TEST(SwRaster, UselessMicroRasterIsSkippedAndProbedAgain) {
-  gpu::Device& dev = test::testDevice();
-  const uint32_t before = dev.validationMessages();
+GPU_TEST(SwRaster, UselessMicroRasterIsSkippedAndProbedAgain) {
   FieldParams p;
   p.objects = 40;
   p.seed = 2;
@@ -349,5 +332,4 @@ TEST(SwRaster, UselessMicroRasterIsSkippedAndProbedAgain) {
   }
   // Frame 0 probes, 1..16 skip, 17 probes again, 18 skips.
   for (int i = 0; i < 19; ++i) EXPECT_EQ(recorded[size_t(i)], i == 0 || i == 17) << "frame " << i;
-  EXPECT_NO_VALIDATION_MESSAGES(before);
 }
