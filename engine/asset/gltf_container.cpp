@@ -15,6 +15,8 @@
 #include <nlohmann/json.hpp>
 
 #include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/gltf_validate.h"
+#include "visbuf/asset/pack_format.h"
 #include "visbuf/asset/uri_resolver.h"
 #include "visbuf/core/file_read.h"
 
@@ -66,6 +68,45 @@ uint32_t readU32(const uint8_t* p) {
 constexpr uint32_t kGlbMagic = 0x46546C67;      // "glTF"
 constexpr uint32_t kGlbChunkJson = 0x4E4F534A;  // "JSON"
 constexpr uint32_t kGlbChunkBin = 0x004E4942;   // "BIN\0"
+
+// Inputs that are not glTF, recognised by their first bytes so that every entry point (bake, render --scene,
+// render --mesh) says what the file is instead of showing a JSON parser's complaint. A glTF file is a GLB
+// container (magic "glTF") or JSON text whose first non-blank character (after an optional UTF-8 BOM) is '{'.
+// `glbName`: the file is named .glb, so text is reported as a bad GLB magic.
+Status checkIsGltf(const std::vector<uint8_t>& bytes, const std::string& path, bool glbName) {
+  auto startsWith = [&](std::string_view magic) {
+    return bytes.size() >= magic.size() && std::memcmp(bytes.data(), magic.data(), magic.size()) == 0;
+  };
+  if (bytes.empty()) return malformed(path + ": not a glTF file (the file is empty)");
+  if (startsWith("glTF")) return {};
+  if (startsWith(std::string_view(pack::kMagic, 4)))
+    return malformed(path + ": is a visbuf pack, not a glTF file; use render --scene (or render --mesh) to view it");
+  struct Kind {
+    std::string_view magic;
+    const char* name;
+  };
+  static constexpr Kind kKnown[] = {
+      {"\x89PNG\r\n\x1a\n", "a PNG image"},       {"\xff\xd8\xff", "a JPEG image"},
+      {"\xabKTX 20\xbb", "a KTX2 texture"},         {"DDS ", "a DDS texture"},
+      {"GIF8", "a GIF image"},                      {"BM", "a BMP image"},
+      {"RIFF", "a RIFF file (WebP, WAV, ...)"},     {"PK\x03\x04", "a ZIP archive"},
+      {"\x1f\x8b", "a gzip file"},                  {"%PDF", "a PDF document"},
+      {"\x7f" "ELF", "an executable"},               {"ply\n", "a PLY mesh"},
+      {"#?RADIANCE", "a Radiance HDR image"},       {"\x76\x2f\x31\x01", "an OpenEXR image"},
+  };
+  for (const Kind& k : kKnown)
+    if (startsWith(k.magic)) return malformed(path + ": not a glTF file (it is " + k.name + ")");
+  if (glbName) return malformed(path + ": not a GLB file (bad magic)");
+  size_t i = startsWith("\xef\xbb\xbf") ? 3 : 0;
+  while (i < bytes.size() && (bytes[i] == ' ' || bytes[i] == '\t' || bytes[i] == '\n' || bytes[i] == '\r')) ++i;
+  if (i < bytes.size() && bytes[i] == '{') return {};
+  const char* what = i == bytes.size() ? "only white space" : bytes[i] == '[' ? "a JSON array, not an object"
+                     : (bytes[i] == '#' || bytes[i] == 'v' || bytes[i] == 'o' || bytes[i] == 'm')
+                         ? "text that looks like a Wavefront OBJ or another text format"
+                         : "neither JSON nor GLB";
+  return malformed(path + ": not a glTF file (" + std::string(what) +
+                   "; a glTF file is a JSON object or a GLB container)");
+}
 
 struct GlbParts {
   std::string_view json;
@@ -287,6 +328,8 @@ Status preflight(const nlohmann::json& doc, const std::string& path, const std::
                                                    "' is not supported (only glTF 2.0)");
     }
   }
+  // Every index, count, offset, enum and number, before tinygltf narrows or drops it (gltf_validate.h).
+  if (Status s = validateGltfDocument(doc, path); !s) return s;
   if (auto buffers = doc.find("buffers"); buffers != doc.end() && buffers->is_array()) {
     for (size_t i = 0; i < buffers->size(); ++i) {
       const nlohmann::json& buffer = (*buffers)[i];
@@ -349,7 +392,7 @@ Status loadModel(const std::string& path, const GltfImportOptions& options, Memo
   std::string extension = std::filesystem::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (!isGlb && extension == ".glb") return malformed(path + ": not a GLB file (bad magic)");
+  if (Status s = checkIsGltf(*bytes, path, extension == ".glb"); !s) return s;
 
   Result<UriResolver> resolver = UriResolver::create(path, options.allowedUriRoots);
   if (!resolver) return resolver.error();

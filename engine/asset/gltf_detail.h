@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -187,6 +188,8 @@ struct AccessorPlan {
   const uint8_t* sparseValues = nullptr;
 };
 
+using SharedVec3 = std::shared_ptr<const std::vector<glm::vec3>>;
+
 // One primitive decoded into local space, before node transform and morph weights.
 struct DecodedPrimitive {
   bool skipped = false;
@@ -200,10 +203,11 @@ struct DecodedPrimitive {
   std::vector<glm::vec4> weights;
   std::vector<glm::u16vec4> joints1;  // JOINTS_1 / WEIGHTS_1 (influences 5-8), empty: none
   std::vector<glm::vec4> weights1;
-  // Morph target deltas, one entry per target; an empty vector means the target lacks that attribute.
-  std::vector<std::vector<glm::vec3>> positionDeltas;
-  std::vector<std::vector<glm::vec3>> normalDeltas;
-  std::vector<std::vector<glm::vec3>> tangentDeltas;  // TANGENT (xyz): kept only for animated morph targets
+  // Morph target deltas, one entry per target; null means the target lacks that attribute. Targets (of any
+  // primitive) that name the same accessor share one decoded array (Importer::morphDeltas).
+  std::vector<SharedVec3> positionDeltas;
+  std::vector<SharedVec3> normalDeltas;
+  std::vector<SharedVec3> tangentDeltas;  // TANGENT (xyz): kept only for animated morph targets
   std::vector<uint32_t> triangles;  // 3 local indices per triangle, counter-clockwise
 };
 
@@ -243,6 +247,14 @@ class Importer {
   Status readIndices(int accessor, const std::string& where, std::vector<uint32_t>* out);
   Status readTexCoords(int accessor, const std::string& where, std::vector<glm::vec2>* out);
   Status readTangents(int accessor, const std::string& where, std::vector<glm::vec4>* out);
+  // A morph target's deltas: accessor `accessor` decoded once per import and shared by every target that names it.
+  Result<SharedVec3> morphDeltas(int accessor, const std::string& where);
+  // Refuses, before anything is decoded, a mesh whose decoded primitives and output would not fit the memory
+  // budget (a small file whose primitives or targets share one large accessor asks for many copies of it).
+  Status checkMeshFits(int mesh);
+  // Adds `count` mesh instances to the import's total; CapacityExceeded naming GltfImportOptions::maxInstances
+  // (and nothing added) past it.
+  Status countInstances(uint64_t count, const std::string& where);
 
   Result<DecodedPrimitive> decodePrimitive(int mesh, int primitive);
   Status decodeSkinAttributes(const tinygltf::Primitive& prim, const std::string& where, DecodedPrimitive* out);
@@ -293,6 +305,8 @@ class Importer {
   bool meshoptRequired_ = false;
   bool instancingRequired_ = false;
   std::map<int, std::vector<uint8_t>> decodedViews_;  // meshopt scratch, by bufferView index
+  std::map<int, SharedVec3> morphDeltaCache_;          // decoded morph target accessors, by accessor index
+  uint64_t instancesEmitted_ = 0;                       // against GltfImportOptions::maxInstances
   std::vector<std::optional<std::vector<DecodedPrimitive>>> meshCache_;
   bool warnedZeroNormals_ = false;
 };

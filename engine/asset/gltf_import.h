@@ -101,6 +101,10 @@ namespace visbuf {
 
 // Default import memory budget (GltfImportOptions::maxMemoryBytes): 4 GiB.
 inline constexpr uint64_t kDefaultImportMemoryBytes = uint64_t{4} << 30;
+// Default GltfImportOptions::maxInstances: 2^20 objects. A pack stores about 144 bytes per object and the scene
+// build about 500 bytes per object at its peak, so this bounds a file of a few hundred bytes that asks for
+// millions of EXT_mesh_gpu_instancing instances to about 150 MB of pack and well under 1 GB of memory.
+inline constexpr uint64_t kDefaultMaxInstances = uint64_t{1} << 20;
 // Largest |coordinate| of an imported vertex (object space for importGltfScene, world space for
 // importGltfMesh, and every instance's world-space bounds): beyond it squared lengths overflow float and
 // bounds, framing and culling stop working, so such files are refused (MalformedInput).
@@ -115,6 +119,10 @@ struct GltfImportOptions {
   // accessors and output streams (an estimate that is checked before each allocation). CapacityExceeded
   // beyond it.
   uint64_t maxMemoryBytes = kDefaultImportMemoryBytes;
+  // Mesh instances the import may create: importGltfScene's ImportedInstance records (one per node mesh
+  // instance and material group, EXT_mesh_gpu_instancing instances included), importGltfMesh's copies of a
+  // node's mesh. CapacityExceeded beyond it, before the instances are built.
+  uint64_t maxInstances = kDefaultMaxInstances;
 };
 
 struct GltfImportReport {

@@ -69,6 +69,21 @@ Result<std::vector<glm::dmat4>> Importer::meshInstances(int nodeIndex, const glm
     const uint64_t n = model_.accessors[static_cast<size_t>(st.accessor)].count;
     if (n == 0 || n > kMaxInstancesPerNode)
       return malformed(aw + ": instance count " + str(n) + " is not in [1, " + str(kMaxInstancesPerNode) + "]");
+    // Before anything per instance is decoded or built: within GltfImportOptions::maxInstances (each instance
+    // is one object per material group; countInstances counts them as they are emitted).
+    if (!count) {
+      std::set<int> materials;
+      for (const tinygltf::Primitive& p : model_.meshes[static_cast<size_t>(node.mesh)].primitives)
+        materials.insert(p.material);
+      const uint64_t objects = n * (sceneImport ? materials.size() : 1);
+      if (objects > options_.maxInstances - std::min(options_.maxInstances, instancesEmitted_)) {
+        return makeError(ErrorCode::CapacityExceeded,
+                         aw + ": " + str(n) + " instances" +
+                             (objects != n ? " (" + str(objects) + " objects, one per material group)" : "") +
+                             " pass the import's limit of " + str(options_.maxInstances) + " instances (" +
+                             str(instancesEmitted_) + " so far; GltfImportOptions::maxInstances)");
+      }
+    }
     if (count && *count != n)
       return malformed(aw + ": count " + str(n) + " differs from accessor " + str(countAccessor) + " (" +
                        countSemantic + ") count " + str(*count) + " (every instance attribute has one per instance)");

@@ -157,24 +157,24 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
 
   // Morph targets (only POSITION and NORMAL matter for a baked mesh; TANGENT too for an animated one).
   for (size_t t = 0; t < prim.targets.size(); ++t) {
-    std::vector<glm::vec3> positionDelta;
-    std::vector<glm::vec3> normalDelta;
-    std::vector<glm::vec3> tangentDelta;
+    SharedVec3 deltas[3];
     const std::string target = " target " + str(uint64_t{t});
-    for (auto [semantic, dst] : {std::pair{"POSITION", &positionDelta}, std::pair{"NORMAL", &normalDelta},
-                                 std::pair{"TANGENT", &tangentDelta}}) {
-      auto it = prim.targets[t].find(semantic);
+    static constexpr const char* kSemantics[3] = {"POSITION", "NORMAL", "TANGENT"};
+    for (int k = 0; k < 3; ++k) {
+      auto it = prim.targets[t].find(kSemantics[k]);
       if (it == prim.targets[t].end()) continue;
-      const std::string w = where + target + " accessor " + str(it->second) + " (" + semantic + ")";
-      if (Status s = readVec3(it->second, AttributeKind::MorphDelta, w, true, dst); !s) return s.error();
-      if (dst->size() != vertexCount) {
-        return malformed(w + ": count " + str(uint64_t{dst->size()}) + " differs from POSITION count " +
+      const std::string w = where + target + " accessor " + str(it->second) + " (" + kSemantics[k] + ")";
+      auto decoded = morphDeltas(it->second, w);
+      if (!decoded) return decoded.error();
+      if ((*decoded)->size() != vertexCount) {
+        return malformed(w + ": count " + str(uint64_t{(*decoded)->size()}) + " differs from POSITION count " +
                          str(vertexCount));
       }
+      deltas[k] = std::move(decoded).value();
     }
-    out.positionDeltas.push_back(std::move(positionDelta));
-    out.normalDeltas.push_back(std::move(normalDelta));
-    out.tangentDeltas.push_back(std::move(tangentDelta));
+    out.positionDeltas.push_back(std::move(deltas[0]));
+    out.normalDeltas.push_back(std::move(deltas[1]));
+    out.tangentDeltas.push_back(std::move(deltas[2]));
   }
 
   // Indices: explicit or sequential; then convert the topology to a triangle list.
@@ -287,6 +287,7 @@ Status Importer::decodeSkinAttributes(const tinygltf::Primitive& prim, const std
 Result<const std::vector<DecodedPrimitive>*> Importer::decodedMesh(int mesh) {
   auto& slot = meshCache_[static_cast<size_t>(mesh)];
   if (!slot) {
+    if (Status s = checkMeshFits(mesh); !s) return s.error();
     std::vector<DecodedPrimitive> prims;
     const size_t count = model_.meshes[static_cast<size_t>(mesh)].primitives.size();
     for (size_t p = 0; p < count; ++p) {
@@ -373,8 +374,23 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
   if (!prim.tangents.empty()) perVertex += sizeof(glm::vec4);
   if (!prim.joints.empty()) perVertex += sizeof(glm::u16vec4) + sizeof(glm::vec4);
   if (!prim.joints1.empty()) perVertex += sizeof(glm::u16vec4) + sizeof(glm::vec4);
-  perVertex += (prim.positionDeltas.size() + prim.normalDeltas.size()) * sizeof(glm::vec3);
   if (Status s = budget_->charge(count * perVertex + prim.triangles.size() * sizeof(uint32_t), where); !s) return s;
+
+  // The weighted targets, one term per distinct delta array (targets that share an accessor share the array, so
+  // their weights add): the work per vertex is bounded by the distinct accessors, not by the target count.
+  auto weighted = [&](const std::vector<SharedVec3>& deltas) {
+    std::vector<std::pair<const std::vector<glm::vec3>*, double>> terms;
+    std::map<const std::vector<glm::vec3>*, size_t> slot;
+    for (size_t t = 0; t < targets; ++t) {
+      if (!deltas[t] || weights[t] == 0.0) continue;
+      auto [it, added] = slot.emplace(deltas[t].get(), terms.size());
+      if (added) terms.emplace_back(deltas[t].get(), 0.0);
+      terms[it->second].second += weights[t];
+    }
+    return terms;
+  };
+  const auto positionTerms = weighted(prim.positionDeltas);
+  const auto normalTerms = weighted(prim.normalDeltas);
 
   out->positions.resize(base + count);
   out->normals.resize(base + count);
@@ -382,9 +398,7 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
   size_t zeroNormals = 0;
   for (size_t v = 0; v < count; ++v) {
     glm::dvec3 p(prim.positions[v]);
-    for (size_t t = 0; t < targets; ++t) {
-      if (!prim.positionDeltas[t].empty()) p += weights[t] * glm::dvec3(prim.positionDeltas[t][v]);
-    }
+    for (const auto& [delta, w] : positionTerms) p += w * glm::dvec3((*delta)[v]);
     const glm::dvec3 wp = glm::dvec3(world * glm::dvec4(p, 1.0));
     const glm::vec3 fp(wp);
     if (!std::isfinite(fp.x) || !std::isfinite(fp.y) || !std::isfinite(fp.z)) {
@@ -399,9 +413,7 @@ Status Importer::emitPrimitive(const DecodedPrimitive& prim, const glm::dmat4& w
     out->positions[base + v] = fp;
     if (!prim.normals.empty()) {
       glm::dvec3 n(prim.normals[v]);
-      for (size_t t = 0; t < targets; ++t) {
-        if (!prim.normalDeltas[t].empty()) n += weights[t] * glm::dvec3(prim.normalDeltas[t][v]);
-      }
+      for (const auto& [delta, w] : normalTerms) n += w * glm::dvec3((*delta)[v]);
       n = normalMatrix * n;
       const double len = glm::length(n);
       if (len > 0.0 && std::isfinite(len)) {
@@ -493,6 +505,7 @@ Status Importer::emitNode(int nodeIndex, const glm::dmat4& world, MeshSource* ou
   auto r = nodeMesh(nodeIndex);  // (the node's mesh, its decoded primitives and weights, and where it is)
   if (!r) return r.error();
   if (!r->mesh) return {};
+  if (Status s = countInstances(1, r->where); !s) return s;  // each use is a copy of the mesh's vertices
   const std::string meshWhere =
       r->where + " mesh " + str(model_.nodes[static_cast<size_t>(nodeIndex)].mesh) + named(r->mesh->name);
   for (size_t p = 0; p < r->prims->size(); ++p) {

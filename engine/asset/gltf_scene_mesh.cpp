@@ -53,17 +53,39 @@ void appendMorphStreams(const DecodedPrimitive& prim, size_t base, size_t target
   const size_t end = out->positions.size();
   for (size_t t = 0; t < targetCount; ++t) {
     MeshSource::MorphTarget& dst = out->morphTargets[t];
-    auto put = [&](std::vector<glm::vec3>& stream, const std::vector<std::vector<glm::vec3>>& deltas) {
-      const bool has = t < deltas.size() && !deltas[t].empty();
+    auto put = [&](std::vector<glm::vec3>& stream, const std::vector<SharedVec3>& deltas) {
+      const bool has = t < deltas.size() && deltas[t];
       if (!has && stream.empty()) return;
       stream.resize(base, glm::vec3(0.0f));
-      if (has) stream.insert(stream.end(), deltas[t].begin(), deltas[t].end());
+      if (has) stream.insert(stream.end(), deltas[t]->begin(), deltas[t]->end());
       stream.resize(end, glm::vec3(0.0f));
     };
     put(dst.positions, prim.positionDeltas);
     put(dst.normals, prim.normalDeltas);
     put(dst.tangents, prim.tangentDeltas);
   }
+}
+
+// The bytes appendMorphStreams() adds for the primitives of `mesh` that use `gltfMaterial`: every vertex of
+// the group gets each of `targetCount` targets' streams that any of its primitives has (zeros where one lacks it).
+uint64_t morphStreamBytes(const std::vector<DecodedPrimitive>& prims, const tinygltf::Mesh& mesh, int gltfMaterial,
+                          size_t targetCount) {
+  uint64_t vertices = 0;
+  bool has[3] = {false, false, false};
+  for (size_t p = 0; p < prims.size(); ++p) {
+    if (mesh.primitives[p].material != gltfMaterial || prims[p].skipped) continue;
+    vertices += prims[p].positions.size();
+    int k = 0;
+    for (const auto* deltas : {&prims[p].positionDeltas, &prims[p].normalDeltas, &prims[p].tangentDeltas}) {
+      for (const SharedVec3& d : *deltas) has[k] = has[k] || d != nullptr;
+      ++k;
+    }
+  }
+  const uint64_t streams = uint64_t{has[0]} + uint64_t{has[1]} + uint64_t{has[2]};
+  uint64_t bytes = 0;
+  if (!checkedMul(vertices, streams * sizeof(glm::vec3), &bytes) || !checkedMul(bytes, targetCount, &bytes))
+    return UINT64_MAX;
+  return bytes;
 }
 
 }  // namespace
@@ -164,6 +186,14 @@ Status Importer::emitSceneMesh(int nodeIndex, const glm::dmat4& world, ImportedS
       im.source.name = mesh.name.empty() ? "mesh" + str(node.mesh) : mesh.name;
       if (groups.size() > 1) im.source.name += "/" + scene->materials[im.material].name;
       if (mirrored) im.source.name += " (mirrored)";
+      // Kept morph targets: the whole group's target streams, charged before the first is appended.
+      if (morphed) {
+        const uint64_t bytes = morphStreamBytes(**prims, mesh, gltfMaterial, morphTargets);
+        if (Status s = budget_->charge(bytes, nodeWhere + " mesh " + str(node.mesh) + named(mesh.name) + ": " +
+                                                  str(uint64_t{morphTargets}) + " animated morph targets");
+            !s)
+          return s;
+      }
       // Object space: identity transform. Normals are generated (when missing) from the file's winding.
       for (size_t p = 0; p < (*prims)->size(); ++p) {
         const DecodedPrimitive& prim = (**prims)[p];
@@ -256,6 +286,7 @@ Status Importer::emitSceneMesh(int nodeIndex, const glm::dmat4& world, ImportedS
       }
       inst.skin = it->second;
     }
+    if (Status s = countInstances(1, nodeWhere); !s) return s;
     scene->instances.push_back(inst);
   }
   return {};

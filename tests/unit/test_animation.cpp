@@ -537,7 +537,7 @@ TEST_F(AnimationSynthetic, BadJointIndex) {
 TEST_F(AnimationSynthetic, MissingJointNode) {
   json doc = document();
   doc["skins"][0]["joints"] = {2, 9};
-  EXPECT_TRUE(rejected(import(doc), "skin 0 'rig': joint 1 is node 9, which does not exist"));
+  EXPECT_TRUE(rejected(import(doc), "skins[0].joints[1]: 9 is not a valid index; nodes has 4 entries"));
 }
 
 TEST_F(AnimationSynthetic, TooFewInverseBindMatrices) {

@@ -166,23 +166,27 @@ TEST_F(InstancingTest, MalformedInstancesAreRefused) {
     doc["accessors"][ext(doc)["ROTATION"].get<int>()]["bufferView"] = doc["bufferViews"].size() - 1;
     importFails(doc, "(ROTATION): instance 0 has a zero-length rotation quaternion");
   }
+  // Indices and JSON types: refused before parsing, naming the JSON path (gltf_validate.h).
+  auto schemaFails = [&](const nlohmann::json& doc, const std::string& message) {
+    Result<ImportedScene> s = importGltfScene(write(doc, "bad.gltf"));
+    ASSERT_FALSE(s.ok()) << message;
+    EXPECT_EQ(s.error().code, ErrorCode::MalformedInput);
+    EXPECT_NE(s.error().message.find(message), std::string::npos) << s.error().message;
+  };
   {  // accessor that does not exist
     nlohmann::json doc = files.instanced;
     ext(doc)["SCALE"] = 99;
-    importFails(doc, "accessor 99 (SCALE): accessor does not exist");
+    schemaFails(doc, "bad.gltf: nodes[1].extensions.EXT_mesh_gpu_instancing.attributes.SCALE: 99 is not a valid index");
   }
-  {  // an instanced node whose mesh does not exist: the node's own error
+  {  // an instanced node whose mesh does not exist
     nlohmann::json doc = files.instanced;
     doc["nodes"][1]["mesh"] = 7;
-    Result<ImportedScene> s = importGltfScene(write(doc, "bad.gltf"));
-    ASSERT_FALSE(s.ok());
-    EXPECT_NE(s.error().message.find("node 1 'instanced': mesh 7 does not exist"), std::string::npos)
-        << s.error().message;
+    schemaFails(doc, "bad.gltf: nodes[1].mesh: 7 is not a valid index; meshes has 1 entry");
   }
   {  // attributes not an object
     nlohmann::json doc = files.instanced;
     doc["nodes"][1]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = 3;
-    importFails(doc, "'attributes' must be an object");
+    schemaFails(doc, "bad.gltf: nodes[1].extensions.EXT_mesh_gpu_instancing.attributes: expected an object, found an integer");
   }
 }
 
