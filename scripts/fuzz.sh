@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs one libFuzzer target of tests/fuzz for a bounded time under ASan + UBSan (+ LeakSanitizer):
 #   scripts/fuzz.sh TARGET SECONDS      e.g. scripts/fuzz.sh fuzz_pack_reader 60
-# TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode.
+# TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode | fuzz_mesh_build.
 #
 # Configures and builds the clang build (build-clang/: clang, RelWithDebInfo, -Werror, ASan + UBSan, libFuzzer
 # instrumentation; the same configuration as scripts/test.sh) when needed, then fuzzes a COPY of the committed
@@ -17,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 usage() {
-  echo "usage: scripts/fuzz.sh TARGET SECONDS   (TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode)" >&2
+  echo "usage: scripts/fuzz.sh TARGET SECONDS   (TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode | fuzz_mesh_build)" >&2
   exit 2
 }
 [ $# -eq 2 ] || usage
@@ -27,6 +27,7 @@ case "$target" in
   fuzz_gltf_import) max_len=32768 ;;   # the seeds are up to 15 KB (a skinned, animated GLB)
   fuzz_pack_reader) max_len=32768 ;;   # the seed packs are up to 17 KB
   fuzz_image_decode) max_len=8192 ;;   # tiny PNG / JPEG seeds; the pixel budget is in the target
+  fuzz_mesh_build) max_len=8192 ;;     # raw meshes are repeated to 20k triangles; small glTF seeds
   *) usage ;;
 esac
 [[ "$seconds" =~ ^[1-9][0-9]*$ ]] || usage

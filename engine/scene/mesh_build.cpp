@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
+#include <limits>
 
 #include <fmt/format.h>
 #include <meshoptimizer.h>
@@ -67,22 +69,41 @@ namespace {
 // with different normals, the vertex of another face: a box's top face would then be lit with the
 // front face's normal while its geometry (and so the measured error) is exact. Each corner is moved to
 // the vertex at the same position whose normal best matches the triangle's own geometric normal.
+// Bounded: the candidates of a position are its vertices with distinct normals, at most kCornerCandidates of them
+// (a real corner has a handful; thousands of coincident vertices would make this quadratic), so the work is
+// O(indexCount * kCornerCandidates + vertices). Beyond that, a corner picks the best of the first ones.
+constexpr size_t kCornerCandidates = 16;
+
 void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std::vector<uint32_t>& positionShadow,
                             uint32_t* indices, size_t indexCount) {
-  // Group the vertices sharing a position (shadow index = first vertex with that position).
-  std::vector<std::vector<uint32_t>> groups(vertices.size());
-  for (uint32_t v = 0; v < vertices.size(); ++v) groups[positionShadow[v]].push_back(v);
+  // Candidates of each position group (shadow index = first vertex with that position), CSR.
+  std::vector<uint32_t> start(vertices.size() + 1, 0);
+  for (uint32_t v = 0; v < vertices.size(); ++v) start[positionShadow[v] + 1]++;
+  for (size_t g = 0; g < vertices.size(); ++g) start[g + 1] = std::min<uint32_t>(start[g + 1], kCornerCandidates);
+  for (size_t g = 0; g < vertices.size(); ++g) start[g + 1] += start[g];
+  std::vector<uint32_t> size(vertices.size(), 0);
+  std::vector<uint32_t> candidates(start.back());
+  for (uint32_t v = 0; v < vertices.size(); ++v) {
+    const uint32_t g = positionShadow[v];
+    const uint32_t capacity = start[g + 1] - start[g];
+    if (size[g] == capacity) continue;
+    bool repeated = false;  // a normal already offered adds nothing
+    for (uint32_t k = 0; k < size[g] && !repeated; ++k)
+      repeated = vertices[candidates[start[g] + k]].normal == vertices[v].normal;
+    if (!repeated) candidates[start[g] + size[g]++] = v;
+  }
   auto pos = [&](uint32_t v) { return glm::vec3(vertices[v].px, vertices[v].py, vertices[v].pz); };
   for (size_t t = 0; t + 2 < indexCount; t += 3) {
     glm::vec3 n = glm::cross(pos(indices[t + 1]) - pos(indices[t]), pos(indices[t + 2]) - pos(indices[t]));
     if (!(glm::dot(n, n) > 0.0f)) continue;
     n = glm::normalize(n);
     for (int k = 0; k < 3; ++k) {
-      const std::vector<uint32_t>& group = groups[positionShadow[indices[t + k]]];
-      if (group.size() < 2) continue;
+      const uint32_t g = positionShadow[indices[t + k]];
+      if (size[g] < 2) continue;
       uint32_t best = indices[t + k];
       float bestDot = glm::dot(octDecode(vertices[best].normal), n);
-      for (uint32_t c : group) {
+      for (uint32_t j = start[g]; j < start[g] + size[g]; ++j) {
+        const uint32_t c = candidates[j];
         float d = glm::dot(octDecode(vertices[c].normal), n);
         if (d > bestDot + 1e-4f) {
           best = c;
@@ -92,6 +113,19 @@ void repairCornerAttributes(const std::vector<gpu::Vertex>& vertices, const std:
       indices[t + k] = best;
     }
   }
+}
+
+// meshopt_simplify classifies each vertex by scanning, for every edge, the adjacency of the edge's other end, and
+// meshopt_optimizeVertexCache rescans the live triangles of every cached vertex after each triangle it emits: both
+// cost about the sum over vertices of valence^2 (a fan of n triangles: n^2). An index list whose sum passes this
+// budget (far above any ordinary mesh: ~6 per index) is simplified by clustering only (meshopt_simplifySloppy,
+// linear) and ordered with meshopt_optimizeVertexCacheFifo (linear); its levels cost more triangles, never time.
+bool valenceWithinBudget(const uint32_t* indices, size_t count, size_t vertexCount, std::vector<uint32_t>& valence) {
+  constexpr uint64_t kValenceWorkPerIndex = 256, kValenceWorkFloor = uint64_t{1} << 22;
+  valence.assign(vertexCount, 0);
+  uint64_t work = 0;
+  for (size_t i = 0; i < count; ++i) work += 2 * uint64_t(valence[indices[i]]++) + 1;  // sum of squares, running
+  return work <= kValenceWorkPerIndex * count + kValenceWorkFloor;
 }
 
 // A simplified level that may join the LOD chain: its indices and measured error (object-space units).
@@ -247,6 +281,11 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
       return makeError(ErrorCode::MalformedInput,
                        fmt::format("mesh '{}': vertex {} has a non-finite uv1", source.name, i));
 
+  // Lod::indexCount and the index values are 32-bit.
+  if (source.indices.size() > std::numeric_limits<uint32_t>::max())
+    return makeError(ErrorCode::CapacityExceeded,
+                     fmt::format("mesh '{}': {} indices (at most 2^32 - 1 per mesh)", source.name,
+                                 source.indices.size()));
   // Interleave into the GPU vertex format, then deduplicate vertices identical in every stream.
   std::vector<gpu::Vertex> raw(vertexCount);
   for (size_t i = 0; i < vertexCount; ++i) {
@@ -265,9 +304,31 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   const bool skinned = !rawSkin->empty();
   Result<std::vector<std::vector<gpu::MorphDelta>>> rawMorph = morphStreamsOf(source);
   if (!rawMorph) return rawMorph.error();
+  // Triangles with two corners at the same place cover no pixel: they are dropped here, before any stage sees
+  // them. "The same place" holds in every pose: the same rest position, the same skin influences and the same
+  // position delta in every morph target (so a triangle a morph target or a skin opens up is kept). Stacks of such
+  // triangles made meshopt_buildMeshlets quadratic (they share one centroid, so its k-d tree degenerates into one
+  // leaf scanned for each meshlet), and they only cost draw time. A mesh with nothing else keeps its first triangle
+  // (it draws nothing; the mesh stays valid). Work: O(indices * (1 + morph targets)).
+  auto samePlace = [&](uint32_t i, uint32_t j) {
+    if (i == j) return true;
+    if (source.positions[i] != source.positions[j]) return false;
+    if (skinned && std::memcmp(&(*rawSkin)[i], &(*rawSkin)[j], sizeof(SkinVertex)) != 0) return false;
+    for (const auto& target : *rawMorph)
+      if (target[i].px != target[j].px || target[i].py != target[j].py || target[i].pz != target[j].pz) return false;
+    return true;
+  };
+  std::vector<uint32_t> kept;
+  kept.reserve(source.indices.size());
+  for (size_t t = 0; t + 2 < source.indices.size(); t += 3) {
+    const uint32_t a = source.indices[t], b = source.indices[t + 1], c = source.indices[t + 2];
+    if (samePlace(a, b) || samePlace(b, c) || samePlace(a, c)) continue;
+    kept.insert(kept.end(), {a, b, c});
+  }
+  if (kept.empty()) kept.assign(source.indices.begin(), source.indices.begin() + 3);
   // Deduplicate: two vertices merge only when the GPU vertex, the skin data and every morph delta are identical
   // (vertices that share a rest position but move apart under a target must stay two).
-  const size_t indexCount = source.indices.size();
+  const size_t indexCount = kept.size();
   std::vector<uint32_t> remap(vertexCount);
   std::vector<meshopt_Stream> streams = {{raw.data(), sizeof(gpu::Vertex), sizeof(gpu::Vertex)}};
   if (!source.tangents.empty()) streams.push_back({source.tangents.data(), sizeof(glm::vec4), sizeof(glm::vec4)});
@@ -290,7 +351,8 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     for (const auto& target : *rawMorph)
       streams.push_back({target.data(), sizeof(gpu::MorphDelta), sizeof(gpu::MorphDelta)});
   }
-  size_t unique = meshopt_generateVertexRemapMulti(remap.data(), source.indices.data(), indexCount, vertexCount,
+  // Vertices only the dropped triangles used get no slot (remap ~0u): every vertex left is used by LOD0.
+  size_t unique = meshopt_generateVertexRemapMulti(remap.data(), kept.data(), indexCount, vertexCount,
                                                    streams.data(), streams.size());
   Mesh mesh;
   mesh.name = source.name;
@@ -301,11 +363,19 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   std::vector<std::vector<gpu::MorphDelta>> morph(rawMorph->size());
   for (size_t t = 0; t < morph.size(); ++t) morph[t] = remapStream((*rawMorph)[t], remap, unique);
   std::vector<uint32_t> lod0(indexCount);
-  meshopt_remapIndexBuffer(lod0.data(), source.indices.data(), indexCount, remap.data());
+  meshopt_remapIndexBuffer(lod0.data(), kept.data(), indexCount, remap.data());
 
   const float* pos = &mesh.vertices[0].px;
   const size_t stride = sizeof(gpu::Vertex);
-  meshopt_optimizeVertexCache(lod0.data(), lod0.data(), indexCount, unique);
+  std::vector<uint32_t> valence;
+  const bool lod0Bounded = valenceWithinBudget(lod0.data(), indexCount, unique, valence);
+  auto optimizeCache = [&](uint32_t* level, size_t count) {
+    if (valenceWithinBudget(level, count, unique, valence))
+      meshopt_optimizeVertexCache(level, level, count, unique);
+    else
+      meshopt_optimizeVertexCacheFifo(level, level, count, unique, 16);
+  };
+  optimizeCache(lod0.data(), indexCount);
   meshopt_optimizeOverdraw(lod0.data(), lod0.data(), indexCount, pos, unique, stride, 1.05f);
   // Fetch order follows LOD0; coarser levels index a subset of the same vertices. Every vertex is used by
   // LOD0 (the remap above keeps only referenced ones), so the fetch remap is a permutation; one remap reorders
@@ -341,6 +411,12 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   static_assert(offsetof(gpu::Vertex, normal) == 12, "position + normal are the first 16 bytes");
   meshopt_generateShadowIndexBuffer(shadow.data(), lod0.data(), indexCount, mesh.vertices.data(), unique,
                                     16, stride);
+  // Which index lists meshopt_simplify may take (valenceWithinBudget); the others are simplified by clustering only.
+  const bool shadowBounded = lod0Bounded && valenceWithinBudget(shadow.data(), indexCount, unique, valence);
+  auto simplify = [&](uint32_t* out, const uint32_t* in, size_t count, bool bounded, size_t target, float* err) {
+    if (!bounded && !valenceWithinBudget(in, count, unique, valence)) return size_t{0};
+    return meshopt_simplify(out, in, count, pos, unique, stride, target, 1.0f, 0, err);
+  };
   // Per vertex: the first vertex with the same position (for repairCornerAttributes).
   std::vector<uint32_t> positionShadow((unique + 2) / 3 * 3);  // the API takes whole triangles
   {
@@ -355,15 +431,15 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
   // The recorded error is the measured two-sided deviation from the full surface (meshoptimizer's estimate,
   // in particular simplifySloppy's, can be far below what the silhouette really loses), never less than the
   // simplifier's own figure; object-space units.
-  const TriangleGrid fullGrid(positions, lod0);
+  const TriangleBvh fullTree(positions, lod0);
   auto measure = [&](const std::vector<uint32_t>& level, size_t count, float estimate) {
-    double measured = measureSimplificationError(fullGrid, positions, lod0, std::span(level.data(), count));
+    double measured = measureSimplificationError(fullTree, positions, lod0, std::span(level.data(), count));
     return std::max(float(measured), estimate * scale);
   };
   std::vector<uint32_t> sloppy(indexCount);
   auto addLevel = [&](std::vector<uint32_t>& level, size_t count, float error) {
     repairCornerAttributes(mesh.vertices, positionShadow, level.data(), count);
-    meshopt_optimizeVertexCache(level.data(), level.data(), count, unique);
+    optimizeCache(level.data(), count);
     mesh.lods.push_back({uint32_t(mesh.indices.size()), uint32_t(count), error});
     mesh.indices.insert(mesh.indices.end(), level.begin(), level.begin() + std::ptrdiff_t(count));
   };
@@ -375,11 +451,9 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     size_t target = std::max<size_t>(size_t(double(previous / 3) * options.lodRatio) * 3,
                                      size_t(options.minTriangles) * 3);
     float err = 0.0f;
-    size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
-                                    &err);
-    if (count > previous * options.minReduction) {
-      count = meshopt_simplify(scratch.data(), shadow.data(), indexCount, pos, unique, stride, target, 1.0f, 0, &err);
-    }
+    size_t count = lod0Bounded ? simplify(scratch.data(), lod0.data(), indexCount, true, target, &err) : 0;
+    if (shadowBounded && count > previous * options.minReduction)
+      count = simplify(scratch.data(), shadow.data(), indexCount, true, target, &err);
     const bool stalled = count == 0 || count > previous * options.minReduction;
     float error = stalled ? INFINITY : measure(scratch, count, err);
     // Topology-preserving simplification either stalled (small islands, a handle it may not close) or paid
@@ -422,11 +496,9 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     for (double t = double(previous / 3) * options.fineLodRatio;; t *= options.fineLodRatio) {
       const size_t target = std::max<size_t>(size_t(t), options.minTriangles) * 3;
       float err = 0.0f;
-      size_t count = meshopt_simplify(scratch.data(), lod0.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
-                                      &err);
-      if (count > target * 2)  // stalled at a seam: let it cross welded seams
-        count = meshopt_simplify(scratch.data(), shadow.data(), indexCount, pos, unique, stride, target, 1.0f, 0,
-                                 &err);
+      size_t count = lod0Bounded ? simplify(scratch.data(), lod0.data(), indexCount, true, target, &err) : 0;
+      if (shadowBounded && count > target * 2)  // stalled at a seam: let it cross welded seams
+        count = simplify(scratch.data(), shadow.data(), indexCount, true, target, &err);
       offer(scratch, count, err);
       float sloppyEstimate = 0.0f;
       size_t sloppyCount = meshopt_simplifySloppy(sloppy.data(), lod0.data(), indexCount, pos, unique, stride,
@@ -442,8 +514,7 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
                                                looseTarget, 1.0f, &e1);
         if (coarse <= target) continue;  // (already at the target: the sloppy candidate above)
         float e2 = 0.0f;
-        size_t refined = meshopt_simplify(scratch.data(), sloppy.data(), coarse, pos, unique, stride, target, 1.0f, 0,
-                                          &e2);
+        size_t refined = simplify(scratch.data(), sloppy.data(), coarse, false, target, &e2);
         offer(scratch, refined, e1);
       }
       if (target <= size_t(options.minTriangles) * 3) break;

@@ -30,98 +30,143 @@ double pointTriangleDistance(const glm::dvec3& p, const glm::dvec3& a, const glm
   return glm::length(p - (a + ab * (vb * denom) + ac * (vc * denom)));
 }
 
-TriangleGrid::TriangleGrid(std::span<const glm::vec3> positions, std::span<const uint32_t> indices)
+TriangleBvh::TriangleBvh(std::span<const glm::vec3> positions, std::span<const uint32_t> indices)
     : positions_(positions), indices_(indices) {
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (uint32_t i : indices) {
-    lo = glm::min(lo, glm::dvec3(positions[i]));
-    hi = glm::max(hi, glm::dvec3(positions[i]));
+  // Lod::indexCount is 32-bit, so a mesh's triangle numbers fit 32 bits (buildMesh refuses more).
+  const uint32_t tris = uint32_t(indices.size() / 3);
+  if (tris == 0) return;
+  std::vector<glm::vec3> centroid(tris);
+  order_.resize(tris);
+  for (uint32_t t = 0; t < tris; ++t) {
+    order_[t] = t;
+    centroid[t] = (positions[indices[3 * t]] + positions[indices[3 * t + 1]] + positions[indices[3 * t + 2]]) / 3.0f;
   }
-  const size_t tris = indices.size() / 3;
-  const glm::dvec3 ext = glm::max(hi - lo, glm::dvec3(1e-9));
-  // About 2 triangles per cell for a surface: cells ~ tris^(1/2) per side of the largest extent.
-  const double target = std::max(1.0, std::sqrt(double(tris)));
-  cell_ = std::max({ext.x, ext.y, ext.z}) / target;
-  dims_ = glm::max(glm::ivec3(glm::ceil(ext / cell_)), glm::ivec3(1));
-  dims_ = glm::min(dims_, glm::ivec3(256));
-  cell_ = std::max({ext.x / dims_.x, ext.y / dims_.y, ext.z / dims_.z}) * (1.0 + 1e-9);
-  origin_ = lo;
-  const size_t cells = size_t(dims_.x) * dims_.y * dims_.z;
-  std::vector<uint32_t> counts(cells + 1, 0);
-  auto forEachCell = [&](size_t t, auto&& fn) {
-    glm::dvec3 a(positions[indices[3 * t]]), b(positions[indices[3 * t + 1]]), c(positions[indices[3 * t + 2]]);
-    glm::ivec3 c0 = cellOf(glm::min(a, glm::min(b, c))), c1 = cellOf(glm::max(a, glm::max(b, c)));
-    for (int z = c0.z; z <= c1.z; ++z)
-      for (int y = c0.y; y <= c1.y; ++y)
-        for (int x = c0.x; x <= c1.x; ++x) fn((size_t(z) * dims_.y + y) * dims_.x + x);
-  };
-  for (size_t t = 0; t < tris; ++t) forEachCell(t, [&](size_t c) { counts[c + 1]++; });
-  for (size_t c = 0; c < cells; ++c) counts[c + 1] += counts[c];
-  cellStart_ = counts;
-  cellTris_.resize(counts[cells]);
-  std::vector<uint32_t> fill(counts.begin(), counts.end() - 1);
-  for (size_t t = 0; t < tris; ++t) forEachCell(t, [&](size_t c) { cellTris_[fill[c]++] = uint32_t(t); });
+  nodes_.reserve(size_t(tris) / 2 + 2);
+  build(0, tris, centroid);
 }
 
-glm::ivec3 TriangleGrid::cellOf(const glm::dvec3& p) const {
-  // Clamped in double before the conversion: a point far outside the grid (a simplified mesh's vertex on a
-  // huge input, found by fuzz_gltf_import) gives a cell index beyond int, and converting it is undefined.
-  const glm::dvec3 f = glm::floor((p - origin_) / cell_);
-  glm::ivec3 c;
-  for (int k = 0; k < 3; ++k) c[k] = f[k] >= 0.0 ? int(std::min(f[k], double(dims_[k] - 1))) : 0;  // NaN -> 0
-  return c;
+uint32_t TriangleBvh::build(uint32_t first, uint32_t count, std::vector<glm::vec3>& centroid) {
+  constexpr uint32_t kLeafTriangles = 4;
+  const uint32_t self = uint32_t(nodes_.size());
+  nodes_.push_back({});
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  glm::vec3 clo = lo, chi = hi;
+  for (uint32_t k = first; k < first + count; ++k) {
+    const uint32_t t = order_[k];
+    for (int c = 0; c < 3; ++c) {
+      lo = glm::min(lo, positions_[indices_[3 * t + c]]);
+      hi = glm::max(hi, positions_[indices_[3 * t + c]]);
+    }
+    clo = glm::min(clo, centroid[t]);
+    chi = glm::max(chi, centroid[t]);
+  }
+  nodes_[self].lo = lo;
+  nodes_[self].hi = hi;
+  if (count <= kLeafTriangles) {
+    nodes_[self].first = first;
+    nodes_[self].count = count;
+    return self;
+  }
+  // Median split by count along the centroids' longest axis: both halves are non-empty and at most half (rounded
+  // up), whatever the geometry (coincident triangles included), so the depth is logarithmic.
+  const glm::vec3 ext = chi - clo;
+  const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+  const uint32_t half = count / 2;
+  std::nth_element(order_.begin() + first, order_.begin() + first + half, order_.begin() + first + count,
+                   [&](uint32_t a, uint32_t b) { return centroid[a][axis] < centroid[b][axis]; });
+  build(first, half, centroid);
+  const uint32_t second = build(first + half, count - half, centroid);
+  nodes_[self].first = second;
+  nodes_[self].count = 0;
+  return self;
 }
 
-double TriangleGrid::distance(const glm::dvec3& p, double enough) const {
-  // Search shells of cells around p's (clamped) cell until the nearest hit is closer than any
-  // unvisited cell can be.
-  const glm::ivec3 home = cellOf(p);
-  // Distance from p to the grid box (p may lie outside it).
-  const glm::dvec3 boxLo = origin_, boxHi = origin_ + glm::dvec3(dims_) * cell_;
-  const double outside = glm::length(glm::max(glm::max(boxLo - p, p - boxHi), glm::dvec3(0.0)));
+namespace {
+
+// Distance from p to the box [lo, hi] (0 inside).
+double boxDistance(const glm::dvec3& p, const glm::vec3& lo, const glm::vec3& hi) {
+  const glm::dvec3 d = glm::max(glm::max(glm::dvec3(lo) - p, p - glm::dvec3(hi)), glm::dvec3(0.0));
+  return glm::length(d);
+}
+
+}  // namespace
+
+double TriangleBvh::distance(const glm::dvec3& p, double enough) const { return search(p, enough, nullptr); }
+
+double TriangleBvh::distance(const glm::dvec3& p, double enough, uint64_t& budget) const {
+  return search(p, enough, &budget);
+}
+
+double TriangleBvh::search(const glm::dvec3& p, double enough, uint64_t* budget) const {
   double best = std::numeric_limits<double>::max();
-  const int maxRing = std::max({dims_.x, dims_.y, dims_.z});
-  for (int r = 0; r <= maxRing; ++r) {
-    // Any triangle in a cell of ring r is at least (r - 1) cells away from p's home cell.
-    if (best < outside + double(r - 1) * cell_) break;
-    for (int z = home.z - r; z <= home.z + r; ++z)
-      for (int y = home.y - r; y <= home.y + r; ++y)
-        for (int x = home.x - r; x <= home.x + r; ++x) {
-          if (std::max({std::abs(x - home.x), std::abs(y - home.y), std::abs(z - home.z)}) != r) continue;
-          if (x < 0 || y < 0 || z < 0 || x >= dims_.x || y >= dims_.y || z >= dims_.z) continue;
-          const size_t c = (size_t(z) * dims_.y + y) * dims_.x + x;
-          for (uint32_t k = cellStart_[c]; k < cellStart_[c + 1]; ++k) {
-            const uint32_t t = cellTris_[k];
-            best = std::min(best, pointTriangleDistance(p, glm::dvec3(positions_[indices_[3 * t]]),
-                                                        glm::dvec3(positions_[indices_[3 * t + 1]]),
-                                                        glm::dvec3(positions_[indices_[3 * t + 2]])));
-            if (best <= enough) return best;
-          }
-        }
+  if (nodes_.empty()) return best;
+  // Depth-first, nearer child first; a subtree whose box is no nearer than the best triangle so far is skipped.
+  // The depth is at most log2(2^32) + 1, so each pending level holds one deferred sibling: 64 slots suffice.
+  struct Pending {
+    uint32_t node;
+    double boxDist;
+  };
+  Pending stack[64];
+  int top = 0;
+  stack[top++] = {0, boxDistance(p, nodes_[0].lo, nodes_[0].hi)};
+  while (top > 0) {
+    const Pending cur = stack[--top];
+    if (cur.boxDist >= best) continue;
+    if (budget) {
+      if (*budget == 0 && best < std::numeric_limits<double>::max()) return best;  // an upper bound
+      if (*budget > 0) --*budget;
+    }
+    const Node& n = nodes_[cur.node];
+    if (n.count > 0) {
+      for (uint32_t k = n.first; k < n.first + n.count; ++k) {
+        const uint32_t t = order_[k];
+        best = std::min(best, pointTriangleDistance(p, glm::dvec3(positions_[indices_[3 * t]]),
+                                                    glm::dvec3(positions_[indices_[3 * t + 1]]),
+                                                    glm::dvec3(positions_[indices_[3 * t + 2]])));
+        if (best <= enough) return best;
+      }
+      if (budget && *budget > 0) *budget -= std::min<uint64_t>(*budget, n.count);
+      continue;
+    }
+    const uint32_t a = cur.node + 1, b = n.first;
+    const double da = boxDistance(p, nodes_[a].lo, nodes_[a].hi), db = boxDistance(p, nodes_[b].lo, nodes_[b].hi);
+    // Push the farther first so the nearer is searched first.
+    if (da <= db) {
+      if (db < best) stack[top++] = {b, db};
+      if (da < best) stack[top++] = {a, da};
+    } else {
+      if (da < best) stack[top++] = {a, da};
+      if (db < best) stack[top++] = {b, db};
+    }
   }
   return best;
 }
 
 double measureSimplificationError(std::span<const glm::vec3> positions, std::span<const uint32_t> full,
                                   std::span<const uint32_t> simplified) {
-  return measureSimplificationError(TriangleGrid(positions, full), positions, full, simplified);
+  return measureSimplificationError(TriangleBvh(positions, full), positions, full, simplified);
 }
 
-double measureSimplificationError(const TriangleGrid& fullGrid, std::span<const glm::vec3> positions,
+double measureSimplificationError(const TriangleBvh& fullTree, std::span<const glm::vec3> positions,
                                   std::span<const uint32_t> full, std::span<const uint32_t> simplified) {
   if (simplified.empty()) return std::numeric_limits<double>::infinity();
   double error = 0.0;
-  TriangleGrid lodGrid(positions, simplified);
+  const TriangleBvh lodTree(positions, simplified);
+  // A full-mesh vertex the level also uses lies on the level's surface (distance 0): only the others are searched.
   std::vector<char> seen(positions.size(), 0);
+  for (uint32_t i : simplified) seen[i] = 1;
+  // One budget for the whole measure (kErrorWorkPerQuery per query point); once spent, each remaining query takes
+  // the first leaf it reaches, an upper bound of its distance, so the result bounds the exact error from above.
+  uint64_t budget = kErrorWorkPerQuery * (uint64_t(full.size()) + uint64_t(simplified.size()) / 3 * 4);
   for (uint32_t i : full) {
     if (seen[i]) continue;
     seen[i] = 1;
-    error = std::max(error, lodGrid.distance(glm::dvec3(positions[i]), error));
+    error = std::max(error, lodTree.distance(glm::dvec3(positions[i]), error, budget));
   }
   for (size_t t = 0; t + 2 < simplified.size(); t += 3) {
     glm::dvec3 a(positions[simplified[t]]), b(positions[simplified[t + 1]]), c(positions[simplified[t + 2]]);
     for (const glm::dvec3& s : {(a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5, (a + b + c) / 3.0})
-      error = std::max(error, fullGrid.distance(s, error));
+      error = std::max(error, fullTree.distance(s, error, budget));
   }
   return error;
 }

@@ -247,7 +247,7 @@ TEST(MeshError, PointTriangleDistanceRegions) {
 TEST(MeshError, GridDistanceFarOutsideTheGrid) {
   const std::vector<glm::vec3> positions{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
   const std::vector<uint32_t> indices{0, 1, 2, 1, 3, 2};
-  const TriangleGrid grid(positions, indices);
+  const TriangleBvh grid(positions, indices);
   for (const glm::dvec3 p : {glm::dvec3(3e16, 0.5, 0.0), glm::dvec3(-3e16, -2e16, 5.0), glm::dvec3(0.5, 0.5, 1e17)}) {
     const double exact = std::min(pointTriangleDistance(p, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}),
                                   pointTriangleDistance(p, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}));
