@@ -249,6 +249,20 @@ def cases(ctx):
     yield "morph_5000_shared_animated", lambda: shared_targets(
         "morph_5000_shared_animated", 10 ** 6, True, r"5000 animated morph targets: needs \d+ more bytes.*maxMemoryBytes")
 
+    # 5,000 targets, each its own accessor of 10^6 zero deltas (no bufferView): 60 GB of decoded deltas from a
+    # 300 KB file, refused before the first is decoded.
+    def distinct_targets():
+        case = "morph_5000_distinct_viewless"
+        d = viewless_doc(3)
+        first = len(d["accessors"])
+        d["accessors"] += [{"componentType": 5126, "count": 10 ** 6, "type": "VEC3"} for _ in range(5000)]
+        d["accessors"].append({"componentType": 5126, "count": 10 ** 6, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]})
+        d["meshes"][0]["primitives"] = [{"attributes": {"POSITION": len(d["accessors"]) - 1},
+                                         "targets": [{"POSITION": first + t} for t in range(5000)]}]
+        d["meshes"][0]["weights"] = [0.0] * 5000
+        refused(case, d, r"mesh 0: its 1 primitives need about \d+ bytes .*maxMemoryBytes")
+    yield "morph_5000_distinct_viewless", distinct_targets
+
     # Files that are not glTF, whatever their name.
     def not_gltf(case, name, data, pattern):
         root = ctx.folder(case)
