@@ -1,6 +1,7 @@
 #include "visbuf/core/file_read.h"
 
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -100,8 +101,8 @@ void recordInput(const std::string& path, const struct stat& st, const std::stri
     }
   };
   add(id);
-  struct stat link {};
-  if (::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode)) add(idOf(link));
+  struct stat linkStat {};
+  if (::lstat(path.c_str(), &linkStat) == 0 && S_ISLNK(linkStat.st_mode)) add(idOf(linkStat));
 }
 
 // Opens `path` and checks that it is a regular file; `size` gets its size.
@@ -237,8 +238,10 @@ Result<std::vector<uint8_t>> readRegularFile(const std::string& path, const File
 Result<FileSnapshot> readFileSnapshot(const std::string& path, const FileReadOptions& options) {
   FileSnapshot snapshot;
   Status s = readWhole(path, options, [&](size_t size) {
-    // Not value-initialised: every byte is read over at once (a pack of gigabytes is not zeroed first).
-    snapshot.bytes.reset(size > 0 ? new (std::nothrow) uint8_t[size] : nullptr);
+    if (size == 0) return static_cast<uint8_t*>(nullptr);
+    void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
+    if (p == MAP_FAILED) return static_cast<uint8_t*>(nullptr);
+    snapshot.bytes = std::unique_ptr<uint8_t[], SnapshotUnmap>(static_cast<uint8_t*>(p), SnapshotUnmap{size});
     snapshot.size = size;
     return snapshot.bytes.get();
   });
@@ -256,6 +259,10 @@ Result<std::vector<uint8_t>> readFilePrefix(const std::string& path, size_t coun
   if (!got) return got.error();
   bytes.resize(*got);
   return bytes;
+}
+
+void SnapshotUnmap::operator()(uint8_t* p) const {
+  if (p != nullptr) ::munmap(p, bytes);
 }
 
 void enableInputLog() { gInputLogOn.store(true, std::memory_order_release); }
@@ -281,14 +288,14 @@ void noteInputFile(const std::string& path, const std::string& role) {
 
 std::optional<InputFileRecord> findInputFile(const std::string& path) {
   if (!inputLogEnabled()) return std::nullopt;
-  struct stat target {}, link {};
+  struct stat target {}, linkStat {};
   const bool hasTarget = ::stat(path.c_str(), &target) == 0;
-  const bool hasLink = ::lstat(path.c_str(), &link) == 0;
+  const bool hasLink = ::lstat(path.c_str(), &linkStat) == 0;
   InputLog& log = inputLog();
   std::lock_guard<std::mutex> lock(log.mutex);
   for (const InputFileRecord& r : log.inputs) {
     const FileId id{r.device, r.inode};
-    if ((hasTarget && idOf(target) == id) || (hasLink && idOf(link) == id)) return r;
+    if ((hasTarget && idOf(target) == id) || (hasLink && idOf(linkStat) == id)) return r;
   }
   return std::nullopt;
 }

@@ -47,10 +47,14 @@ Result<std::vector<uint8_t>> readRegularFile(const std::string& path, const File
 
 // A private copy of a whole regular file, read once (the checks and errors of readRegularFile()): nothing parsed
 // from it can change afterwards, whatever another program does to the file. Unlike a mapping, a file truncated
-// or overwritten in place while it is used cannot raise SIGBUS or change bytes already checked. The buffer is
-// not zeroed before the read (a large file is touched once).
+// or overwritten in place while it is used cannot raise SIGBUS or change bytes already checked.
+struct SnapshotUnmap {
+  size_t bytes = 0;
+  void operator()(uint8_t* p) const;
+};
 struct FileSnapshot {
-  std::unique_ptr<uint8_t[]> bytes;  // null for an empty file
+  // Anonymous memory mapped with MAP_POPULATE (its pages made in one call, not one fault each); null when empty.
+  std::unique_ptr<uint8_t[], SnapshotUnmap> bytes;
   size_t size = 0;
   const uint8_t* data() const { return bytes.get(); }
 };
