@@ -31,6 +31,7 @@
 #include "visbuf/asset/pack_writer.h"
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/asset/texture_bake.h"
+#include "visbuf/core/file_read.h"
 #include "cli_checks.h"
 #include "commands.h"
 #include "invocation.h"
@@ -40,8 +41,8 @@ namespace visbuf::tools {
 
 void addBakeCommand(CLI::App& app, BakeCommand& c) {
   CLI::App* sub = app.add_subcommand("bake", "bake a glTF 2.0 file (.gltf/.glb) into a visbuf pack (.vbp)");
-  sub->add_option("input", c.input, "glTF 2.0 file to bake (.gltf or .glb)");
-  sub->add_option("-o,--output", c.output, "pack to write (.vbp); replaced atomically");
+  sub->add_option("input", c.input, "glTF 2.0 file to bake (.gltf or .glb)")->check(nonEmptyPath());
+  sub->add_option("-o,--output", c.output, "pack to write (.vbp); replaced atomically")->check(nonEmptyPath());
   sub->add_option("--lod-count", c.lodCount,
                   fmt::format("LOD levels per mesh including the full mesh, 1..{}", MAX_LODS))
       ->check(unsignedIn(1, MAX_LODS))
@@ -70,12 +71,12 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
   sub->add_option("--allow-uri-root", c.allowUriRoots,
                   "also let the glTF's buffer / image uris point into this folder (repeatable; by default only "
                   "files inside the glTF's own folder are read: docs/security.md)")
-      ->check(CLI::ExistingDirectory);
+      ->check(nonEmptyPath() & CLI::ExistingDirectory);
   sub->add_option("--max-image-pixels", c.maxImagePixels,
                   "refuse images whose header declares more pixels than this (width x height), before decoding")
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
-  sub->add_option("--json", c.json, "also write the summary as JSON");
+  sub->add_option("--json", c.json, "also write the summary as JSON")->check(nonEmptyPath());
   sub->add_option("--threads", c.threads,
                   "threads building meshes and textures (0: all cores); the pack is the same byte for byte at any count")
       ->check(unsignedIn(0, 4096))
@@ -168,17 +169,11 @@ int runBake(const BakeCommand& c) {
   if (c.textureQuality != "fast" && c.textureQuality != "normal" && c.textureQuality != "high")
     return badValue(fmt::format("--texture-quality '{}': must be fast, normal or high", c.textureQuality));
   // The output paths before any work (bad input, exit 1): their folders exist and are writable (nothing is
-  // created yet), and neither is the input itself (also through a symlink or a hard link).
-  if (Status s = checkOutputFile("-o", c.output); !s) return badInput(s.error());
-  if (Status s = checkNotSameFile(c.input, "-o", c.output); !s) return badInput(s.error());
-  if (!c.json.empty()) {
-    if (Status s = checkOutputFile("--json", c.json); !s) return badInput(s.error());
-    if (Status s = checkNotSameFile(c.input, "--json", c.json); !s) return badInput(s.error());
-    std::error_code ec1, ec2;
-    if (std::filesystem::weakly_canonical(c.json, ec1) == std::filesystem::weakly_canonical(c.output, ec2) && !ec1 &&
-        !ec2)
-      return badValue("--json and -o name the same file");
-  }
+  // created yet), neither is the input itself (also through a symlink or a hard link), and they differ.
+  noteInputFile(c.input, "the glTF to bake");
+  std::vector<OutputFile> outputs = {{"-o", c.output}};
+  if (!c.json.empty()) outputs.push_back({"--json", c.json});
+  if (Status s = checkOutputs(outputs); !s) return badInput(s.error());
   if (isPackFile(c.input)) {
     return badInput(
         {ErrorCode::InvalidArgument, c.input + ": is already a visbuf pack; bake takes a .gltf/.glb file"});
@@ -193,13 +188,9 @@ int runBake(const BakeCommand& c) {
   for (const std::string& w : report.warnings)
     std::fprintf(stderr, "visbuf bake: warning: %s\n", printable(w).c_str());
   if (!imported) return badInput(imported.error());
-  // Nor may the output be one of the images the asset references (read later, by the texture bake).
-  for (const ImportedImage& image : imported->images) {
-    if (image.path.empty()) continue;
-    if (Status s = checkNotSameFile(image.path, "-o", c.output); !s) return badInput(s.error());
-    if (!c.json.empty())
-      if (Status s = checkNotSameFile(image.path, "--json", c.json); !s) return badInput(s.error());
-  }
+  // Nor may an output be one of the files the asset references (its buffers, read by the import, and its images,
+  // read later by the texture bake or not at all with --no-textures: the importer notes them all as inputs).
+  if (Status s = checkOutputs(outputs); !s) return badInput(s.error());
   const double importSeconds = secondsSince(start);
 
   MeshBuildOptions options;

@@ -57,7 +57,9 @@ void addBenchBakeCommand(CLI::App& app, BenchBakeCommand& c, int argc, char** ar
   for (int i = 0; i < argc; ++i) c.commandLine += (i ? " " : "") + std::string(argv[i]);
   CLI::App* sub = app.add_subcommand(
       "bench-bake", "bake throughput and pack load time for every glTF file of an assets folder");
-  sub->add_option("--assets", c.assets, "folder searched recursively for .gltf / .glb files")->capture_default_str();
+  sub->add_option("--assets", c.assets, "folder searched recursively for .gltf / .glb files")
+      ->check(nonEmptyPath())
+      ->capture_default_str();
   sub->add_option("--repeats", c.repeats, "measured runs per file (medians)")
       ->check(unsignedIn(1, 1000))
       ->capture_default_str();
@@ -332,9 +334,23 @@ int runBenchBake(const BenchBakeCommand& c) {
 
   std::error_code ec;
   const fs::path out(c.output);
-  const fs::path scratch = out / "scratch";
-  fs::create_directories(scratch, ec);
+  for (const char* name : {"bench-bake.json", "bench-bake.md"})
+    if (Status s = checkOutputs({{"-o", (out / name).string(), true}}); !s) return fail(s.error());
+  fs::create_directories(out, ec);
   if (ec) return fail({ErrorCode::IoError, fmt::format("{}: cannot create the output folder", c.output)});
+  // The packs of the runs go into a folder of this run's own (mkdtemp: new, empty, never a folder of the user's
+  // that happens to have the same name), removed at the end.
+  std::string scratchTemplate = (out / ".bench-bake-scratch.XXXXXX").string();
+  if (::mkdtemp(scratchTemplate.data()) == nullptr)
+    return fail({ErrorCode::IoError, fmt::format("{}: cannot create a scratch folder in it", c.output)});
+  const fs::path scratch(scratchTemplate);
+  struct RemoveScratch {
+    fs::path path;
+    ~RemoveScratch() {
+      std::error_code e;
+      fs::remove_all(path, e);
+    }
+  } removeScratch{scratch};
 
   auto devOptions = gpu::parseDeviceOption(c.device, {.validation = c.validation});
   if (!devOptions) return fail(devOptions.error());
@@ -390,7 +406,6 @@ int runBenchBake(const BenchBakeCommand& c) {
     std::fflush(stdout);
     rows.push_back(std::move(row));
   }
-  fs::remove_all(scratch, ec);
 
   // Totals over the files that baked (sums of the medians).
   AssetRow total;

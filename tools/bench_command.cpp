@@ -37,13 +37,16 @@ void addBenchCommand(CLI::App& app, BenchCommand& c, int argc, char** argv) {
   for (int i = 0; i < argc; ++i) c.commandLine += (i ? " " : "") + shellQuote(argv[i]);
   CLI::App* sub = app.add_subcommand(
       "bench", "time against error: a camera path through a matrix of path x culling x LOD, per scene size");
-  sub->add_option("--scene", c.scene, "field | city | a .gltf/.glb file | a baked pack (.vbp)")->capture_default_str();
+  sub->add_option("--scene", c.scene, "field | city | a .gltf/.glb file | a baked pack (.vbp)")
+      ->check(nonEmptyPath())
+      ->capture_default_str();
   sub->add_option("--objects", c.objects,
                   "object counts, one scene each (default: 100,1000 for field and city; a file's own objects)")
       ->delimiter(',')
       ->check(unsignedIn(1, UINT32_MAX));
   sub->add_option("--seed", c.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
-  sub->add_option("--mesh", c.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
+  sub->add_option("--mesh", c.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)")
+      ->check(nonEmptyPath());
   sub->add_option("--lights", c.lights, "scatter N point lights over each scene (tiled light culling)")
       ->check(unsignedIn(0, UINT32_MAX));
   sub->add_option("--size", c.size, "image size WxH")->check(imageSize())->capture_default_str();
@@ -500,6 +503,14 @@ int runBench(const BenchCommand& c) {
 
   // The output folder and the memory for the largest scene before any work (bad input, exit 1).
   if (Status s = checkOutputFolder("-o", c.output); !s) return benchFail(s.error());
+  // The files the folder gets are never inputs of this run (writeBenchReport, bench_in_flight.cpp); checked again
+  // by commitFile when they are written, once every scene has been read.
+  const std::filesystem::path outFolder(c.output);
+  std::vector<OutputFile> outputs;
+  for (const char* name : {"bench.json", "bench.csv", "bench.md", "bench.svg"})
+    outputs.push_back({"-o", (outFolder / name).string(), true});
+  noteSceneInputs(sceneOptions(c, 0));
+  if (Status s = checkOutputs(outputs); !s) return benchFail(s.error());
   RenderBudgetInput budget;
   budget.objects = *std::max_element(objectCounts.begin(), objectCounts.end());
   budget.lights = c.lights;

@@ -174,7 +174,8 @@ int runInFlightBench(const BenchCommand& c, gpu::Device& device, const std::vect
   j["inFlight"] = rows;
   if (Status s = writeJsonFile((out / "bench.json").string(), j); !s) return benchFail(s.error());
   if (Status s = writeTextFile((out / "bench.md").string(), md); !s) return benchFail(s.error());
-  std::printf("wrote %s and %s\n", (out / "bench.json").string().c_str(), (out / "bench.md").string().c_str());
+  std::printf("wrote %s and %s\n", printable((out / "bench.json").string()).c_str(),
+              printable((out / "bench.md").string()).c_str());
   return 0;
 }
 

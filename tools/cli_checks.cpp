@@ -11,10 +11,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "scene_options.h"
+#include "visbuf/core/file_read.h"
 
 namespace visbuf::tools {
 
@@ -180,6 +182,10 @@ CLI::Validator powerOfTwo(uint32_t max) {
       range);
 }
 
+CLI::Validator nonEmptyPath() {
+  return CLI::Validator([](std::string& text) -> std::string { return text.empty() ? "empty path" : ""; }, "PATH");
+}
+
 // ---- paths -------------------------------------------------------------------------------------------------
 
 namespace {
@@ -257,14 +263,39 @@ Status checkOutputFolder(const std::string& option, const std::string& path) {
   return checkWritableFolder(option, path, ancestor, "the folder it would be created in");
 }
 
-Status checkNotSameFile(const std::string& input, const std::string& outputOption, const std::string& output) {
-  std::error_code ec;
-  const bool same = fs::exists(output, ec) && fs::exists(input, ec) && fs::equivalent(input, output, ec);
-  if (same && !ec)
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("{} {} is the input file {} (the same file, a link or a symlink to it); "
-                                 "the input is never overwritten: choose another output",
-                                 outputOption, quoted(output), quoted(input)));
+namespace {
+// The same file: equal once resolved (the folders' links followed; the file need not exist), or the same existing
+// file (hard link, symbolic link).
+bool sameFile(const std::string& a, const std::string& b) {
+  std::error_code ec1, ec2;  // absolute first: weakly_canonical leaves a relative path without existing prefix as is
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec1), ec1),
+                 cb = fs::weakly_canonical(fs::absolute(b, ec2), ec2);
+  if (!ec1 && !ec2 && ca == cb) return true;
+  struct stat sa {}, sb {};
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev &&
+         sa.st_ino == sb.st_ino;
+}
+}  // namespace
+
+Status checkOutputs(const std::vector<OutputFile>& outputs) {
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    const OutputFile& o = outputs[i];
+    if (!o.inFolder)
+      if (Status s = checkOutputFile(o.option, o.path); !s) return s;
+    if (std::optional<InputFileRecord> input = findInputFile(o.path)) {
+      const std::string what = input->role.empty() ? "read as " + tools::quoted(input->path) : printable(input->role);
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("{} {}: is an input of this command ({}); refused: an output never replaces an "
+                                   "input",
+                                   o.option, tools::quoted(o.path), what));
+    }
+    for (size_t j = 0; j < i; ++j) {
+      if (sameFile(outputs[j].path, o.path))
+        return makeError(ErrorCode::InvalidArgument,
+                         fmt::format("{} {}: is the same file as {} {}; each output needs its own file", o.option,
+                                     tools::quoted(o.path), outputs[j].option, tools::quoted(outputs[j].path)));
+    }
+  }
   return {};
 }
 

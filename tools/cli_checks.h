@@ -42,6 +42,9 @@ CLI::Validator unsignedIn(uint64_t lo, uint64_t hi);
 CLI::Validator imageSize();
 // A power of two in 1..max.
 CLI::Validator powerOfTwo(uint32_t max);
+// A path (file or folder, to read or write): not empty ("--scene: empty path"; a usage error, not "file not found"
+// about a blank name).
+CLI::Validator nonEmptyPath();
 
 // ---- paths (bad input, exit 1) -----------------------------------------------------------------------------
 // A file that will be written atomically (temporary file in the same folder, then rename): `path` names a
@@ -51,9 +54,23 @@ Status checkOutputFile(const std::string& option, const std::string& path);
 // An output folder (created when missing): an existing folder must be writable; a missing one must have a
 // writable folder as its nearest existing ancestor. Nothing is created.
 Status checkOutputFolder(const std::string& option, const std::string& path);
-// `output` must not be the same file as `input` (std::filesystem::equivalent: the same path, a symlink to it,
-// or a hard link of it), nor a symlink that resolves to it.
-Status checkNotSameFile(const std::string& input, const std::string& outputOption, const std::string& output);
+
+// ---- no output over an input, no two outputs in one file ------------------------------------------------
+// Every file a command writes, by the option that names it. inFolder: one of the fixed files an output folder
+// gets (bench.json in bench's -o folder): its folder is checked by checkOutputFolder, not here.
+struct OutputFile {
+  std::string option;
+  std::string path;
+  bool inFolder = false;
+};
+// Called before any work with the inputs named on the command line noted (core/file_read.h: noteInputFile), and
+// again once the inputs are loaded (the glTF's buffers and images, packs, --mesh files: everything the loaders
+// read or the asset references is then in the input log). Each output: checkOutputFile (unless inFolder); not
+// an input of this command: the same file, a hard link or a symbolic link to one ("-o 'scene.bin': is an input
+// of this command (scene.gltf: buffer 0); refused"); and not the same file as another output (the same path
+// once resolved, or the same existing file through a link): "--json 'x.png': is also -o". Bad input (exit 1).
+// commitFile() refuses the same again at the moment of writing, for an output a command would forget to list.
+Status checkOutputs(const std::vector<OutputFile>& outputs);
 
 // ---- memory ----------------------------------------------------------------------------------------------
 // What this process can still allocate: MemAvailable of /proc/meminfo (else physical pages x page size),

@@ -65,8 +65,9 @@ void addRenderCommand(CLI::App& app, RenderCommand& c) {
       ->check(unsignedIn(1, 10000))
       ->capture_default_str();
   sub->add_option("-o,--output", c.output, "colour image (.png, .exr, .tif); empty: none")->capture_default_str();
-  sub->add_option("--ids-out", c.idsOut, "decoded IDs (object+1, triangle) as a 2-channel uint32 TIFF");
-  sub->add_option("--json", c.json, "write the stats as JSON");
+  sub->add_option("--ids-out", c.idsOut, "decoded IDs (object+1, triangle) as a 2-channel uint32 TIFF")
+      ->check(nonEmptyPath());
+  sub->add_option("--json", c.json, "write the stats as JSON")->check(nonEmptyPath());
   sub->add_flag("--reference", c.reference,
                 "also render the forward path (same culling and LOD rule, hardware interpolation) over the same "
                 "frames and report the error against it beside both times");
@@ -267,28 +268,31 @@ int runRender(const RenderCommand& c) {
       c.pyramidLevel >= 0 && uint32_t(c.pyramidLevel) >= levels)
     return badValue(fmt::format("--pyramid-level {}: a {}x{} frame's depth pyramid has levels 0..{}", c.pyramidLevel,
                              size->first, size->second, levels - 1));
+  // Every output, before any work (bad input, exit 1): a writable folder, not an input named on the command line,
+  // no two in one file; again once the scene is loaded (its buffers, images and packs are inputs too).
+  std::vector<OutputFile> outputs;
+  if (!c.output.empty()) outputs.push_back({"-o", c.output});
+  if (!c.idsOut.empty()) outputs.push_back({"--ids-out", c.idsOut});
+  if (!c.judge.empty()) outputs.push_back({"--judge", c.judge});
+  if (!c.json.empty()) outputs.push_back({"--json", c.json});
+  noteSceneInputs(c.scene);
+  if (Status s = checkOutputs(outputs); !s) return fail(s.error());
   if (!c.output.empty()) {
-    if (Status s = checkOutputFile("-o", c.output); !s) return fail(s.error());
     const std::string ext = lowerExtension(c.output);
     if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".exr" && ext != ".tif" && ext != ".tiff")
       return fail({ErrorCode::InvalidArgument,
                    fmt::format("-o '{}': the image must be .png, .jpg, .exr or .tif", c.output)});
   }
   if (!c.idsOut.empty()) {
-    if (Status s = checkOutputFile("--ids-out", c.idsOut); !s) return fail(s.error());
     const std::string ext = lowerExtension(c.idsOut);
     if (ext != ".tif" && ext != ".tiff")
       return fail({ErrorCode::InvalidArgument, fmt::format("--ids-out '{}': the ID image must be .tif", c.idsOut)});
   }
   if (!c.judge.empty()) {
-    if (Status s = checkOutputFile("--judge", c.judge); !s) return fail(s.error());
     const std::string ext = lowerExtension(c.judge);
     if (ext != ".png" && ext != ".exr" && ext != ".tif" && ext != ".tiff")
       return fail({ErrorCode::InvalidArgument,
                    fmt::format("--judge '{}': the heat map must be .png, .exr or .tif", c.judge)});
-  }
-  if (!c.json.empty()) {
-    if (Status s = checkOutputFile("--json", c.json); !s) return fail(s.error());
   }
 
   // Memory, before anything is allocated: the machine's for --objects and the targets, then the device's
@@ -325,6 +329,7 @@ int runRender(const RenderCommand& c) {
 
   auto scene = loadScene(c.scene);
   if (!scene) return fail(scene.error());
+  if (Status s = checkOutputs(outputs); !s) return fail(s.error());
   if (Status s = checkMemory(estimateUpload(*scene, budget), device->get(), fmt::format("uploading this scene ({} "
                                                                                          "objects) at {}x{}",
                                                                                          scene->objects.size(),

@@ -12,26 +12,29 @@
 #include "visbuf/asset/pack_reader.h"
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/asset/texture_bake.h"
+#include "visbuf/core/file_read.h"
 #include "visbuf/scene/generate.h"
 
 namespace visbuf::tools {
 
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--scene", o.scene, "field | city | foliage | foliage-opaque | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
+      ->check(nonEmptyPath())
       ->capture_default_str();
   app.add_option("--objects,--instances", o.objects,
                  "number of objects (field: instances; city: approx. total; a pack, or a glTF with skins, morph or "
                  "node animation: copies of its scene on a grid, each at its own animation phase)")
       ->check(unsignedIn(1, UINT32_MAX));
   app.add_option("--seed", o.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
-  app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)");
+  app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)")
+      ->check(nonEmptyPath());
   app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)")
       ->check(unsignedIn(0, UINT32_MAX));
   app.add_flag("--no-sun", o.noSun, "no directional light (ambient, emissive and point lights only)");
   app.add_option("--allow-uri-root", o.allowUriRoots,
                  "glTF scenes: also let buffer / image uris point into this folder (repeatable; by default only "
                  "files inside the glTF's own folder are read: docs/security.md)")
-      ->check(CLI::ExistingDirectory);
+      ->check(nonEmptyPath() & CLI::ExistingDirectory);
   app.add_option("--max-image-pixels", o.maxImagePixels,
                  "glTF scenes: refuse images whose header declares more pixels than this, before decoding")
       ->check(unsignedIn(1, uint64_t{1} << 40))
@@ -55,6 +58,12 @@ GltfImportOptions importOptions(const SceneOptions& o) {
 }
 
 Result<MeshSource> importMesh(const std::string& path, const SceneOptions& o) {
+  // A pack holds built meshes with their LOD chains and materials, not a source mesh to instance: said plainly
+  // rather than as the glTF parser's complaint about the pack's bytes.
+  if (isPackFile(path) || std::filesystem::path(path).extension() == ".vbp")
+    return makeError(ErrorCode::InvalidArgument,
+                     "--mesh '" + path + "': is a visbuf pack; --mesh takes a .gltf/.glb mesh (render a pack with "
+                     "--scene '" + path + "', and --objects N for N copies of it)");
   GltfImportReport report;
   Result<MeshSource> m = importGltfMesh(path, importOptions(o), &report);
   for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
@@ -65,6 +74,15 @@ Result<MeshSource> importMesh(const std::string& path, const SceneOptions& o) {
 namespace {
 Result<Scene> loadSceneWithoutLights(const SceneOptions& o);
 }  // namespace
+
+bool isLayoutName(const std::string& scene) {
+  return scene == "field" || scene == "city" || scene == "foliage" || scene == "foliage-opaque";
+}
+
+void noteSceneInputs(const SceneOptions& o) {
+  if (!isLayoutName(o.scene)) noteInputFile(o.scene, "the --scene file");
+  if (!o.mesh.empty()) noteInputFile(o.mesh, "the --mesh file");
+}
 
 Result<Scene> loadScene(const SceneOptions& o) {
   Result<Scene> scene = loadSceneWithoutLights(o);

@@ -25,6 +25,11 @@ struct SceneOptions {
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);
+// Notes the files the options name (--scene when it is a file, not a layout; --mesh) as inputs of this command
+// (core/file_read.h), so that checkOutputs refuses an output aimed at one before any work.
+void noteSceneInputs(const SceneOptions& options);
+// True when --scene names a built-in layout rather than a file.
+bool isLayoutName(const std::string& scene);
 Result<Scene> loadScene(const SceneOptions& options);
 
 struct CameraOptions {

@@ -1,5 +1,7 @@
 #include "stats_output.h"
 
+#include <cstdio>
+
 #include <fstream>
 
 #include <fmt/format.h>
@@ -213,10 +215,14 @@ std::string formatMotion(const nlohmann::json& perFrame, uint32_t movingObjects)
 Status writeTextFile(const std::string& path, const std::string& text) {
   const std::string tmp = path + fmt::format(".tmp{}", getpid());
   {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) return makeError(ErrorCode::IoError, fmt::format("{}: cannot open for writing", path));
-    f << text;
-    if (!f.flush()) return makeError(ErrorCode::IoError, fmt::format("{}: write failed", path));
+    // "x": created new (O_EXCL), never an existing file truncated through its name or a link.
+    std::FILE* f = std::fopen(tmp.c_str(), "wbx");
+    if (!f) return makeError(ErrorCode::IoError, fmt::format("{}: cannot create the temporary file for writing", path));
+    const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    if (std::fclose(f) != 0 || !written) {
+      std::remove(tmp.c_str());
+      return makeError(ErrorCode::IoError, fmt::format("{}: write failed", path));
+    }
   }
   return commitFile(tmp, path);
 }

@@ -86,6 +86,15 @@ int runStress(const StressCommand& c) {
     std::fprintf(stderr, "visbuf stress: error: %s\n", printable(s.error().message).c_str());
     return 1;
   }
+  {
+    const std::filesystem::path outFolder(c.output);
+    if (Status s = checkOutputs({{"-o", (outFolder / "stress.json").string(), true},
+                                 {"-o", (outFolder / "stress.md").string(), true}});
+        !s) {
+      std::fprintf(stderr, "visbuf stress: error: %s\n", printable(s.error().message).c_str());
+      return 1;
+    }
+  }
   std::error_code ec;
   std::filesystem::create_directories(c.output, ec);
   if (ec) {
@@ -128,7 +137,7 @@ int runStress(const StressCommand& c) {
       return 1;
     }
   std::printf("visbuf stress: %s; wrote %s/stress.json and stress.md\n", all ? "every bound holds" : "BOUNDS FAILED",
-              c.output.c_str());
+              printable(c.output).c_str());
   if (messages) {
     std::fprintf(stderr, "visbuf stress: %u validation messages\n", messages);
     return 3;

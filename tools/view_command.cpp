@@ -198,8 +198,11 @@ int runView(const ViewCommand& c) {
   auto devOptions = gpu::parseDeviceOption(c.device, {.validation = false, .verbose = false});
   if (!devOptions) return fail(devOptions.error());
   if (!(c.lodError >= 0.0f)) return badValue("--lod-error must be >= 0");
+  std::vector<OutputFile> outputs;
+  if (!c.screenshot.empty()) outputs.push_back({"--screenshot", c.screenshot});
+  noteSceneInputs(c.scene);
+  if (Status s = checkOutputs(outputs); !s) return fail(s.error());
   if (!c.screenshot.empty()) {
-    if (Status s = checkOutputFile("--screenshot", c.screenshot); !s) return fail(s.error());
     const std::string ext = lowerExtension(c.screenshot);
     if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".exr" && ext != ".tif" && ext != ".tiff")
       return fail({ErrorCode::InvalidArgument,
@@ -219,6 +222,7 @@ int runView(const ViewCommand& c) {
 
   auto scene = loadScene(c.scene);
   if (!scene) return fail(scene.error());
+  if (Status s = checkOutputs(outputs); !s) return fail(s.error());
   auto startCamera = makeCamera(c.camera, *scene);
   if (!startCamera) return fail(startCamera.error());
 

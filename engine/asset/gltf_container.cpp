@@ -357,6 +357,7 @@ Status preflight(const nlohmann::json& doc, const std::string& path, const std::
                          shown + ": not a regular file (" + fileKindName(kind) + "); only regular files are read");
       }
       if (Status s = budget->charge(size, shown); !s) return s;
+      noteInputFile(*file, what);  // an input of the command: never replaced by one of its outputs
       const std::string key = tinygltf::JoinPath(baseDir, tinygltf::dlib::urldecode(text));
       auto [it, added] = gate->approved.emplace(key, *file);
       if (!added && it->second != *file) {
@@ -375,6 +376,7 @@ Status preflight(const nlohmann::json& doc, const std::string& path, const std::
         continue;
       Result<std::string> file = resolver.resolve(uri->get_ref<const std::string&>(), path + ": image " + str(uint64_t{i}));
       if (!file) return file.error();
+      noteInputFile(*file, path + ": image " + str(uint64_t{i}));  // an input, read or not (bake --no-textures)
       refs->imagePaths[i] = std::move(file.value());
     }
   }

@@ -31,7 +31,6 @@
 #include "visbuf/asset/pack_geometry.h"
 #include "visbuf/asset/pack_parser.h"
 #include "visbuf/core/file_read.h"
-#include "visbuf/core/mapped_file.h"
 
 namespace visbuf {
 
@@ -426,15 +425,18 @@ Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& lab
   }
 }
 
-// Only a regular file is mapped, opened without blocking (core/mapped_file.h): a FIFO or device given as a pack
-// fails at once instead of hanging in open(). The sections are checked and decoded in place from the read-only
-// mapping; nothing holds a copy of the file.
+// Only a regular file is read, opened without blocking (core/file_read.h): a FIFO or device given as a pack fails
+// at once instead of hanging in open(). The whole file is read once into private memory (readFileSnapshot), and
+// every check (the checksums first) and every decode works on that copy: another program that truncates or
+// overwrites the file in place meanwhile can neither raise SIGBUS nor change a byte after its checksum was
+// verified. A change during the read itself is caught by readFileSnapshot (size / mtime / ctime differ before and
+// after) or by the checksums.
 Result<Scene> readPack(const std::string& path, PackReadStats* stats) {
   FileReadOptions options;
   options.maxBytes = kMaxPackFileBytes;
-  Result<MappedFile> file = MappedFile::open(path, options);
+  Result<FileSnapshot> file = readFileSnapshot(path, options);
   if (!file) return file.error();
-  return parsePack(file->data(), file->size(), path, stats);
+  return parsePack(file->data(), file->size, path, stats);
 }
 
 bool isPackFile(const std::string& path) {

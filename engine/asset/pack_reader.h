@@ -20,24 +20,26 @@
 
 namespace visbuf {
 
-// Largest pack file readPack() maps (the address space, not memory, is what a mapping uses).
+// Largest pack file readPack() reads (into memory: callers that know the memory they may use check the file's size
+// against it first, as the command line does).
 inline constexpr uint64_t kMaxPackFileBytes = uint64_t{1} << 40;
 
 // What reading a pack cost besides the Scene it returns (for load statistics).
 struct PackReadStats {
-  uint64_t fileBytes = 0;         // the pack's size (mapped read-only, not copied, by readPack)
+  uint64_t fileBytes = 0;         // the pack's size (read once into private memory by readPack, freed on return)
   uint64_t largestSection = 0;    // bytes of the largest section as stored
   uint64_t peakScratchBytes = 0;  // the largest transient decode buffer (quantised vertices of one mesh); the
                                   // Scene's own decoded geometry is not counted
 };
 
-// Maps the pack file at `path` (read-only, private; core/mapped_file.h) and parses it in place. The result
-// passes validateScene(). `stats` (may be null) gets the read's figures.
+// Reads the pack file at `path` once into private memory (core/file_read.h: readFileSnapshot) and parses that
+// copy; the copy is freed on return. The result passes validateScene(). `stats` (may be null) gets the read's
+// figures.
 //
-// A mapped file that another process truncates while it is being read raises SIGBUS on the next access to the
-// lost pages. Packs are written atomically (writePack renames a complete file into place, which leaves an open
-// mapping on the old file intact), so only an in-place truncation by another program can do that; such a file
-// should be read with parsePack() from a private copy instead.
+// A pack changed by another program while it is read -- truncated, extended or overwritten in place -- gives an
+// Error (IoError: "changed while it was being read" / "shrank", or MalformedInput: a checksum or size mismatch),
+// never SIGBUS and never a scene with bytes from after the checksum check: the checksums are verified on the copy
+// that is decoded. Once readPack has returned, the file is not read again.
 Result<Scene> readPack(const std::string& path, PackReadStats* stats = nullptr);
 
 // Parses pack bytes held in memory (`size` bytes at `data`); `label` starts every error message.

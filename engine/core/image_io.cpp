@@ -45,16 +45,6 @@ Status writeWith(const std::string& path, const OIIO::ImageSpec& spec, OIIO::Typ
 
 }  // namespace
 
-Status commitFile(const std::string& tmp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return makeError(ErrorCode::IoError, fmt::format("{}: cannot move the finished file into place", path));
-  }
-  return {};
-}
-
 Status writeColorImage(const std::string& path, uint32_t width, uint32_t height, const std::vector<float>& rgba) {
   if (rgba.size() != size_t(width) * height * 4) return makeError(ErrorCode::InvalidArgument, "colour image size mismatch");
   const std::string ext = extensionOf(path);

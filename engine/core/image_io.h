@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "visbuf/core/result.h"
+#include "visbuf/core/temp_file.h"  // commitFile: every write ends there
 
 namespace visbuf {
 
@@ -17,8 +18,5 @@ Status writeRgba8Image(const std::string& path, uint32_t width, uint32_t height,
 Status writeIdImage(const std::string& path, uint32_t width, uint32_t height, const std::vector<uint32_t>& ids);
 // Reads a two-channel uint32 TIFF written by writeIdImage.
 Status readIdImage(const std::string& path, uint32_t& width, uint32_t& height, std::vector<uint32_t>& ids);
-
-// Renames `tmp` onto `path` (same filesystem); removes tmp on failure.
-Status commitFile(const std::string& tmp, const std::string& path);
 
 }  // namespace visbuf

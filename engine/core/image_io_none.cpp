@@ -17,14 +17,4 @@ Status writeRgba8Image(const std::string& path, uint32_t, uint32_t, const std::v
 Status writeIdImage(const std::string& path, uint32_t, uint32_t, const std::vector<uint32_t>&) { return unavailable(path); }
 Status readIdImage(const std::string& path, uint32_t&, uint32_t&, std::vector<uint32_t>&) { return unavailable(path); }
 
-Status commitFile(const std::string& tmp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return makeError(ErrorCode::IoError, path + ": cannot move the finished file into place");
-  }
-  return {};
-}
-
 }  // namespace visbuf

@@ -3,8 +3,9 @@
 // a size budget checked before mapping. The mapping uses the size fstat() reported at open.
 //
 // Remaining risk: if another process truncates the file in place while it is mapped, touching a page past the
-// new end raises SIGBUS. Replacing the file by rename (as every visbuf writer does) is safe: the mapping keeps
-// the old file. Callers that must survive in-place truncation read a private copy (readRegularFile) instead.
+// new end raises SIGBUS, and bytes overwritten in place show through the mapping after any check made on them.
+// Replacing the file by rename (as every visbuf writer does) is safe: the mapping keeps the old file. Inputs that
+// another program may change (packs: readPack) are read as a private copy (readFileSnapshot) instead.
 #pragma once
 
 #include <cstddef>

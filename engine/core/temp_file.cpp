@@ -2,6 +2,8 @@
 // left them.
 #include "visbuf/core/temp_file.h"
 
+#include <fmt/format.h>
+
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -15,6 +17,9 @@
 #include <limits>
 #include <mutex>
 #include <string_view>
+#include <system_error>
+
+#include "visbuf/core/file_read.h"
 
 namespace visbuf {
 
@@ -129,5 +134,24 @@ void removeStaleTempFiles(const std::filesystem::path& target) {
   ::closedir(dir);
 }
 
+Status commitFile(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  if (std::optional<InputFileRecord> input = findInputFile(path)) {
+    std::filesystem::remove(tmp, ec);
+    const std::string what = input->role.empty() ? "read as '" + input->path + "'" : input->role;
+    return makeError(ErrorCode::InvalidArgument,
+                     fmt::format("{}: is an input of this command ({}); refused: an output never replaces an input "
+                                 "(nothing was written)",
+                                 path, what));
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    std::filesystem::remove(tmp, ec);
+    return makeError(ErrorCode::IoError, fmt::format("{}: cannot move the finished file into place ({})", path, why));
+  }
+  noteOutputFile(path);
+  return {};
+}
 
 }  // namespace visbuf

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <string>
 
+#include "visbuf/core/result.h"
+
 namespace visbuf {
 
 struct TempSlot;
@@ -31,5 +33,13 @@ class TempFileGuard {
 // <pid> is no live process (kill(pid, 0) fails with ESRCH). Files of live processes, of other users (kill:
 // EPERM), and of this process are kept. Best effort: errors are ignored.
 void removeStaleTempFiles(const std::filesystem::path& target);
+
+// The last step of every atomic write: renames the finished temporary file `tmp` onto `path` (same folder), and
+// removes `tmp` on failure. Every output of the engine and the tools goes through here, so this is where "no
+// output replaces an input" holds: while the input log is on (core/file_read.h), a `path` that is an input of
+// this process (the same file, a hard link, a symbolic link to it, or the link it was opened through) is refused
+// with InvalidArgument ("<path>: is an input of this command (<what>); refused"), nothing is renamed and `tmp`
+// is removed. A committed file is marked as this process's output (reading it back does not make it an input).
+Status commitFile(const std::string& tmp, const std::string& path);
 
 }  // namespace visbuf
