@@ -326,6 +326,49 @@ Result<Mesh> buildMesh(const MeshSource& source, const MeshBuildOptions& options
     kept.insert(kept.end(), {a, b, c});
   }
   if (kept.empty()) kept.assign(source.indices.begin(), source.indices.begin() + 3);
+  // A triangle whose corners are at the same places as an earlier kept triangle's, in the same winding, covers the
+  // same pixels at the same depths in every pose: only one of them can be seen (which one is z-fighting), and
+  // stacks of them (65,600 copies of one triangle) only multiply overdraw. Sorted by their corner positions (each
+  // triangle rotated to start at its smallest corner, winding kept), a triangle is dropped when it repeats the
+  // first of its run. O(n log n), memory O(kept triangles).
+  {
+    const size_t tris = kept.size() / 3;
+    auto less = [&](uint32_t a, uint32_t b) {
+      const glm::vec3 &pa = source.positions[a], &pb = source.positions[b];
+      return pa.x != pb.x ? pa.x < pb.x : pa.y != pb.y ? pa.y < pb.y : pa.z < pb.z;
+    };
+    std::vector<uint8_t> rot(tris);  // the corner each triangle starts at (kept itself is not reordered)
+    for (size_t t = 0; t < tris; ++t) {
+      const uint32_t* c = &kept[3 * t];
+      rot[t] = !less(c[1], c[0]) && !less(c[2], c[0]) ? 0 : (!less(c[2], c[1]) ? 1 : 2);
+    }
+    auto corner = [&](uint32_t t, int c) { return kept[3 * t + (rot[t] + c) % 3]; };
+    std::vector<uint32_t> order(tris);
+    for (uint32_t t = 0; t < tris; ++t) order[t] = t;
+    auto triLess = [&](uint32_t a, uint32_t b) {
+      for (int c = 0; c < 3; ++c) {
+        if (less(corner(a, c), corner(b, c))) return true;
+        if (less(corner(b, c), corner(a, c))) return false;
+      }
+      return a < b;  // the earlier triangle first: it is the one kept
+    };
+    std::sort(order.begin(), order.end(), triLess);
+    std::vector<char> drop(tris, 0);
+    for (size_t i = 1, first = 0; i < tris; ++i) {
+      const uint32_t a = order[first], b = order[i];
+      bool samePositions = true, same = true;
+      for (int c = 0; c < 3; ++c) {
+        samePositions = samePositions && source.positions[corner(a, c)] == source.positions[corner(b, c)];
+        same = same && samePositions && samePlace(corner(a, c), corner(b, c));
+      }
+      if (!samePositions) first = i;  // a new run
+      else if (same) drop[b] = 1;      // (same positions, other deformation: kept; it may repeat another kept one)
+    }
+    size_t out = 0;
+    for (size_t t = 0; t < tris; ++t)
+      if (!drop[t]) out += 3, std::copy_n(&kept[3 * t], 3, &kept[out - 3]);
+    kept.resize(out);
+  }
   // Deduplicate: two vertices merge only when the GPU vertex, the skin data and every morph delta are identical
   // (vertices that share a rest position but move apart under a target must stay two).
   const size_t indexCount = kept.size();

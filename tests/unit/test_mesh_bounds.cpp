@@ -289,7 +289,28 @@ TEST(MeshBuild, FanAndStackedCopiesBuild) {
   EXPECT_EQ(f->lods[0].indexCount, 20000u * 3);
   Result<Mesh> st = buildMesh(sourceOf(stacked(20000)));
   ASSERT_TRUE(st.ok()) << st.error().message;
-  // Identical copies merge into one triangle's vertices; each copy is still a triangle of LOD0.
+  // Copies at the same places cover the same pixels at the same depths: one is kept.
   EXPECT_EQ(st->vertices.size(), 3u);
-  EXPECT_EQ(st->lods[0].indexCount, 20000u * 3);
+  EXPECT_EQ(st->lods[0].indexCount, 3u);
+}
+
+// Repeated triangles: copies with their own vertices and normals collapse to the first; the reversed winding (a
+// back face) stays, and so does a copy that a morph target moves elsewhere.
+TEST(MeshBuild, DropsRepeatedTrianglesOnlyWhereNoPoseSeparatesThem) {
+  MeshSource m = sourceOf(stacked(50));
+  for (size_t v = 0; v < m.normals.size(); ++v) m.normals[v] = glm::normalize(glm::vec3(0.01f * float(v), 0, 1));
+  const uint32_t n = uint32_t(m.positions.size());
+  m.positions.insert(m.positions.end(), {{-100, -100, 0}, {0, 100, 0}, {100, -100, 0}});  // reversed winding
+  m.normals.insert(m.normals.end(), 3, glm::vec3(0, 0, -1));
+  m.indices.insert(m.indices.end(), {n, n + 1, n + 2});
+  Result<Mesh> built = buildMesh(m);
+  ASSERT_TRUE(built.ok()) << built.error().message;
+  EXPECT_EQ(built->lods[0].indexCount, 2u * 3);
+  MeshSource::MorphTarget t;
+  t.positions.assign(m.positions.size(), glm::vec3(0.0f));
+  t.positions[3] = {0, 0, 1};  // the second copy's first corner moves under the target
+  m.morphTargets.push_back(t);
+  built = buildMesh(m);
+  ASSERT_TRUE(built.ok()) << built.error().message;
+  EXPECT_EQ(built->lods[0].indexCount, 3u * 3);
 }
