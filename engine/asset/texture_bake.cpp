@@ -6,6 +6,7 @@
 #include <squish.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -19,6 +20,7 @@
 #include <tuple>
 #include <utility>
 
+#include "visbuf/asset/texture_decode.h"
 #include "visbuf/asset/uri_resolver.h"
 #include "visbuf/core/file_read.h"
 #include "visbuf/shared/config.h"
@@ -275,27 +277,31 @@ uint32_t bakedTextureSize(uint32_t width, uint32_t height, uint32_t maxSize) {
   return uint32_t(std::min<uint64_t>(nearest, std::max(maxSize, 1u)));
 }
 
+namespace {
+// The next mip level of a square power-of-two level wider than 1: each texel the 2x2 box average.
+LinearImage halveLinear(const LinearImage& src) {
+  LinearImage dst;
+  dst.width = dst.height = src.width / 2;
+  dst.rgba.resize(size_t(dst.width) * dst.height * 4);
+  // Rows in parallel: every output texel is the same expression whichever thread computes it.
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, dst.height, 16), [&](const tbb::blocked_range<uint32_t>& rows) {
+    for (uint32_t y = rows.begin(); y != rows.end(); ++y) {
+      for (uint32_t x = 0; x < dst.width; ++x) {
+        const float* a = &src.rgba[(size_t(2 * y) * src.width + 2 * x) * 4];
+        const float* b = a + size_t(src.width) * 4;  // the row below
+        float* out = &dst.rgba[(size_t(y) * dst.width + x) * 4];
+        for (int c = 0; c < 4; ++c) out[c] = 0.25f * ((a[c] + a[4 + c]) + (b[c] + b[4 + c]));
+      }
+    }
+  });
+  return dst;
+}
+}  // namespace
+
 std::vector<LinearImage> buildMipChain(LinearImage level0) {
   std::vector<LinearImage> chain;
   chain.push_back(std::move(level0));
-  while (chain.back().width > 1) {
-    const LinearImage& src = chain.back();
-    LinearImage dst;
-    dst.width = dst.height = src.width / 2;
-    dst.rgba.resize(size_t(dst.width) * dst.height * 4);
-    // Rows in parallel: every output texel is the same expression whichever thread computes it.
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, dst.height, 16), [&](const tbb::blocked_range<uint32_t>& rows) {
-      for (uint32_t y = rows.begin(); y != rows.end(); ++y) {
-        for (uint32_t x = 0; x < dst.width; ++x) {
-          const float* a = &src.rgba[(size_t(2 * y) * src.width + 2 * x) * 4];
-          const float* b = a + size_t(src.width) * 4;  // the row below
-          float* out = &dst.rgba[(size_t(y) * dst.width + x) * 4];
-          for (int c = 0; c < 4; ++c) out[c] = 0.25f * ((a[c] + a[4 + c]) + (b[c] + b[4 + c]));
-        }
-      }
-    });
-    chain.push_back(std::move(dst));
-  }
+  while (chain.back().width > 1) chain.push_back(halveLinear(chain.back()));
   return chain;
 }
 
@@ -381,6 +387,39 @@ LinearImage halveCodes(const std::vector<uint8_t>& codes, uint32_t size, ColorSp
   return dst;
 }
 
+// 2:1 box reduction along x and / or y (an odd last column or row is averaged alone).
+LinearImage reduceHalf(const LinearImage& src, bool halveX, bool halveY) {
+  LinearImage dst;
+  dst.width = halveX ? (src.width + 1) / 2 : src.width;
+  dst.height = halveY ? (src.height + 1) / 2 : src.height;
+  dst.rgba.resize(size_t(dst.width) * dst.height * 4);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, dst.height, 16), [&](const tbb::blocked_range<uint32_t>& rows) {
+    for (uint32_t y = rows.begin(); y != rows.end(); ++y) {
+      const size_t y0 = halveY ? 2 * y : y, y1 = halveY ? std::min(2 * y + 1, src.height - 1) : y;
+      for (uint32_t x = 0; x < dst.width; ++x) {
+        const size_t x0 = halveX ? 2 * x : x, x1 = halveX ? std::min(2 * x + 1, src.width - 1) : x;
+        const float* a = &src.rgba[(y0 * src.width + x0) * 4];
+        const float* b = &src.rgba[(y0 * src.width + x1) * 4];
+        const float* c = &src.rgba[(y1 * src.width + x0) * 4];
+        const float* d = &src.rgba[(y1 * src.width + x1) * 4];
+        float* out = &dst.rgba[(size_t(y) * dst.width + x) * 4];
+        for (int k = 0; k < 4; ++k) out[k] = 0.25f * ((a[k] + b[k]) + (c[k] + d[k]));
+      }
+    }
+  });
+  return dst;
+}
+
+// Appends the RGBA8 levels no wider than baked->size of the chain that starts at `level` (buildMipChain's
+// values). Only two float levels exist at a time: levels above the baked size are averaged, then dropped.
+void appendMips(LinearImage level, ColorSpace colorSpace, BakedImage* baked) {
+  while (true) {
+    if (level.width <= baked->size) baked->mips.push_back(encodeRgba8(level, colorSpace));
+    if (level.width <= 1) break;
+    level = halveLinear(level);
+  }
+}
+
 }  // namespace
 
 Result<LinearImage> decodeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
@@ -408,32 +447,39 @@ Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::strin
       baked.resizeNote =
           fmt::format("{}x{} -> {}x{} (size cap: top mip levels dropped)", width, height, baked.size, baked.size);
     }
-    if (width <= baked.size) baked.mips.push_back(decoded->codes);
-    if (width > 1) {
-      LinearImage level1 = halveCodes(decoded->codes, width, colorSpace);
-      std::vector<uint8_t>().swap(decoded->codes);
-      for (const LinearImage& level : buildMipChain(std::move(level1)))
-        if (level.width <= baked.size) baked.mips.push_back(encodeRgba8(level, colorSpace));
-    }
+    LinearImage level1 = width > 1 ? halveCodes(decoded->codes, width, colorSpace) : LinearImage{};
+    if (width <= baked.size) baked.mips.push_back(std::move(decoded->codes));
+    std::vector<uint8_t>().swap(decoded->codes);
+    if (width > 1) appendMips(std::move(level1), colorSpace, &baked);
     return baked;
   }
   LinearImage image = decoded->codes.empty() ? std::move(decoded->linear)
                                              : linearFromCodes(decoded->codes, width, height, colorSpace);
+  std::vector<uint8_t>().swap(decoded->codes);  // float from here: the codes would only add 4 B/pixel
   if (!squarePow2) {
     const char* why = width != height ? "non-square: square of the nearest power of two"
                       : baked.size < bakedTextureSize(width, height, kMaxTextureSize)
                           ? "size cap"
                           : "non-power-of-two: nearest power of two";
     baked.resizeNote = fmt::format("{}x{} -> {}x{} ({})", width, height, baked.size, baked.size, why);
-    Result<LinearImage> resized = resizeImage(image, baked.size, baked.size);
-    if (!resized) return makeError(resized.error().code, name + ": " + resized.error().message);
-    image = std::move(resized.value());
+    // A downscale by 2 or more is first box-halved per axis (as mips are) while the half stays >= the baked
+    // size: the filter then spans under 2 source texels per output texel, and the resize costs O(S^2), not
+    // O(S^2 * ratio^2) (8192 x 8191 to 2048 took over a minute).
+    while (true) {
+      const bool hx = (image.width + 1) / 2 >= baked.size, hy = (image.height + 1) / 2 >= baked.size;
+      if (!hx && !hy) break;
+      image = reduceHalf(image, hx, hy);
+    }
+    if (image.width != baked.size || image.height != baked.size) {
+      Result<LinearImage> resized = resizeImage(image, baked.size, baked.size);
+      if (!resized) return makeError(resized.error().code, name + ": " + resized.error().message);
+      image = std::move(resized.value());
+    }
   } else if (baked.size < width) {
     baked.resizeNote =
         fmt::format("{}x{} -> {}x{} (size cap: top mip levels dropped)", width, height, baked.size, baked.size);
   }
-  for (const LinearImage& level : buildMipChain(std::move(image)))
-    if (level.width <= baked.size) baked.mips.push_back(encodeRgba8(level, colorSpace));
+  appendMips(std::move(image), colorSpace, &baked);
   return baked;
 }
 
@@ -459,6 +505,7 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   std::atomic<size_t> firstFailed{count};
   std::mutex progressMutex;
   size_t done = 0;
+  ImageMemoryGate gate(kImageBakeMemoryBudget);  // images baked at once: within the budget (texture_decode.h)
   tbb::parallel_for(size_t{0}, count, [&](size_t t) {
     if (t > firstFailed.load()) return;
     const TextureKey& key = (*keys)[t];
@@ -466,11 +513,30 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     const std::string name =
         fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), key.image, quoteForMessage(image.name));
     Result<BakedImage> b = [&]() -> Result<BakedImage> {
+      // Memory: the file's bytes are reserved while it is read, then with the estimate of its bake
+      // (imageBakePeakBytes); released and reserved again, never held while waiting for more.
+      uint64_t fileBytes = image.bytes.size();  // embedded: copied below
+      if (!image.path.empty()) (void)probeFile(image.path, &fileBytes, /*noFollow=*/true);
+      fileBytes = std::min(fileBytes, kMaxImageFileBytes);
+      gate.acquire(fileBytes);
       Result<std::vector<uint8_t>> file = image.path.empty() ? Result<std::vector<uint8_t>>(image.bytes)
                                                              : readImageFile(image);
+      gate.release(fileBytes);
       if (!file) return makeError(file.error().code, imported.name + ": " + file.error().message);
-      return bakeImage(file->data(), file->size(), name, key.colorSpace, options.maxTextureSize,
-                       options.maxImagePixels);
+      Result<ImageHeader> header = readImageHeader(file->data(), file->size(), name);
+      // An image over the pixel budget is refused before anything of its size is allocated: reserve nothing.
+      const bool admitted =
+          header && uint64_t(header->width) * header->height <= options.maxImagePixels;
+      const uint64_t reserved = file->size() + (admitted ? imageBakePeakBytes(*header, options.maxTextureSize) : 0);
+      gate.acquire(reserved);
+      // Isolated: while this thread waits inside the bake's nested parallel loops it must not start another
+      // image, whose acquire() could wait on this one's reservation.
+      Result<BakedImage> r = tbb::this_task_arena::isolate([&] {
+        return bakeImage(file->data(), file->size(), name, key.colorSpace, options.maxTextureSize,
+                         options.maxImagePixels);
+      });
+      gate.release(reserved);
+      return r;
     }();
     if (b) {
       const std::vector<uint8_t>& top = b->mips.front();

@@ -13,7 +13,9 @@
 //      way; REPEAT / MIRRORED_REPEAT then wrap in hardware exactly as glTF asks, which a sub-rectangle of a
 //      bigger layer could not).
 //      A square power-of-two image needs no resampling: its own mip chain is built and the levels above S
-//      dropped. Anything else is resampled once with OpenImageIO's resize (filtered, in linear light).
+//      dropped. Anything else is resampled once with OpenImageIO's resize (filtered, in linear light), after
+//      2:1 box reductions per axis while the half stays >= S (so the filter spans under 2 texels: linear time).
+//      Memory per image: texture_decode.h (imageBakePeakBytes); images baked at once share a 1.5 GiB budget.
 //   3. Mip chain to 1x1: each level is the 2x2 box average of the previous one, in linear light (float).
 //   4. Encode RGBA8: sRGB textures re-encode RGB with the sRGB curve (exactly rounded), alpha linear; data
 //      textures (normal, metallic-roughness, occlusion) are linear throughout.

@@ -128,6 +128,24 @@ def png_seeds():
         for y in range(ph):
             rows += b"\0" + bytes([(37 * (x + y)) & 255 for x in range(pw) for _ in range(3)])
     seeds["rgb8_8x8_adam7.png"] = png(8, 8, 2, 8, rows, interlace=1)
+    # Adam7, 3x3 RGBA 16-bit: passes 2 and 3 are empty (no rows at all); the others are 1x1, 1x1, 2x1, 1x2, 3x1.
+    rows = b""
+    for pw, ph in [(1, 1), (1, 1), (2, 1), (1, 2), (3, 1)]:
+        for y in range(ph):
+            rows += b"\0" + b"".join(struct.pack(">HHHH", 9000 * x, 60000, 300 * y, 65535 - x) for x in range(pw))
+    seeds["rgba16_3x3_adam7.png"] = png(3, 3, 6, 16, rows, interlace=1)
+    pal2 = b"\0\x1b\0\xe4"  # 2-bit palette, 4x2: filter byte + one packed byte a row
+    seeds["palette2_4x2.png"] = png(4, 2, 3, 2, pal2, extra=[(b"PLTE", bytes(range(12)))])
+    # Metadata chunks: a texture reads none of them (texture_decode_png.cpp skips all but PLTE / tRNS), and the
+    # fuzzer should keep checking that.
+    xmp = b"<x:xmpmeta xmlns:x='adobe:ns:meta/'>" + b"<a>" * 40 + b"</a>" * 40 + b"</x:xmpmeta>"
+    key = b"XML:com.adobe.xmp\0"
+    tiff = b"MM\0*\0\0\0\x08\0\x01" + struct.pack(">HHII", 0x8769, 4, 1, 8) + b"\0\0\0\0"
+    seeds["rgba8_2x2_metadata.png"] = png(2, 2, 6, 8, rgba, extra=[
+        (b"iTXt", key + b"\0\0\0\0" + xmp), (b"zTXt", key + b"\0" + zlib.compress(xmp)),
+        (b"tEXt", b"Raw profile type exif\0\nexif\n" + str(len(tiff)).encode() + b"\n" + tiff.hex().encode()),
+        (b"eXIf", tiff), (b"iCCP", b"icc\0\0" + zlib.compress(b"\0\0\x02\x0cappl" + b"\0" * 120)),
+        (b"sRGB", b"\0"), (b"pHYs", bytes(9)), (b"vsBf", b"private")])
     return seeds
 
 
@@ -151,6 +169,14 @@ def jpeg_seeds(tmp):
         with open(out, "rb") as f:
             seeds[name] = f.read()
     seeds.update(jpeg_regressions(seeds["baseline_rgb_8x8.jpg"], seeds["progressive_rgb_8x8.jpg"]))
+    # The progressive seed with metadata segments after SOI: XMP (APP1), ICC (APP2), IPTC (APP13), a comment.
+    def seg(marker, payload):
+        return struct.pack(">BBH", 0xFF, marker, len(payload) + 2) + payload
+    xmp = b"http://ns.adobe.com/xap/1.0/\0<x:xmpmeta>" + b"<a>" * 40 + b"</a>" * 40 + b"</x:xmpmeta>"
+    prog = seeds["progressive_rgb_8x8.jpg"]
+    seeds["progressive_rgb_8x8_metadata.jpg"] = prog[:2] + seg(0xE1, xmp) + seg(0xE2, b"ICC_PROFILE\0\x01\x01" +
+                                                                                   bytes(128)) + \
+        seg(0xED, b"Photoshop 3.0\x008BIM\x04\x04\0\0\0\0\0\x08\x1c\x02\x19\0\x04seed") + seg(0xFE, b"comment") + prog[2:]
     return seeds
 
 
