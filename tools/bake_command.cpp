@@ -76,6 +76,7 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
                   "refuse images whose header declares more pixels than this (width x height), before decoding")
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
+  addImportBudgetOptions(*sub, c.maxInstances, c.maxImportMemory);
   sub->add_option("--json", c.json, "also write the summary as JSON")->check(nonEmptyPath());
   sub->add_option("--threads", c.threads,
                   "threads building meshes and textures (0: all cores); the pack is the same byte for byte at any count")
@@ -184,6 +185,8 @@ int runBake(const BakeCommand& c) {
   GltfImportReport report;
   GltfImportOptions importOptions;
   importOptions.allowedUriRoots = c.allowUriRoots;
+  importOptions.maxInstances = c.maxInstances;
+  importOptions.maxMemoryBytes = c.maxImportMemory;
   Result<ImportedScene> imported = importGltfScene(c.input, importOptions, &report);
   for (const std::string& w : report.warnings)
     std::fprintf(stderr, "visbuf bake: warning: %s\n", printable(w).c_str());

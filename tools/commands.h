@@ -73,6 +73,8 @@ struct BakeCommand {
   std::string textureQuality = "fast";                 // --texture-quality fast|normal|high
   std::vector<std::string> allowUriRoots;              // --allow-uri-root: more folders uris may point into
   uint64_t maxImagePixels = uint64_t{64} << 20;        // --max-image-pixels (TextureBakeOptions::maxImagePixels)
+  uint64_t maxInstances = kDefaultMaxInstances;        // --max-instances (GltfImportOptions::maxInstances)
+  uint64_t maxImportMemory = kDefaultImportMemoryBytes;  // --max-import-memory (GltfImportOptions::maxMemoryBytes)
   uint32_t threads = 0;                                // --threads: mesh build threads, 0 = all cores
 };
 

@@ -39,6 +39,7 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
                  "glTF scenes: refuse images whose header declares more pixels than this, before decoding")
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
+  addImportBudgetOptions(app, o.maxInstances, o.maxImportMemory);
   app.add_option("--materials", o.materials,
                  "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
                  "assigned to objects by hash (material classification's many-material scenes)")
@@ -50,10 +51,25 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
       ->capture_default_str();
 }
 
+void addImportBudgetOptions(CLI::App& app, uint64_t& maxInstances, uint64_t& maxImportMemory) {
+  app.add_option("--max-instances", maxInstances,
+                 "glTF: refuse a file whose mesh instances (nodes, EXT_mesh_gpu_instancing) pass this count, before "
+                 "any instance is built")
+      ->check(unsignedIn(1, uint64_t{1} << 32))
+      ->capture_default_str();
+  app.add_option("--max-import-memory", maxImportMemory,
+                 "glTF: the import's memory budget in bytes (file, JSON, buffers, decoded accessors, output), "
+                 "checked before each allocation")
+      ->check(unsignedIn(uint64_t{1} << 20, uint64_t{1} << 40))
+      ->capture_default_str();
+}
+
 namespace {
 GltfImportOptions importOptions(const SceneOptions& o) {
   GltfImportOptions options;
   options.allowedUriRoots = o.allowUriRoots;
+  options.maxInstances = o.maxInstances;
+  options.maxMemoryBytes = o.maxImportMemory;
   return options;
 }
 

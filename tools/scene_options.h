@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "visbuf/asset/gltf_import.h"
 #include "visbuf/core/result.h"
 #include "visbuf/scene/scene.h"
 
@@ -21,10 +22,15 @@ struct SceneOptions {
   uint32_t materials = 0;       // generated layouts: replace the materials with N generated ones (applyGeneratedMaterials)
   std::vector<std::string> allowUriRoots;        // glTF: more folders its uris may point into (--allow-uri-root)
   uint64_t maxImagePixels = uint64_t{64} << 20;  // glTF: per-image pixel budget (--max-image-pixels)
+  uint64_t maxInstances = kDefaultMaxInstances;  // glTF: mesh instances of one import (--max-instances)
+  uint64_t maxImportMemory = kDefaultImportMemoryBytes;  // glTF: the import's memory budget, bytes (--max-import-memory)
   std::string objectOrder = "spatial";           // spatial (orderObjectsSpatially) | as-built (--object-order)
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);
+// --max-instances and --max-import-memory (GltfImportOptions::maxInstances / maxMemoryBytes), for every command
+// that imports a glTF (render, bake): the budgets docs/security.md states, raised on purpose.
+void addImportBudgetOptions(CLI::App& app, uint64_t& maxInstances, uint64_t& maxImportMemory);
 // Notes the files the options name (--scene when it is a file, not a layout; --mesh) as inputs of this command
 // (core/file_read.h), so that checkOutputs refuses an output aimed at one before any work.
 void noteSceneInputs(const SceneOptions& options);

@@ -376,8 +376,11 @@ Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where)
       plan.dense = bytes->data + acc.byteOffset;
     }
   } else if (plan.count > kMaxViewlessAccessorCount) {
-    return malformed(where + ": count " + str(plan.count) + " without a bufferView exceeds the limit " +
-                     str(kMaxViewlessAccessorCount));
+    return makeError(ErrorCode::CapacityExceeded,
+                     where + ": count " + str(plan.count) + " without a bufferView (all zeros but " +
+                         str(uint64_t(acc.sparse.isSparse ? acc.sparse.count : 0)) +
+                         " sparse values) exceeds the limit of " + str(kMaxViewlessAccessorCount) +
+                         " elements for an accessor whose data the file does not hold");
   }
 
   if (acc.sparse.isSparse) {

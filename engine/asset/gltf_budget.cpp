@@ -70,7 +70,8 @@ Status Importer::checkMeshFits(int meshIndex) {
                          str(uint64_t{mesh.primitives.size()}) + " primitives need " +
                          (overflow ? std::string("more than 2^64") : "about " + str(total)) +
                          " bytes decoded and emitted, past the import memory budget of " + str(budget_->limit()) +
-                         " bytes (" + str(budget_->used()) + " already used; GltfImportOptions::maxMemoryBytes)");
+                         " bytes (" + str(budget_->used()) +
+                         " already used; raise it with --max-import-memory, GltfImportOptions::maxMemoryBytes)");
   }
   return {};
 }
@@ -80,7 +81,7 @@ Status Importer::countInstances(uint64_t count, const std::string& where) {
     return makeError(ErrorCode::CapacityExceeded,
                      where + ": " + str(count) + " more mesh instances (" + str(instancesEmitted_) +
                          " so far) pass the import's limit of " + str(options_.maxInstances) +
-                         " instances (GltfImportOptions::maxInstances)");
+                         " instances (raise it with --max-instances, GltfImportOptions::maxInstances)");
   }
   instancesEmitted_ += count;
   return {};

@@ -26,7 +26,8 @@ Status MemoryBudget::charge(uint64_t bytes, const std::string& what) {
   if (bytes > limit_ - used_) {
     return makeError(ErrorCode::CapacityExceeded,
                      what + ": needs " + str(bytes) + " more bytes, past the import memory budget of " + str(limit_) +
-                         " bytes (" + str(used_) + " already used; GltfImportOptions::maxMemoryBytes)");
+                         " bytes (" + str(used_) +
+                         " already used; raise it with --max-import-memory, GltfImportOptions::maxMemoryBytes)");
   }
   used_ += bytes;
   return {};

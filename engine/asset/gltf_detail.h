@@ -130,9 +130,12 @@ inline constexpr const char* kInstancingExt = "EXT_mesh_gpu_instancing";
 // (importGltfMesh), so the count is bounded like a viewless accessor's.
 inline constexpr uint64_t kMaxInstancesPerNode = uint64_t{1} << 24;
 
-// Accessors without a bufferView are all zeros (plus sparse substitutions). Nothing in the file bounds their
-// count, so cap it to keep a hostile file from requesting terabytes.
-inline constexpr uint64_t kMaxViewlessAccessorCount = uint64_t{1} << 24;
+// Accessors without a bufferView are all zeros (plus sparse substitutions): nothing in the file holds their
+// elements, so their count is what a few bytes of JSON can make the import decode and the mesh build process.
+// 2^20 elements (12 MiB as VEC3 floats) covers the sparse morph targets and attribute defaults that real files
+// use; a mesh with more vertices stores them in a bufferView. (At 2^24 - 1 a 1 KB file held a render at 1.8 GB
+// for a minute, for a mesh whose triangles nearly all collapse to one point.)
+inline constexpr uint64_t kMaxViewlessAccessorCount = uint64_t{1} << 20;
 // meshopt codecs compress at most ~64:1 (vertex codec, all-zero data); refuse claims far beyond that so a
 // 30-byte stream cannot make us allocate gigabytes.
 inline constexpr uint64_t kMaxMeshoptExpansion = 256;

@@ -81,7 +81,8 @@ Result<std::vector<glm::dmat4>> Importer::meshInstances(int nodeIndex, const glm
                          aw + ": " + str(n) + " instances" +
                              (objects != n ? " (" + str(objects) + " objects, one per material group)" : "") +
                              " pass the import's limit of " + str(options_.maxInstances) + " instances (" +
-                             str(instancesEmitted_) + " so far; GltfImportOptions::maxInstances)");
+                             str(instancesEmitted_) +
+                             " so far; raise it with --max-instances, GltfImportOptions::maxInstances)");
       }
     }
     if (count && *count != n)

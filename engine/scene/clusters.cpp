@@ -8,6 +8,16 @@
 
 namespace visbuf {
 
+uint64_t spreadBits3(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
 void clusterOrder(uint32_t* indices, size_t indexCount, const float* positions, size_t vertexCount, size_t stride) {
   if (indexCount / 3 <= CLUSTER_TRIANGLES) return;
   constexpr size_t kMaxVertices = 3 * CLUSTER_TRIANGLES;
@@ -37,21 +47,13 @@ void clusterOrder(uint32_t* indices, size_t indexCount, const float* positions, 
       hi = glm::max(hi, at(indices[k]));
     }
     const glm::dvec3 scale = 2097151.0 / glm::max(glm::dvec3(hi) - glm::dvec3(lo), glm::dvec3(1e-30));
-    auto spread = [](uint64_t x) {  // 21 bits to every third of 63
-      x &= 0x1fffff;
-      x = (x | x << 32) & 0x1f00000000ffffull;
-      x = (x | x << 16) & 0x1f0000ff0000ffull;
-      x = (x | x << 8) & 0x100f00f00f00f00full;
-      x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-      x = (x | x << 2) & 0x1249249249249249ull;
-      return x;
-    };
     std::vector<std::pair<uint64_t, uint32_t>> keys(tris);
     for (size_t t = 0; t < tris; ++t) {
       const glm::dvec3 c = (glm::dvec3(at(indices[3 * t])) + glm::dvec3(at(indices[3 * t + 1])) +
                             glm::dvec3(at(indices[3 * t + 2]))) / 3.0;
       const glm::dvec3 q = glm::clamp((c - glm::dvec3(lo)) * scale, glm::dvec3(0.0), glm::dvec3(2097151.0));
-      keys[t] = {spread(uint64_t(q.x)) | spread(uint64_t(q.y)) << 1 | spread(uint64_t(q.z)) << 2, uint32_t(t)};
+      const uint64_t code = spreadBits3(uint64_t(q.x)) | spreadBits3(uint64_t(q.y)) << 1 | spreadBits3(uint64_t(q.z)) << 2;
+      keys[t] = {code, uint32_t(t)};
     }
     std::sort(keys.begin(), keys.end());
     spatial.resize(indexCount);

@@ -17,12 +17,17 @@ namespace visbuf {
 // CLUSTER_TRIANGLES triangles is left as it is.
 // Bounded: meshopt_buildMeshlets is quadratic in a chunk's triangles on some meshes (a fan's centre vertex is
 // rescanned for every triangle added; triangles sharing one centroid make its k-d tree one leaf scanned for every
-// meshlet), so a level is clustered in chunks of kClusterChunkTriangles consecutive triangles (the order is the
-// vertex-cache order, which is spatially coherent): O(indexCount * kClusterChunkTriangles) at worst, about linear
-// on ordinary meshes; only the chunks' borders can split what one pass would have clustered together.
+// meshlet), so a level of more than kClusterChunkTriangles triangles is put in Morton order of its triangles'
+// centroids and clustered in chunks of kClusterChunkTriangles consecutive triangles: O(indexCount *
+// kClusterChunkTriangles) at worst, about linear on ordinary meshes; only the chunks' borders can split what one
+// pass would have clustered together.
 void clusterOrder(uint32_t* indices, size_t indexCount, const float* positions, size_t vertexCount, size_t stride);
 
 inline constexpr size_t kClusterChunkTriangles = 4096;
+
+// Bit i of x to bit 3i (x below 2^21): one coordinate spread out for a 63-bit Morton code (x | y << 1 | z << 2),
+// the spatial orders of triangles (clusterOrder) and of objects (orderObjectsSpatially).
+uint64_t spreadBits3(uint64_t x);
 
 // Whether a LOD level is drawn as clusters (more than one cluster's triangles) and how many it has.
 inline bool lodHasClusters(const Lod& lod) { return lod.indexCount / 3 > CLUSTER_TRIANGLES; }

@@ -1,4 +1,5 @@
 #include "visbuf/scene/scene.h"
+#include "visbuf/scene/clusters.h"
 
 #include <algorithm>
 #include <cmath>
@@ -26,18 +27,6 @@ double maxScaleOf(const glm::dmat4& m) {
   return std::sqrt(best) * (1.0 + 1e-6);
 }
 
-namespace {
-// Bit i of x to bit 3 i (x below 2^21): one coordinate spread out for a 63-bit Morton code.
-uint64_t spreadBits3(uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-}  // namespace
 
 std::vector<uint32_t> spatialObjectOrder(const Scene& scene) {
   const size_t n = scene.objects.size();
