@@ -35,7 +35,9 @@ namespace fs = std::filesystem;
 
 const std::string kCanary = "S3cr3t!Bytes";  // 12 bytes: 3 RGBA8 vertex colours
 
-fs::path hostileDir() { return fs::path(__FILE__).parent_path().parent_path() / "data" / "hostile"; }
+// From the build's definition, not __FILE__ (a compiler cache or a relative build may make __FILE__ relative to
+// the build folder, which is not where the tests run).
+fs::path hostileDir() { return fs::path(VISBUF_TEST_DATA_DIR) / "hostile"; }
 
 std::vector<uint8_t> readBytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
