@@ -331,6 +331,17 @@ Status preflight(const nlohmann::json& doc, const std::string& path, const std::
   }
   // Every index, count, offset, enum and number, before tinygltf narrows or drops it (gltf_validate.h).
   if (Status s = validateGltfDocument(doc, path); !s) return s;
+  // A required extension visbuf does not read is refused by name here, before the parser, which fails on some of
+  // them with a message that does not say why (a Draco-compressed accessor has no bufferView of its own).
+  if (auto required = doc.find("extensionsRequired"); required != doc.end() && required->is_array()) {
+    for (const nlohmann::json& ext : *required) {
+      if (ext.is_string() && !requiredExtensionSupported(ext.get<std::string>())) {
+        return makeError(ErrorCode::Unsupported, path + ": required extension '" +
+                                                     quoteForMessage(ext.get<std::string>()) +
+                                                     "' is not supported");
+      }
+    }
+  }
   if (auto buffers = doc.find("buffers"); buffers != doc.end() && buffers->is_array()) {
     for (size_t i = 0; i < buffers->size(); ++i) {
       const nlohmann::json& buffer = (*buffers)[i];

@@ -47,25 +47,22 @@
 namespace visbuf {
 namespace gltf_detail {
 
-// Required extensions that change how geometry must be read are either handled or refused; the ones that only
-// concern materials, textures or lights cannot change the triangles, so they are ignored.
-Status Importer::checkRequiredExtensions() {
+bool requiredExtensionSupported(const std::string& ext) {
   static constexpr const char* kIgnorablePrefixes[] = {"KHR_materials_", "KHR_texture_",  "EXT_texture_",
                                                        "KHR_lights_",    "MSFT_texture_", "KHR_xmp"};
+  if (ext == kMeshoptExt || ext == kQuantizationExt || ext == kInstancingExt) return true;
+  return std::any_of(std::begin(kIgnorablePrefixes), std::end(kIgnorablePrefixes),
+                     [&](const char* prefix) { return ext.rfind(prefix, 0) == 0; });
+}
+
+// Required extensions that change how geometry must be read are either handled or refused (loadModel refuses
+// the unsupported ones before the parser runs: requiredExtensionSupported); here the handled ones set the flags.
+Status Importer::checkRequiredExtensions() {
   for (const std::string& ext : model_.extensionsRequired) {
-    if (ext == kMeshoptExt) {
-      meshoptRequired_ = true;
-      continue;
-    }
-    if (ext == kQuantizationExt) continue;
-    if (ext == kInstancingExt) {
-      instancingRequired_ = true;
-      continue;
-    }
-    const bool ignorable = std::any_of(std::begin(kIgnorablePrefixes), std::end(kIgnorablePrefixes),
-                                       [&](const char* prefix) { return ext.rfind(prefix, 0) == 0; });
-    if (ignorable) continue;
-    return makeError(ErrorCode::Unsupported, path_ + ": required extension '" + ext + "' is not supported");
+    if (ext == kMeshoptExt) meshoptRequired_ = true;
+    if (ext == kInstancingExt) instancingRequired_ = true;
+    if (!requiredExtensionSupported(ext))
+      return makeError(ErrorCode::Unsupported, path_ + ": required extension '" + ext + "' is not supported");
   }
   return {};
 }

@@ -165,7 +165,8 @@ std::vector<Rule> buildRules() {
   textureInfo("materials[].occlusionTexture");
   textureInfo("materials[].emissiveTexture");
   numbers("materials[].emissiveFactor", 3, 3);
-  oneOfText("materials[].alphaMode", {"OPAQUE", "MASK", "BLEND"});
+  // An unknown alphaMode stays the importer's: it is treated as OPAQUE with a warning naming it (gltf_materials.cpp).
+  text("materials[].alphaMode");
   number("materials[].alphaCutoff");
   boolean("materials[].doubleSided");
   const std::string ext = "materials[].extensions.";

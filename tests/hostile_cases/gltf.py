@@ -298,5 +298,5 @@ def cases(ctx):
         renamed = os.path.join(root, "pack.gltf")
         os.rename(pack, renamed)
         outcome = ctx.visbuf_run(["render", "--mesh", renamed, "-o", os.path.join(root, "x.png")], root)
-        ctx.expect_error(case, outcome, r"pack\.gltf: .*visbuf pack")
+        ctx.expect_error(case, outcome, r"pack\.gltf'?: .*is a visbuf pack")
     yield "pack_named_gltf", pack_to_importer
