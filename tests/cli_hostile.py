@@ -314,7 +314,7 @@ class Suite:
             "--max-image-pixels", "1000")
         yield "truncated_jpeg", lambda: self.simple(
             "truncated_jpeg", "truncated_jpeg.gltf",
-            r"image 0 'truncated\.jpg': truncated or corrupt image: .*Premature end of JPEG file")
+            r"image 0 'truncated\.jpg': truncated or corrupt image: .*Premature end of JPEG file", "--strict-images")
         yield "fifo_buffer", lambda: self.simple(
             "fifo_buffer", "fifo_buffer.gltf", r"buffer 1: uri 'fifo\.bin': not a regular file \(a FIFO\)")
         yield "fifo_image", lambda: self.simple(

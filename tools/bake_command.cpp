@@ -77,6 +77,7 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
   addImportBudgetOptions(*sub, c.maxInstances, c.maxImportMemory);
+  addExtensionPolicyOptions(*sub, c.ignoreRequiredExtensions, c.strictImages);
   sub->add_option("--json", c.json, "also write the summary as JSON")->check(nonEmptyPath());
   sub->add_option("--threads", c.threads,
                   "threads building meshes and textures (0: all cores); the pack is the same byte for byte at any count")
@@ -187,6 +188,7 @@ int runBake(const BakeCommand& c) {
   importOptions.allowedUriRoots = c.allowUriRoots;
   importOptions.maxInstances = c.maxInstances;
   importOptions.maxMemoryBytes = c.maxImportMemory;
+  importOptions.ignoreRequiredExtensions = c.ignoreRequiredExtensions;
   Result<ImportedScene> imported = importGltfScene(c.input, importOptions, &report);
   for (const std::string& w : report.warnings)
     std::fprintf(stderr, "visbuf bake: warning: %s\n", printable(w).c_str());
@@ -218,6 +220,7 @@ int runBake(const BakeCommand& c) {
       TextureBakeOptions textureOptions;
       textureOptions.maxTextureSize = c.maxTextureSize;
       textureOptions.maxImagePixels = c.maxImagePixels;
+      textureOptions.dropUndecodableImages = !c.strictImages;
       textureOptions.encoding = c.textures == "rgba8" ? TextureEncoding::Rgba8 : TextureEncoding::Bc;
       textureOptions.quality = c.textureQuality == "high"     ? TextureQuality::High
                                : c.textureQuality == "normal" ? TextureQuality::Normal
@@ -237,6 +240,8 @@ int runBake(const BakeCommand& c) {
   textureTask.wait();
   if (!scene) return badInput(scene.error());
   for (const std::string& note : textureReport.notes) std::fprintf(stderr, "bake: resized %s\n", printable(note).c_str());
+  for (const std::string& w : textureReport.warnings)
+    std::fprintf(stderr, "visbuf bake: warning: %s\n", printable(w).c_str());
   if (!textureStatus) return badInput(textureStatus.error());
   if (!c.noTextures && !imported->materials.empty()) {
     scene->materials = std::move(textureScene.materials);

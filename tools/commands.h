@@ -75,11 +75,21 @@ struct BakeCommand {
   uint64_t maxImagePixels = uint64_t{64} << 20;        // --max-image-pixels (TextureBakeOptions::maxImagePixels)
   uint64_t maxInstances = kDefaultMaxInstances;        // --max-instances (GltfImportOptions::maxInstances)
   uint64_t maxImportMemory = kDefaultImportMemoryBytes;  // --max-import-memory (GltfImportOptions::maxMemoryBytes)
+  std::vector<std::string> ignoreRequiredExtensions;   // --ignore-required-extension (GltfImportOptions)
+  bool strictImages = false;                           // --strict-images (TextureBakeOptions::dropUndecodableImages off)
   uint32_t threads = 0;                                // --threads: mesh build threads, 0 = all cores
 };
 
 void addBakeCommand(CLI::App& app, BakeCommand& cmd);
 int runBake(const BakeCommand& cmd);
+
+// visbuf extensions (tools/extensions_command.cpp): the glTF extension table (gltf_extensions.h). Exit code 0.
+struct ExtensionsCommand {
+  bool markdown = false;  // --markdown: the table of docs/gltf.md
+};
+
+void addExtensionsCommand(CLI::App& app, ExtensionsCommand& cmd);
+int runExtensions(const ExtensionsCommand& cmd);
 
 // visbuf bench (tools/bench_command.cpp): run time against error over a camera path and a matrix of
 // path x culling x LOD, one scene per object count. Exit codes: 0 ok, 1 bad input / failure, 2 usage,

@@ -76,6 +76,8 @@ int main(int argc, char** argv) {
   visbuf::tools::addRenderCommand(app, render);
   visbuf::tools::BakeCommand bake;
   visbuf::tools::addBakeCommand(app, bake);
+  visbuf::tools::ExtensionsCommand extensions;
+  visbuf::tools::addExtensionsCommand(app, extensions);
   visbuf::tools::BenchCommand bench;
   visbuf::tools::addBenchCommand(app, bench, argc, argv);
   visbuf::tools::BenchBakeCommand benchBake;
@@ -105,6 +107,7 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("render")) return visbuf::tools::runRender(render);
     if (app.got_subcommand("bake")) return visbuf::tools::runBake(bake);
+    if (app.got_subcommand("extensions")) return visbuf::tools::runExtensions(extensions);
     if (app.got_subcommand("bench")) return visbuf::tools::runBench(bench);
     if (app.got_subcommand("bench-bake")) return visbuf::tools::runBenchBake(benchBake);
     if (app.got_subcommand("stress")) return visbuf::tools::runStress(stress);

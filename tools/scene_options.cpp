@@ -40,6 +40,7 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
   addImportBudgetOptions(app, o.maxInstances, o.maxImportMemory);
+  addExtensionPolicyOptions(app, o.ignoreRequiredExtensions, o.strictImages);
   app.add_option("--materials", o.materials,
                  "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
                  "assigned to objects by hash (material classification's many-material scenes)")
@@ -64,12 +65,23 @@ void addImportBudgetOptions(CLI::App& app, uint64_t& maxInstances, uint64_t& max
       ->capture_default_str();
 }
 
+void addExtensionPolicyOptions(CLI::App& app, std::vector<std::string>& ignoreRequired, bool& strictImages) {
+  app.add_option("--ignore-required-extension", ignoreRequired,
+                 "glTF: import a file that requires this extension although visbuf does not read it (repeatable; "
+                 "'*': any), rendering it without the extension (warned); `visbuf extensions` lists what is read")
+      ->check(nonEmptyPath());
+  app.add_flag("--strict-images", strictImages,
+               "glTF: fail when an image cannot be decoded (corrupt, missing, KTX2/WebP) instead of dropping its "
+               "texture with a warning");
+}
+
 namespace {
 GltfImportOptions importOptions(const SceneOptions& o) {
   GltfImportOptions options;
   options.allowedUriRoots = o.allowUriRoots;
   options.maxInstances = o.maxInstances;
   options.maxMemoryBytes = o.maxImportMemory;
+  options.ignoreRequiredExtensions = o.ignoreRequiredExtensions;
   return options;
 }
 
@@ -194,7 +206,12 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   // Its textures too, as `visbuf bake` does (default size cap), so the material is shaded as in a pack.
   TextureBakeOptions textureOptions;
   textureOptions.maxImagePixels = o.maxImagePixels;
-  if (Status t = bakeTextures(*imported, textureOptions, &*scene); !t) return t.error();
+  textureOptions.dropUndecodableImages = !o.strictImages;
+  TextureBakeReport textureReport;
+  Status t = bakeTextures(*imported, textureOptions, &*scene, &textureReport);
+  for (const std::string& w : textureReport.warnings)
+    std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
+  if (!t) return t.error();
   scene->name = o.scene;
   return scene;
 }

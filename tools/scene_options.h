@@ -25,12 +25,18 @@ struct SceneOptions {
   uint64_t maxInstances = kDefaultMaxInstances;  // glTF: mesh instances of one import (--max-instances)
   uint64_t maxImportMemory = kDefaultImportMemoryBytes;  // glTF: the import's memory budget, bytes (--max-import-memory)
   std::string objectOrder = "spatial";           // spatial (orderObjectsSpatially) | as-built (--object-order)
+  std::vector<std::string> ignoreRequiredExtensions;  // glTF: required extensions imported anyway (--ignore-required-extension)
+  bool strictImages = false;                     // glTF: an undecodable image fails the load (--strict-images)
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);
 // --max-instances and --max-import-memory (GltfImportOptions::maxInstances / maxMemoryBytes), for every command
 // that imports a glTF (render, bake): the budgets docs/security.md states, raised on purpose.
 void addImportBudgetOptions(CLI::App& app, uint64_t& maxInstances, uint64_t& maxImportMemory);
+// --ignore-required-extension (GltfImportOptions::ignoreRequiredExtensions) and --strict-images
+// (TextureBakeOptions::dropUndecodableImages off), for the same commands: what a file that asks for more than
+// visbuf reads may do (gltf_extensions.h).
+void addExtensionPolicyOptions(CLI::App& app, std::vector<std::string>& ignoreRequired, bool& strictImages);
 // Notes the files the options name (--scene when it is a file, not a layout; --mesh) as inputs of this command
 // (core/file_read.h), so that checkOutputs refuses an output aimed at one before any work.
 void noteSceneInputs(const SceneOptions& options);

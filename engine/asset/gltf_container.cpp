@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "visbuf/asset/gltf_extensions.h"
 #include "visbuf/asset/gltf_import.h"
 #include "visbuf/asset/gltf_validate.h"
 #include "visbuf/asset/pack_format.h"
@@ -331,17 +332,6 @@ Status preflight(const nlohmann::json& doc, const std::string& path, const std::
   }
   // Every index, count, offset, enum and number, before tinygltf narrows or drops it (gltf_validate.h).
   if (Status s = validateGltfDocument(doc, path); !s) return s;
-  // A required extension visbuf does not read is refused by name here, before the parser, which fails on some of
-  // them with a message that does not say why (a Draco-compressed accessor has no bufferView of its own).
-  if (auto required = doc.find("extensionsRequired"); required != doc.end() && required->is_array()) {
-    for (const nlohmann::json& ext : *required) {
-      if (ext.is_string() && !requiredExtensionSupported(ext.get<std::string>())) {
-        return makeError(ErrorCode::Unsupported, path + ": required extension '" +
-                                                     quoteForMessage(ext.get<std::string>()) +
-                                                     "' is not supported");
-      }
-    }
-  }
   if (auto buffers = doc.find("buffers"); buffers != doc.end() && buffers->is_array()) {
     for (size_t i = 0; i < buffers->size(); ++i) {
       const nlohmann::json& buffer = (*buffers)[i];
@@ -438,6 +428,9 @@ Status loadModel(const std::string& path, const GltfImportOptions& options, Memo
     return s;
   nlohmann::json doc = nlohmann::json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (Status s = preflight(doc, path, baseDir, *resolver, budget, &gate, references); !s) return s;
+  // A required extension visbuf does not read is refused by name here, before the parser, which fails on some of
+  // them with a message that does not say why; every used one it does not read fully is warned about once.
+  if (Status s = auditGltfExtensions(doc, path, options.ignoreRequiredExtensions, warnings); !s) return s;
   gate.maxBytes = budget->limit();  // sizes were charged above; a file that grew since is refused by tinygltf
   const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(doc);
   nlohmann::json().swap(doc);  // freed before tinygltf builds its own

@@ -103,13 +103,9 @@ struct LoadedReferences {
 // file is opened), charges the file and its buffers to `budget`, neutralises EXT_meshopt_compression
 // fallback buffers (tinygltf 2.7 cannot load a buffer without data), then lets tinygltf parse the JSON and
 // load data-URI buffers and the external buffers approved above (through file-system callbacks that read
-// nothing else). tinygltf's warnings are appended to `warnings`.
-// Whether visbuf can import a file that lists `extension` in extensionsRequired: the geometry extensions it
-// decodes (EXT_meshopt_compression, KHR_mesh_quantization, EXT_mesh_gpu_instancing), and those that only concern
-// materials, textures or lights (they cannot change the triangles). Anything else (KHR_draco_mesh_compression
-// among them) is refused by name.
-bool requiredExtensionSupported(const std::string& extension);
-
+// nothing else). Before the parser, auditGltfExtensions (gltf_extensions.h) refuses required extensions visbuf
+// cannot honour and warns once about each used one it does not read fully. tinygltf's warnings are appended to
+// `warnings`.
 Status loadModel(const std::string& path, const GltfImportOptions& options, MemoryBudget* budget,
                  tinygltf::Model* model, LoadedReferences* references, std::vector<std::string>* warnings);
 

@@ -47,22 +47,12 @@
 namespace visbuf {
 namespace gltf_detail {
 
-bool requiredExtensionSupported(const std::string& ext) {
-  static constexpr const char* kIgnorablePrefixes[] = {"KHR_materials_", "KHR_texture_",  "EXT_texture_",
-                                                       "KHR_lights_",    "MSFT_texture_", "KHR_xmp"};
-  if (ext == kMeshoptExt || ext == kQuantizationExt || ext == kInstancingExt) return true;
-  return std::any_of(std::begin(kIgnorablePrefixes), std::end(kIgnorablePrefixes),
-                     [&](const char* prefix) { return ext.rfind(prefix, 0) == 0; });
-}
-
-// Required extensions that change how geometry must be read are either handled or refused (loadModel refuses
-// the unsupported ones before the parser runs: requiredExtensionSupported); here the handled ones set the flags.
+// The handled required extensions set the flags; loadModel's extension audit (gltf_extensions.h) has already
+// refused the ones visbuf cannot honour, before the parser ran.
 Status Importer::checkRequiredExtensions() {
   for (const std::string& ext : model_.extensionsRequired) {
     if (ext == kMeshoptExt) meshoptRequired_ = true;
     if (ext == kInstancingExt) instancingRequired_ = true;
-    if (!requiredExtensionSupported(ext))
-      return makeError(ErrorCode::Unsupported, path_ + ": required extension '" + ext + "' is not supported");
   }
   return {};
 }

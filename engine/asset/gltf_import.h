@@ -67,19 +67,17 @@
 //     anywhere among the file's nodes (not only the scene's); coordinates beyond kMaxImportCoordinate;
 //     an external uri outside the allowed folders or with a scheme other than data:;
 //     JSON nested deeper than 512 levels; a scene that produces no triangles ("no triangle geometry").
-//   - Unsupported: a required extension that changes geometry and is not handled (e.g.
-//     KHR_draco_mesh_compression; required extensions of the KHR_materials_ / KHR_texture_ / EXT_texture_ /
-//     KHR_lights_ / MSFT_texture_ families only concern shading and are imported as far as supported, with
-//     warnings for what is dropped), EXT_mesh_gpu_instancing on a skinned or animated node while the file
-//     requires the extension, an EXT_meshopt_compression view that cannot be decoded while the extension
-//     is required, GLB versions other than 2, asset.version other than 2.x (or minVersion other than 2.0),
+//   - Unsupported: a required extension visbuf does not read (the table and the audit: gltf_extensions.h; used
+//     ones not fully read are imported with one warning each), EXT_mesh_gpu_instancing on a skinned or animated
+//     node while the file requires the extension, an EXT_meshopt_compression view that cannot be decoded while
+//     the extension is required, GLB versions other than 2, asset.version other than 2.x (or minVersion other than 2.0),
 //     files of 4 GiB or more.
 //   - CapacityExceeded: more than 2^32-1 vertices, memory exhausted, or more than options.maxMemoryBytes.
 // Nothing in the file's contents can make the importer assert or crash.
 //
-// Not supported: KHR_draco_mesh_compression (Unsupported when required; when only used, the plain primitives
-// are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas of baked targets (the base
-// tangents are kept; animated targets keep them, see importGltfScene), JOINTS_2+ / WEIGHTS_2+ (more than 8
+// Not supported (extensions: gltf_extensions.h, `visbuf extensions`): TEXCOORD_2+ / COLOR_1+ (ignored), morph
+// target TANGENT deltas of baked targets (the base tangents are kept; animated targets keep them, see
+// importGltfScene), JOINTS_2+ / WEIGHTS_2+ (more than 8
 // influences per vertex: ignored with a warning, the first 8 renormalised), KHR_animation_pointer channels
 // (ignored with a warning), KHR_texture_basisu images (KTX2 / Basis Universal: the texture's fallback `source`
 // is used; without one the texture is dropped with a warning naming the extension and the texture).
@@ -123,6 +121,9 @@ struct GltfImportOptions {
   // instance and material group, EXT_mesh_gpu_instancing instances included), importGltfMesh's copies of a
   // node's mesh. CapacityExceeded beyond it, before the instances are built.
   uint64_t maxInstances = kDefaultMaxInstances;
+  // Required extensions to import anyway, as if the file only used them ("*": every one); each is still warned
+  // about. Without it a required extension visbuf does not read is refused (gltf_extensions.h).
+  std::vector<std::string> ignoreRequiredExtensions;
 };
 
 struct GltfImportReport {

@@ -29,8 +29,8 @@ namespace visbuf {
 
 namespace {
 
-constexpr uint32_t kMaxTextureSize = 16384;
-constexpr uint32_t kMaxLayersPerClass = 256;  // Vulkan's guaranteed minimum of maxImageArrayLayers
+constexpr uint32_t kMaxTextureSize = kMaxBakedTextureSize;
+constexpr uint32_t kMaxLayersPerClass = kMaxTextureClassLayers;
 
 // The linear value whose sRGB encoding lies halfway between codes k and k + 1 (k = 0..254): encodeSrgb8(v) =
 // number of midpoints below v = round(255 * encode(v)), rounded in the encoded domain as GPUs and image tools do.
@@ -39,92 +39,6 @@ std::array<float, 255> makeSrgbMidpoints() {
   auto decode = [](double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); };
   for (int k = 0; k < 255; ++k) mid[size_t(k)] = float(decode((k + 0.5) / 255.0));
   return mid;
-}
-
-// An external image: a regular file only, opened without blocking (core/file_read.h), within the size budget.
-Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image) {
-  const std::string shown = quoteForMessage(image.name);
-  uint64_t size = 0;
-  const FileKind kind = probeFile(image.path, &size, /*noFollow=*/true);
-  if (kind == FileKind::Missing) {
-    return makeError(ErrorCode::FileNotFound, fmt::format("image '{}': file '{}' not found", shown, image.path));
-  }
-  if (kind != FileKind::Regular) {
-    return makeError(ErrorCode::InvalidArgument, fmt::format("image '{}': '{}' is not a regular file ({}); only regular "
-                                                          "files are read",
-                                                          shown, image.path, fileKindName(kind)));
-  }
-  FileReadOptions options;
-  options.maxBytes = kMaxImageFileBytes;
-  options.noFollow = true;  // the importer's paths are link-free (uri_resolver.h): a link here was swapped in
-  Result<std::vector<uint8_t>> bytes = readRegularFile(image.path, options);
-  if (!bytes) return makeError(bytes.error().code, fmt::format("image '{}': {}", shown, bytes.error().message));
-  return bytes;
-}
-
-// A texture to bake: one (image, colour space) pair and the slots that use it.
-struct TextureKey {
-  int32_t image = -1;
-  ColorSpace colorSpace = ColorSpace::Linear;
-  TextureSlotMask slots = 0;
-};
-
-// Numbers the (image, colour space) pairs in order of first use and points every reference at its number.
-Result<std::vector<TextureKey>> assignTextures(const ImportedScene& imported, Scene* scene) {
-  std::vector<TextureKey> keys;
-  std::map<std::pair<int32_t, ColorSpace>, int32_t> index;
-  for (Material& m : scene->materials) {
-    const auto slots = textureSlots(m);
-    for (size_t slot = 0; slot < slots.size(); ++slot) {
-      TextureRef* ref = slots[slot];
-      const ColorSpace colorSpace = textureSlotColorSpace(slot);
-      if (ref->image < 0) continue;
-      if (size_t(ref->image) >= imported.images.size()) {
-        return makeError(ErrorCode::MalformedInput,
-                         fmt::format("material '{}': image {} does not exist ({} images)", m.name, ref->image,
-                                     imported.images.size()));
-      }
-      auto [it, added] = index.emplace(std::pair{ref->image, colorSpace}, int32_t(keys.size()));
-      if (added) keys.push_back({ref->image, colorSpace, 0});
-      keys[size_t(it->second)].slots |= TextureSlotMask{1} << slot;
-      ref->baked = it->second;
-    }
-  }
-  return keys;
-}
-
-// Puts each baked image into a class (layer = position in its class) and concatenates the texels mip-major.
-void buildClasses(std::vector<BakedImage>& baked, Scene* scene) {
-  // (size, colour space, format) -> class with room
-  std::map<std::tuple<uint32_t, ColorSpace, TextureFormat>, uint32_t> open;
-  for (size_t t = 0; t < baked.size(); ++t) {
-    Texture& texture = scene->textures[t];
-    const auto key = std::tuple{baked[t].size, texture.colorSpace, baked[t].format};
-    auto it = open.find(key);
-    if (it == open.end() || scene->textureClasses[it->second].layers == kMaxLayersPerClass) {
-      TextureClass c;
-      c.size = baked[t].size;
-      c.colorSpace = texture.colorSpace;
-      c.format = baked[t].format;
-      c.mipCount = TextureClass::mipCountFor(c.size);
-      scene->textureClasses.push_back(c);
-      it = open.insert_or_assign(key, uint32_t(scene->textureClasses.size() - 1)).first;
-    }
-    texture.sizeClass = it->second;
-    texture.layer = scene->textureClasses[it->second].layers++;
-  }
-  for (uint32_t c = 0; c < scene->textureClasses.size(); ++c) {
-    TextureClass& cls = scene->textureClasses[c];
-    cls.texels.reserve(cls.totalBytes());
-    for (uint32_t mip = 0; mip < cls.mipCount; ++mip) {
-      for (size_t t = 0; t < baked.size(); ++t) {
-        if (scene->textures[t].sizeClass != c) continue;  // textures are in layer order within a class
-        std::vector<uint8_t>& level = baked[t].mips[mip];
-        cls.texels.insert(cls.texels.end(), level.begin(), level.end());
-        std::vector<uint8_t>().swap(level);
-      }
-    }
-  }
 }
 
 int squishFlags(TextureFormat format, TextureQuality quality) {
@@ -481,111 +395,6 @@ Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::strin
   }
   appendMips(std::move(image), colorSpace, &baked);
   return baked;
-}
-
-Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& options, Scene* scene,
-                    TextureBakeReport* report, const TextureBakeProgress& progress) {
-  if (options.maxTextureSize < 1 || options.maxTextureSize > kMaxTextureSize ||
-      !std::has_single_bit(options.maxTextureSize)) {
-    return makeError(ErrorCode::InvalidArgument, fmt::format("maxTextureSize {} must be a power of two in [1, {}]",
-                                                             options.maxTextureSize, kMaxTextureSize));
-  }
-  if (options.maxImagePixels < 1)
-    return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be at least 1");
-  scene->textures.clear();
-  scene->textureClasses.clear();
-  auto keys = assignTextures(imported, scene);
-  if (!keys) return keys.error();
-  // Images in parallel (each one's levels in parallel too: oneTBB nests); messages, textures and classes are
-  // assembled afterwards in key order, so the result is that of a serial bake. After a failure, images behind
-  // the first failed one are skipped: the error reported is the one a serial bake stops at.
-  const size_t count = keys->size();
-  std::vector<std::optional<Result<BakedImage>>> results(count);
-  std::vector<TextureFormat> formats(count, TextureFormat::Rgba8);
-  std::atomic<size_t> firstFailed{count};
-  std::mutex progressMutex;
-  size_t done = 0;
-  ImageMemoryGate gate(kImageBakeMemoryBudget);  // images baked at once: within the budget (texture_decode.h)
-  tbb::parallel_for(size_t{0}, count, [&](size_t t) {
-    if (t > firstFailed.load()) return;
-    const TextureKey& key = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(key.image)];
-    const std::string name =
-        fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), key.image, quoteForMessage(image.name));
-    Result<BakedImage> b = [&]() -> Result<BakedImage> {
-      // Memory: the file's bytes are reserved while it is read, then with the estimate of its bake
-      // (imageBakePeakBytes); released and reserved again, never held while waiting for more.
-      uint64_t fileBytes = image.bytes.size();  // embedded: copied below
-      if (!image.path.empty()) (void)probeFile(image.path, &fileBytes, /*noFollow=*/true);
-      fileBytes = std::min(fileBytes, kMaxImageFileBytes);
-      gate.acquire(fileBytes);
-      Result<std::vector<uint8_t>> file = image.path.empty() ? Result<std::vector<uint8_t>>(image.bytes)
-                                                             : readImageFile(image);
-      gate.release(fileBytes);
-      if (!file) return makeError(file.error().code, imported.name + ": " + file.error().message);
-      Result<ImageHeader> header = readImageHeader(file->data(), file->size(), name);
-      // An image over the pixel budget is refused before anything of its size is allocated: reserve nothing.
-      const bool admitted =
-          header && uint64_t(header->width) * header->height <= options.maxImagePixels;
-      const uint64_t reserved = file->size() + (admitted ? imageBakePeakBytes(*header, options.maxTextureSize) : 0);
-      gate.acquire(reserved);
-      // Isolated: while this thread waits inside the bake's nested parallel loops it must not start another
-      // image, whose acquire() could wait on this one's reservation.
-      Result<BakedImage> r = tbb::this_task_arena::isolate([&] {
-        return bakeImage(file->data(), file->size(), name, key.colorSpace, options.maxTextureSize,
-                         options.maxImagePixels);
-      });
-      gate.release(reserved);
-      return r;
-    }();
-    if (b) {
-      const std::vector<uint8_t>& top = b->mips.front();
-      bool opaque = true;
-      for (size_t i = 3; i < top.size() && opaque; i += 4) opaque = top[i] == 255;
-      formats[t] = chooseTextureFormat(options.encoding, key.slots, key.colorSpace, opaque);
-    } else {
-      for (size_t seen = firstFailed.load(); t < seen && !firstFailed.compare_exchange_weak(seen, t);) {
-      }
-    }
-    results[t].emplace(std::move(b));
-  });
-  for (size_t t = 0; t < count; ++t)
-    if (!*results[t]) return results[t]->error();  // every image up to the first failed one ran
-  // The classes must fit the shading pass's bindings: merge formats where the chosen ones would open too many.
-  std::vector<TextureClassKey> classKeys;
-  for (size_t t = 0; t < count; ++t) classKeys.push_back({(*results[t])->size, (*keys)[t].colorSpace, formats[t]});
-  fitTextureClassFormats(classKeys, MAX_TEXTURE_CLASSES);
-  tbb::parallel_for(size_t{0}, count, [&](size_t t) {
-    compressBakedImage(&results[t]->value(), classKeys[t].format, options.quality);
-    if (progress) {
-      std::lock_guard<std::mutex> lock(progressMutex);
-      progress(++done, count, imported.images[size_t((*keys)[t].image)].name);
-    }
-  });
-  std::vector<BakedImage> baked;
-  baked.reserve(count);
-  for (size_t t = 0; t < count; ++t) {
-    Result<BakedImage>& b = *results[t];
-    const TextureKey& key = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(key.image)];
-    if (report && !b->resizeNote.empty()) {
-      report->notes.push_back(fmt::format("{}: image {} '{}': {}", quoteForMessage(imported.name), key.image,
-                                          quoteForMessage(image.name), b->resizeNote));
-    }
-    scene->textures.push_back({image.name, key.image, key.colorSpace, 0, 0, b->originalWidth, b->originalHeight});
-    baked.push_back(std::move(b.value()));
-  }
-  buildClasses(baked, scene);
-  if (report) {
-    report->texelBytes = 0;
-    report->rgba8Bytes = 0;
-    for (const TextureClass& c : scene->textureClasses) {
-      report->texelBytes += c.texels.size();
-      TextureClass rgba8 = {c.size, c.colorSpace, c.layers, c.mipCount, TextureFormat::Rgba8, {}};
-      report->rgba8Bytes += rgba8.totalBytes();
-    }
-  }
-  return {};
 }
 
 }  // namespace visbuf

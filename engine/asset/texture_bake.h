@@ -49,6 +49,10 @@ namespace visbuf {
 inline constexpr uint64_t kDefaultMaxImagePixels = uint64_t{64} << 20;
 // Largest encoded image file read (external images): 1 GiB.
 inline constexpr uint64_t kMaxImageFileBytes = uint64_t{1} << 30;
+// The largest baked texture side (TextureBakeOptions::maxTextureSize) and the layers of one texture class (Vulkan's
+// guaranteed minimum of maxImageArrayLayers: a 257th image of a class opens another).
+inline constexpr uint32_t kMaxBakedTextureSize = 16384;
+inline constexpr uint32_t kMaxTextureClassLayers = 256;
 
 // How baked textures are stored (`visbuf bake --textures bc|rgba8`).
 enum class TextureEncoding { Bc, Rgba8 };
@@ -66,6 +70,12 @@ struct TextureBakeOptions {
   // Range fit by default: DamagedHelmet rendered from its BC pack is 45 dB PSNR from the RGBA8 pack's image
   // (cluster fit: 48 dB for a texture bake ~5x longer; docs/pack-format.md).
   TextureQuality quality = TextureQuality::Fast;
+  // An image that cannot be decoded (MalformedInput: corrupt, truncated, a format visbuf does not decode such as
+  // KTX2 or WebP; FileNotFound: its file is missing) drops its texture from every material slot that uses it,
+  // with a warning in TextureBakeReport::warnings, as glTF viewers do. false (CLI --strict-images): the bake
+  // fails on it. Budget refusals (CapacityExceeded), files that are not regular and builds without a decoder
+  // (Unsupported) always fail: they say something the user must decide.
+  bool dropUndecodableImages = true;
 };
 
 // A decoded image in linear light: width x height RGBA floats, row-major from the top row.
@@ -89,7 +99,8 @@ struct BakedImage {
 using TextureBakeProgress = std::function<void(size_t done, size_t total, const std::string& name)>;
 
 struct TextureBakeReport {
-  std::vector<std::string> notes;  // one line per resized image
+  std::vector<std::string> notes;     // one line per resized image
+  std::vector<std::string> warnings;  // one line per image dropped (TextureBakeOptions::dropUndecodableImages)
   uint64_t texelBytes = 0;         // all classes, all mips
   uint64_t rgba8Bytes = 0;         // what the same classes take as RGBA8 (texelBytes without compression)
 };

@@ -9,6 +9,7 @@ Inputs are written at run time with zlib and struct only: constant images compre
 import base64
 import json
 import os
+import re
 import struct
 import zlib
 
@@ -281,7 +282,8 @@ def cases(ctx):
         baked_within("jpeg_huge_metadata", outcome, out, BASELINE + 3 * len(jpg) + peak_estimate("jpeg", 512, 512))
     yield "jpeg_huge_metadata", jpeg_metadata
 
-    # Corrupt images: a clean error naming the image, and nothing on stderr but visbuf's own lines.
+    # Corrupt images: with --strict-images a clean error naming the image; by default the texture is dropped with a
+    # warning naming the image and the bake succeeds. Either way nothing on stderr but visbuf's own lines.
     good = png_constant(256, 256, 6, 8, b"\x10\x80\xf0\xff")
     idat = good.index(b"IDAT")
     corrupt = {
@@ -295,9 +297,17 @@ def cases(ctx):
     for name, data in corrupt.items():
         def run(case=f"corrupt_{name}", data=data):
             file = "bad.jpg" if "jpeg" in case else "bad.png"
-            outcome, out = bake(case, {file: data}, gltf([{"uri": file}]))
+            outcome, out = bake(case, {file: data}, gltf([{"uri": file}]), ("--strict-images",))
             if ctx.expect_error(case, outcome, r"image 0 'bad\.(png|jpg)': "):
                 problem = only_visbuf_lines(outcome) or ("a pack was written" if os.path.exists(out) else None)
                 if problem:
                     ctx.fail(case, problem, outcome)
+            outcome, out = bake(case + "_dropped", {file: data}, gltf([{"uri": file}]))
+
+            def dropped_with_warning():
+                if not re.search(r"warning: .*image 0 'bad\.(png|jpg)': .*; its texture is dropped from the "
+                                 r"materials that use it", outcome.text):
+                    return "no warning naming the dropped image"
+                return only_visbuf_lines(outcome)
+            ctx.expect_ok(case + "_dropped", outcome, dropped_with_warning)
         yield f"corrupt_{name}", run

@@ -1,7 +1,7 @@
 // KHR_texture_basisu: a texture whose KTX2 (Basis Universal) image sits in the extension uses its plain `source`
-// fallback when it has one (no warning: the file offers an image this build decodes); without a fallback the
-// texture is dropped with a warning that names the extension and the texture. Requiring the extension does not
-// refuse the file (textures never change the geometry; the same warning tells what is lost).
+// fallback when it has one (one warning: the extension is read in part); without a fallback the texture is also
+// dropped with a warning that names the extension and the texture. A file that requires the extension is refused
+// by name (visbuf does not decode KTX2) unless the caller ignores it (GltfImportOptions::ignoreRequiredExtensions).
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -20,7 +20,8 @@ class BasisuTest : public test::TempDirTest {
  protected:
   // A triangle with a material whose base colour uses texture 0; `texture` is that texture's JSON. Image 0 is a
   // PNG file name, image 1 a KTX2 one (neither is opened by the import).
-  Result<ImportedScene> import(const nlohmann::json& texture, bool required, GltfImportReport* report) {
+  Result<ImportedScene> import(const nlohmann::json& texture, bool required, GltfImportReport* report,
+                               const GltfImportOptions& options = {}) {
     std::vector<uint8_t> bytes(36 + 24);
     const float tri[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1};
     std::memcpy(bytes.data(), tri, sizeof(tri));
@@ -42,7 +43,7 @@ class BasisuTest : public test::TempDirTest {
     if (required) doc["extensionsRequired"] = {"KHR_texture_basisu"};
     const std::string path = (dir_ / "basisu.gltf").string();
     std::ofstream(path) << doc.dump();
-    return importGltfScene(path, {}, report);
+    return importGltfScene(path, options, report);
   }
   static bool warnedAbout(const GltfImportReport& r, const std::string& what) {
     for (const std::string& w : r.warnings)
@@ -62,15 +63,37 @@ TEST_F(BasisuTest, FallbackSourceIsUsed) {
   EXPECT_EQ(ref.texture, 0);
   EXPECT_EQ(ref.image, 0);
   EXPECT_EQ(ref.uri, "albedo.png");
-  for (const std::string& w : report.warnings) ADD_FAILURE() << "unexpected warning: " << w;
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_TRUE(warnedAbout(report, "extension 'KHR_texture_basisu' is read in part: the texture's fallback PNG/JPEG "
+                                  "source is used"))
+      << report.warnings[0];
+}
+
+TEST_F(BasisuTest, RequiredIsRefusedByNameUnlessIgnored) {
+  const nlohmann::json texture = {{"source", 0}, {"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}};
+  Result<ImportedScene> refused = import(texture, true, nullptr);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::Unsupported);
+  EXPECT_NE(refused.error().message.find("required extension 'KHR_texture_basisu' is not supported"),
+            std::string::npos)
+      << refused.error().message;
+  GltfImportOptions options;
+  options.ignoreRequiredExtensions = {"KHR_texture_basisu"};
+  GltfImportReport report;
+  Result<ImportedScene> s = import(texture, true, &report, options);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->materials.at(0).baseColorTexture.image, 0);
+  EXPECT_TRUE(warnedAbout(report, "extension 'KHR_texture_basisu' is read in part"));
 }
 
 TEST_F(BasisuTest, NoFallbackWarnsNamingTheExtension) {
+  GltfImportOptions ignore;
+  ignore.ignoreRequiredExtensions = {"*"};
   for (bool required : {false, true}) {
     SCOPED_TRACE(required);
     GltfImportReport report;
-    Result<ImportedScene> s = import(
-        {{"name", "albedoTex"}, {"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}}, required, &report);
+    Result<ImportedScene> s = import({{"name", "albedoTex"}, {"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}},
+                                     required, &report, ignore);
     ASSERT_TRUE(s.ok()) << s.error().message;
     const TextureRef& ref = s->materials.at(0).baseColorTexture;
     EXPECT_EQ(ref.image, -1);

@@ -308,6 +308,8 @@ TEST_F(MaterialFixture, BakedTexturesAndPackRoundTrip) {
   EXPECT_EQ(back->meshes[0].uvs1, scene->meshes[0].uvs1);
 }
 
+// A missing image: with dropUndecodableImages off (--strict-images) a clear FileNotFound naming it; by default its
+// texture is dropped from every slot that used it, with one warning naming the image, and the others bake.
 TEST_F(MaterialFixture, MissingExternalImageIsAClearError) {
   const fs::path path = write();
   REQUIRE_OIIO();
@@ -316,7 +318,35 @@ TEST_F(MaterialFixture, MissingExternalImageIsAClearError) {
   ASSERT_TRUE(imported) << imported.error().message;  // import does not read pixels
   Result<Scene> scene = buildImportedScene(*imported);
   ASSERT_TRUE(scene);
-  Status s = bakeTextures(*imported, {}, &scene.value());
+  {
+    Scene dropped = *scene;
+    TextureBakeReport report;
+    ASSERT_TRUE(bakeTextures(*imported, {}, &dropped, &report));
+    ASSERT_EQ(report.warnings.size(), 1u);
+    EXPECT_NE(report.warnings[0].find("image 'data.png'"), std::string::npos) << report.warnings[0];
+    EXPECT_NE(report.warnings[0].find("its texture is dropped"), std::string::npos) << report.warnings[0];
+    size_t slotsLeft = 0, slotsBefore = 0;
+    for (size_t m = 0; m < dropped.materials.size(); ++m) {
+      for (size_t slot = 0; slot < kTextureSlotCount; ++slot) {
+        const TextureRef& before = *textureSlots(scene->materials[m])[slot];
+        const TextureRef& after = *textureSlots(dropped.materials[m])[slot];
+        slotsBefore += before.image >= 0;
+        slotsLeft += after.image >= 0;
+        if (after.image >= 0) {
+          EXPECT_EQ(after.image, before.image);
+          ASSERT_GE(after.baked, 0);
+          ASSERT_LT(size_t(after.baked), dropped.textures.size());
+          EXPECT_EQ(dropped.textures[size_t(after.baked)].sourceImage, after.image);
+        } else if (before.image >= 0) {
+          EXPECT_EQ(imported->images[size_t(before.image)].uri, "data.png");
+        }
+      }
+    }
+    EXPECT_LT(slotsLeft, slotsBefore);
+  }
+  TextureBakeOptions strict;
+  strict.dropUndecodableImages = false;
+  Status s = bakeTextures(*imported, strict, &scene.value());
   ASSERT_FALSE(s);
   EXPECT_EQ(s.error().code, ErrorCode::FileNotFound);
   EXPECT_NE(s.error().message.find("image 'data.png'"), std::string::npos) << s.error().message;
