@@ -66,6 +66,7 @@ struct BakeCommand {
   uint32_t lodCount = MeshBuildOptions{}.maxLods;      // LOD levels incl. the full mesh, 1..MAX_LODS
   uint32_t lodMinTriangles = MeshBuildOptions{}.minTriangles;
   bool quantize = false;                               // store quantised vertices (PackWriteOptions::quantize)
+  uint32_t compressionLevel = 9;                       // zstd level of the sections, 0: raw (PackWriteOptions)
   std::string json;                                    // summary as JSON; empty: none
   uint32_t maxTextureSize = 2048;                      // power of two, 1..16384
   bool noTextures = false;                             // skip texture baking (materials keep their references)

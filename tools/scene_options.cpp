@@ -147,7 +147,7 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   // message rather than the glTF parser's).
   // --objects N > 1: N copies of the pack's scene on a grid, its animated objects each copy at its own phase.
   if (isPackFile(o.scene) || std::filesystem::path(o.scene).extension() == ".vbp") {
-    Result<Scene> pack = readPack(o.scene);
+    Result<Scene> pack = readPack(o.scene, PackReadOptions{o.maxImportMemory});  // budget: --max-import-memory
     if (!pack || o.objects <= 1) return pack;
     AnimatedFieldParams p;
     p.instances = o.objects;
