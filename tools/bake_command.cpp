@@ -63,6 +63,10 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
                   "largest baked texture side (power of two, 1..16384); larger images are downscaled")
       ->check(powerOfTwo(16384))
       ->capture_default_str();
+  sub->add_option("--normal-map-size", c.normalMapSize,
+                  "largest side of images used only as normal maps (power of two, 1..16384; default: "
+                  "--max-texture-size): their larger mip levels are dropped")
+      ->check(powerOfTwo(16384));
   sub->add_flag("--no-textures", c.noTextures, "do not bake texture pixels (materials keep their references)");
   sub->add_option("--textures", c.textures,
                   "texture storage: bc (block-compressed: BC1 colour, BC3 colour with alpha, BC4 occlusion, BC5 "
@@ -223,6 +227,7 @@ int runBake(const BakeCommand& c) {
       TextureBakeOptions textureOptions;
       textureOptions.maxTextureSize = c.maxTextureSize;
       textureOptions.maxImagePixels = c.maxImagePixels;
+      textureOptions.maxNormalMapSize = c.normalMapSize;
       textureOptions.encoding = c.textures == "rgba8" ? TextureEncoding::Rgba8 : TextureEncoding::Bc;
       textureOptions.quality = c.textureQuality == "high"     ? TextureQuality::High
                                : c.textureQuality == "normal" ? TextureQuality::Normal

@@ -59,7 +59,7 @@ void addImportBudgetOptions(CLI::App& app, uint64_t& maxInstances, uint64_t& max
       ->capture_default_str();
   app.add_option("--max-import-memory", maxImportMemory,
                  "glTF: the import's memory budget in bytes (file, JSON, buffers, decoded accessors, output), "
-                 "checked before each allocation")
+                 "checked before each allocation; a pack: what its zstd sections may decode to")
       ->check(unsignedIn(uint64_t{1} << 20, uint64_t{1} << 40))
       ->capture_default_str();
 }

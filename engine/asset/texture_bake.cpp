@@ -158,7 +158,7 @@ const char* textureQualityName(TextureQuality quality) {
 
 TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque) {
   if (encoding == TextureEncoding::Rgba8) return TextureFormat::Rgba8;
-  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = 1u << 2, kOcclusion = 1u << 3;
+  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = kNormalSlotMask, kOcclusion = 1u << 3;
   if (colorSpace == ColorSpace::Srgb) return (slots & kBaseColor) && !opaque ? TextureFormat::Bc3 : TextureFormat::Bc1;
   // Only the normal slot reads xy (z is rebuilt), only the occlusion slot reads R alone; metallic-roughness (G,
   // B) and images shared by several data slots keep three channels.
@@ -490,8 +490,8 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     return makeError(ErrorCode::InvalidArgument, fmt::format("maxTextureSize {} must be a power of two in [1, {}]",
                                                              options.maxTextureSize, kMaxTextureSize));
   }
-  if (options.maxImagePixels < 1)
-    return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be at least 1");
+  if (options.maxImagePixels < 1 || (options.maxNormalMapSize != 0 && !std::has_single_bit(options.maxNormalMapSize)))
+    return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be >= 1, maxNormalMapSize 0 or a power of two");
   scene->textures.clear();
   scene->textureClasses.clear();
   auto keys = assignTextures(imported, scene);
@@ -536,6 +536,11 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
                          options.maxImagePixels);
       });
       gate.release(reserved);
+      if (r && key.slots == kNormalSlotMask && options.maxNormalMapSize != 0 && options.maxNormalMapSize < r->size) {
+        // The level of that size and those below it, as a larger source's cap keeps them (box-filtered mips).
+        r->mips.erase(r->mips.begin(), r->mips.begin() + std::countr_zero(r->size / options.maxNormalMapSize));
+        r->size = options.maxNormalMapSize;
+      }
       return r;
     }();
     if (b) {
