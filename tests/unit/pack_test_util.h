@@ -221,7 +221,7 @@ inline void reseal(std::vector<uint8_t>& bytes) {
     pack::SectionEntry e = entryOf(bytes, i);
     if (e.offset <= bytes.size() && e.storedSize <= bytes.size() - e.offset) {
       e.crc32 = pack::crc32(bytes.data() + e.offset, e.storedSize);
-      setEntry(bytes, i, e);
+      std::memcpy(bytes.data() + sizeof(pack::Header) + i * sizeof(pack::SectionEntry), &e, sizeof(e));
     }
   }
   h.headerCrc = 0;

@@ -61,7 +61,6 @@ TEST(PackZstd, CompressedPackLoadsToTheSameSceneAsItsRawTwin) {
   EXPECT_EQ(texels->encoding, pack::kSectionZstd);
   EXPECT_GT(texels->size, pack::kZstdChunkBytes);  // more than one frame
   EXPECT_LT(texels->storedSize, texels->size * 3 / 4);
-  EXPECT_EQ(info(zReport, "vertices")->encoding, pack::kSectionZstd);
   EXPECT_LT(z->size(), raw->size());
   // Small sections stay raw.
   EXPECT_EQ(info(zReport, "scene")->encoding, pack::kSectionRaw);
@@ -170,7 +169,9 @@ TEST(PackZstd, HostileFramesAreRefusedByName) {
     expectScenesEqual(*expected, *r);
   }
   auto refuses = [&](const std::vector<uint8_t>& stored, uint64_t decodedSize, const std::string& text) {
-    return failsWith(parse(packWithTexels(stored, decodedSize)), "section 'texels': " + text);
+    const Result<Scene> r = parse(packWithTexels(stored, decodedSize));
+    const ::testing::AssertionResult named = failsWith(r, "section 'texels': zstd");
+    return named ? failsWith(r, text) : named;
   };
   // Lying sizes: the section declares more or fewer bytes than the frame holds.
   EXPECT_TRUE(refuses(storedOf(chunk, {good}), texels.size() + 16, "declares " + std::to_string(texels.size())));
