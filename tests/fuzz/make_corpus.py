@@ -343,9 +343,10 @@ def pack_seeds(visbuf, tmp):
                                ("SimpleMorph.vbp", "SimpleMorph.gltf", ["--lod-count", "2"]),
                                ("RiggedSimple.vbp", "RiggedSimple.glb", ["--lod-count", "1"]),
                                ("Textured.vbp", "Textured.glb", ["--max-texture-size", "4"]),
-                               # RGBA8 texels of 64^2 (21 KiB): a zstd "texels" section
-                               ("Textured_zstd.vbp", "Textured.glb", ["--max-texture-size", "64", "--textures",
-                                                                      "rgba8"]),
+                               # RGBA8 texels of 32^2 (5.4 KiB) from an in-repo asset: a zstd "texels" section
+                               ("Textured_zstd.vbp", os.path.join(ROOT, "assets", "BoxTexturedNonPowerOfTwo", "glTF",
+                                                                  "BoxTexturedNonPowerOfTwo.gltf"),
+                                ["--max-texture-size", "32", "--textures", "rgba8", "--lod-count", "1"]),
                                ("RigidSpin.vbp", "RigidSpin.gltf", ["--lod-count", "1"]),
                                ("BoxInterleaved_quantized.vbp", "BoxInterleaved.glb", ["--quantize", "--lod-count", "2"])]:
         src = os.path.join(tmp, source)
