@@ -363,9 +363,6 @@ TEST(TextureCompression, BcBakeRoundTripsThroughThePackAndMatchesTheRgba8Bake) {
   }
 }
 
-}  // namespace
-}  // namespace visbuf
-
 // --normal-map-size: the normal-only image keeps the levels from that size down -- byte for byte the lower levels
 // of the uncapped bake (the same box-filtered chain, compressed level by level) -- and no other image shrinks.
 TEST(TextureCompression, NormalMapSizeKeepsTheUncappedBakesLowerLevels) {
@@ -408,3 +405,6 @@ TEST(TextureCompression, NormalMapSizeKeepsTheUncappedBakesLowerLevels) {
   ASSERT_TRUE(scene);
   EXPECT_FALSE(bakeTextures(*imported, bad, &scene.value()));
 }
+
+}  // namespace
+}  // namespace visbuf
