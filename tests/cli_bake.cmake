@@ -12,6 +12,24 @@ execute_process(COMMAND ${VISBUF} render --scene ${OUT}/truck.vbp --size 160x120
 if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/truck.png)
   message(FATAL_ERROR "render of the pack failed (${rc}):\n${out2}\n${err2}")
 endif()
+# zstd sections (the default) against the same scene stored raw (--compression-level 0): a smaller file whose
+# texels and geometry load to the same bytes, so the rendered image is bit-identical.
+file(REMOVE ${OUT}/truck_raw.vbp)
+execute_process(COMMAND ${VISBUF} bake ${ASSETS}/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb -o ${OUT}/truck_raw.vbp
+                        --compression-level 0
+                RESULT_VARIABLE rc OUTPUT_VARIABLE outr ERROR_VARIABLE errr)
+execute_process(COMMAND ${VISBUF} render --scene ${OUT}/truck_raw.vbp --size 160x120 --validation
+                        -o ${OUT}/truck_raw.png RESULT_VARIABLE rc2 OUTPUT_VARIABLE outr2 ERROR_VARIABLE errr2)
+if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0)
+  message(FATAL_ERROR "raw bake or render failed (${rc}, ${rc2}):\n${outr}\n${errr}\n${outr2}\n${errr2}")
+endif()
+file(SIZE ${OUT}/truck.vbp zbytes)
+file(SIZE ${OUT}/truck_raw.vbp rawbytes)
+file(SHA256 ${OUT}/truck.png zimage)
+file(SHA256 ${OUT}/truck_raw.png rawimage)
+if(NOT zbytes LESS rawbytes OR NOT zimage STREQUAL rawimage)
+  message(FATAL_ERROR "zstd pack ${zbytes} bytes against ${rawbytes} raw; images ${zimage} / ${rawimage} must match")
+endif()
 # --quantize: the summary and the JSON carry the measured error, and the quantised pack renders.
 file(REMOVE ${OUT}/truck_q.vbp ${OUT}/truck_q.json)
 execute_process(COMMAND ${VISBUF} bake ${ASSETS}/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb -o ${OUT}/truck_q.vbp

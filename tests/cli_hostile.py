@@ -74,25 +74,50 @@ def meshoptimizer():
     return _MESHOPT
 
 
+_ZSTD = None
+
+
+def unzstd(stored, size):
+    """A zstd section's decoded bytes (pack format 7: header, frame sizes, frames), through libzstd via ctypes."""
+    global _ZSTD
+    if _ZSTD is None:
+        name = ctypes.util.find_library("zstd")
+        if not name:
+            raise SystemExit("cli_hostile.py: libzstd is needed to decode compressed pack sections")
+        _ZSTD = ctypes.CDLL(name)
+        _ZSTD.ZSTD_decompress.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_char_p, ctypes.c_size_t]
+        _ZSTD.ZSTD_decompress.restype = ctypes.c_size_t
+    chunk, frames, _ = struct.unpack_from("<IIQ", stored, 0)
+    at, out = 16 + 4 * frames, b""
+    for n in struct.unpack_from(f"<{frames}I", stored, 16):
+        dst = ctypes.create_string_buffer(min(chunk, size - len(out)))
+        if _ZSTD.ZSTD_decompress(dst, len(dst), stored[at:at + n], n) != len(dst):
+            raise SystemExit("cli_hostile.py: a zstd frame of a written pack does not decode")
+        out += dst.raw
+        at += n
+    return out
+
+
 def decoded_vertices(pack):
-    """A pack's vertex records as the reader decodes them (pack format 5: each mesh's "vertices" stream is
-    meshoptimizer-encoded, located by its "meshEncoding" record), concatenated; b"" for what is not a pack.
-    Canary bytes that reached the pack are looked for here: in the encoded stream they would not show."""
+    """A pack's vertex records as the reader decodes them (pack format 7: each section raw or zstd; each mesh's
+    "vertices" stream meshoptimizer-encoded, located by its "meshEncoding" record), concatenated; b"" for what is
+    not a pack. Canary bytes that reached the pack are looked for here: in the encoded streams they would not show."""
     if len(pack) < 64 or pack[:4] != b"VBPK":
         return b""
     sections = {}
     for i in range(struct.unpack_from("<I", pack, 16)[0]):
-        name, offset, size, count, _, _ = struct.unpack_from("<16sQQQII", pack, 64 + 48 * i)
-        sections[name.rstrip(b"\0").decode()] = (offset, size, count)
+        name, offset, size, count, _, _, stored, encoding, _ = struct.unpack_from("<16sQQQIIQII", pack, 64 + 64 * i)
+        data = pack[offset:offset + stored]
+        sections[name.rstrip(b"\0").decode()] = (unzstd(data, size) if encoding == 1 else data, count)
     if "meshEncoding" not in sections or "vertices" not in sections:
         return b""
-    enc_offset, _, meshes = sections["meshEncoding"]
-    vertices_offset = sections["vertices"][0]
+    encoding, meshes = sections["meshEncoding"]
+    vertices = sections["vertices"][0]
     out = b""
     for m in range(meshes):
-        byte, nbytes, _, _, count = struct.unpack_from("<QQQQI", pack, enc_offset + 48 * m)
+        byte, nbytes, _, _, count = struct.unpack_from("<QQQQI", encoding, 48 * m)
         dst = ctypes.create_string_buffer(count * 32)
-        src = pack[vertices_offset + byte:vertices_offset + byte + nbytes]
+        src = vertices[byte:byte + nbytes]
         if meshoptimizer().meshopt_decodeVertexBuffer(dst, count, 32, src, len(src)) != 0:
             raise SystemExit(f"cli_hostile.py: mesh {m} of a written pack does not decode")
         out += dst.raw

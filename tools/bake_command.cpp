@@ -54,10 +54,19 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
   sub->add_flag("--quantize", c.quantize,
                 "store quantised vertices: 16-bit positions over each mesh's box and uvs over its uv range "
                 "(20 instead of 32 bytes a vertex; the error is measured and printed)");
+  sub->add_option("--compression-level", c.compressionLevel,
+                  "zstd level of the pack's sections (BC blocks, geometry streams), 1..19; 0 stores every section "
+                  "raw. The loaded scene is the same at every level")
+      ->check(unsignedIn(0, 19))
+      ->capture_default_str();
   sub->add_option("--max-texture-size", c.maxTextureSize,
                   "largest baked texture side (power of two, 1..16384); larger images are downscaled")
       ->check(powerOfTwo(16384))
       ->capture_default_str();
+  sub->add_option("--normal-map-size", c.normalMapSize,
+                  "largest side of images used only as normal maps (power of two, 1..16384; default: "
+                  "--max-texture-size): their larger mip levels are dropped")
+      ->check(powerOfTwo(16384));
   sub->add_flag("--no-textures", c.noTextures, "do not bake texture pixels (materials keep their references)");
   sub->add_option("--textures", c.textures,
                   "texture storage: bc (block-compressed: BC1 colour, BC3 colour with alpha, BC4 occlusion, BC5 "
@@ -221,6 +230,7 @@ int runBake(const BakeCommand& c) {
       textureOptions.maxTextureSize = c.maxTextureSize;
       textureOptions.maxImagePixels = c.maxImagePixels;
       textureOptions.dropUndecodableImages = !c.strictImages;
+      textureOptions.maxNormalMapSize = c.normalMapSize;
       textureOptions.encoding = c.textures == "rgba8" ? TextureEncoding::Rgba8 : TextureEncoding::Bc;
       textureOptions.quality = c.textureQuality == "high"     ? TextureQuality::High
                                : c.textureQuality == "normal" ? TextureQuality::Normal
@@ -254,6 +264,7 @@ int runBake(const BakeCommand& c) {
   PackWriteReport written;
   PackWriteOptions writeOptions;
   writeOptions.quantize = c.quantize;
+  writeOptions.compressionLevel = int(c.compressionLevel);
   if (Status s = writePack(*scene, c.output, writeOptions, &written); !s) return badInput(s.error());
   const PackQuantizationReport& q = written.quantization;
   const double writeSeconds = secondsSince(writeStart);
@@ -315,8 +326,11 @@ int runBake(const BakeCommand& c) {
       static_cast<unsigned long long>(trianglesAllLods));
   printTextureSummary(*scene, textureReport, c.noTextures, json);
   std::string sections;
-  for (const PackSectionInfo& s : written.sections)
+  for (const PackSectionInfo& s : written.sections) {
     sections += fmt::format("{}{} {}", sections.empty() ? "" : ", ", s.name, s.size);
+    if (s.storedSize != s.size) sections += fmt::format(" (zstd {})", s.storedSize);
+    json["sections"].push_back({{"name", s.name}, {"bytes", s.size}, {"storedBytes", s.storedSize}});
+  }
   std::printf("  pack: %llu bytes (%s)\n", static_cast<unsigned long long>(written.fileBytes),
               sections.c_str());
   if (q.enabled) {

@@ -66,8 +66,10 @@ struct BakeCommand {
   uint32_t lodCount = MeshBuildOptions{}.maxLods;      // LOD levels incl. the full mesh, 1..MAX_LODS
   uint32_t lodMinTriangles = MeshBuildOptions{}.minTriangles;
   bool quantize = false;                               // store quantised vertices (PackWriteOptions::quantize)
+  uint32_t compressionLevel = 9;                       // zstd level of the sections, 0: raw (PackWriteOptions)
   std::string json;                                    // summary as JSON; empty: none
   uint32_t maxTextureSize = 2048;                      // power of two, 1..16384
+  uint32_t normalMapSize = 0;                          // --normal-map-size (TextureBakeOptions::maxNormalMapSize)
   bool noTextures = false;                             // skip texture baking (materials keep their references)
   std::string textures = "bc";                         // --textures bc|rgba8 (TextureBakeOptions::encoding)
   std::string textureQuality = "fast";                 // --texture-quality fast|normal|high

@@ -60,7 +60,7 @@ void addImportBudgetOptions(CLI::App& app, uint64_t& maxInstances, uint64_t& max
       ->capture_default_str();
   app.add_option("--max-import-memory", maxImportMemory,
                  "glTF: the import's memory budget in bytes (file, JSON, buffers, decoded accessors, output), "
-                 "checked before each allocation")
+                 "checked before each allocation; a pack: what its zstd sections may decode to")
       ->check(unsignedIn(uint64_t{1} << 20, uint64_t{1} << 40))
       ->capture_default_str();
 }
@@ -159,7 +159,7 @@ Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
   // message rather than the glTF parser's).
   // --objects N > 1: N copies of the pack's scene on a grid, its animated objects each copy at its own phase.
   if (isPackFile(o.scene) || std::filesystem::path(o.scene).extension() == ".vbp") {
-    Result<Scene> pack = readPack(o.scene);
+    Result<Scene> pack = readPack(o.scene, PackReadOptions{o.maxImportMemory});  // budget: --max-import-memory
     if (!pack || o.objects <= 1) return pack;
     AnimatedFieldParams p;
     p.instances = o.objects;

@@ -6,12 +6,14 @@
 // File layout (all offsets in bytes from the start of the file):
 //
 //   [0, 64)                  Header
-//   [64, 64 + 48 * count)    SectionEntry[Header::sectionCount]   (the section table)
+//   [64, 64 + 64 * count)    SectionEntry[Header::sectionCount]   (the section table)
 //   then the sections, each starting at a multiple of kAlignment (16), zero padding in between and after
 //   the last one up to Header::fileSize, which is a multiple of 16.
 //
 // Integrity: Header::headerCrc is the CRC-32 of the header (with headerCrc itself set to 0) followed by the
-// whole section table; SectionEntry::crc32 is the CRC-32 of the section's `size` bytes. CRC-32 is the
+// whole section table; SectionEntry::crc32 is the CRC-32 of the section's `storedSize` bytes as stored (for a
+// zstd section the compressed bytes: checked before any decoder runs; each zstd frame's own content checksum then
+// covers the decoded bytes). CRC-32 is the
 // IEEE 802.3 / zlib / PNG one (reflected polynomial 0xEDB88320, initial value and final XOR 0xFFFFFFFF).
 //
 // Versioning: Header::version is kVersion. Any change to the layout or meaning of an existing record or
@@ -38,7 +40,9 @@ inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
 // and meshoptimizer-encoded geometry sections; the file is read in place from a memory mapping. 6: rigid node
 // animation ("rigidObjects", pack_animation_format.h): an unskinned object that node animation moves is a plain
 // object listed there (no longer a one-joint skin), which a version-5 reader would draw without its motion.
-inline constexpr uint32_t kVersion = 6;
+// 7: section encodings (SectionEntry grew to 64 bytes: storedSize, encoding): a section may be stored as zstd
+// frames (ZstdSectionHeader below), which a version-6 reader would misread as raw records.
+inline constexpr uint32_t kVersion = 7;
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
 inline constexpr size_t kSectionNameSize = 16;
@@ -47,7 +51,7 @@ struct Header {
   char magic[4];              // "VBPK"
   uint32_t version;           // kVersion
   uint32_t headerSize;        // sizeof(Header) = 64
-  uint32_t sectionEntrySize;  // sizeof(SectionEntry) = 48
+  uint32_t sectionEntrySize;  // sizeof(SectionEntry) = 64
   uint32_t sectionCount;      // entries in the table at offset headerSize; 1..kMaxSections
   uint32_t flags;             // 0 (none defined)
   uint64_t fileSize;          // total file size in bytes, multiple of kAlignment
@@ -56,16 +60,41 @@ struct Header {
 };
 static_assert(sizeof(Header) == 64 && offsetof(Header, fileSize) == 24 && offsetof(Header, headerCrc) == 60);
 
+// How a section's bytes are stored (SectionEntry::encoding). Every reader check below the section table sees the
+// decoded bytes; the encoding is invisible above it.
+inline constexpr uint32_t kSectionRaw = 0;   // storedSize == size: the bytes as they are
+inline constexpr uint32_t kSectionZstd = 1;  // ZstdSectionHeader + frame sizes + zstd frames, decoding to `size` bytes
+
 struct SectionEntry {
   char name[kSectionNameSize];  // ASCII, NUL-padded, at least one NUL (e.g. "indices")
-  uint64_t offset;              // from the start of the file; multiple of kAlignment; after the table
-  uint64_t size;                // bytes; == count * elementSize
+  uint64_t offset;              // of the stored bytes, from the start of the file; multiple of kAlignment; after
+                                // the table
+  uint64_t size;                // decoded bytes; == count * elementSize
   uint64_t count;               // number of records
   uint32_t elementSize;         // bytes per record (1 for "strings")
-  uint32_t crc32;               // CRC-32 of the section's `size` bytes
+  uint32_t crc32;               // CRC-32 of the section's `storedSize` bytes as stored in the file
+  uint64_t storedSize;          // bytes in the file: == size for kSectionRaw, > 0 for kSectionZstd
+  uint32_t encoding;            // kSectionRaw or kSectionZstd
+  uint32_t reserved;            // 0
 };
-static_assert(sizeof(SectionEntry) == 48 && offsetof(SectionEntry, offset) == 16 &&
-              offsetof(SectionEntry, crc32) == 44);
+static_assert(sizeof(SectionEntry) == 64 && offsetof(SectionEntry, offset) == 16 &&
+              offsetof(SectionEntry, crc32) == 44 && offsetof(SectionEntry, storedSize) == 48 &&
+              offsetof(SectionEntry, encoding) == 56);
+
+// The stored bytes of a kSectionZstd section: this header, then u32 frameBytes[frameCount] (each frame's stored
+// length), then the frames back to back, exactly filling storedSize. Frame i is one zstd frame (RFC 8878; no
+// skippable frame, no dictionary, content size and content checksum present) that decodes to the decoded bytes
+// [i * chunkBytes, min((i + 1) * chunkBytes, size)): frames decode independently (in parallel, or only those a
+// byte range needs). frameCount = ceil(size / chunkBytes); a section of size 0 is never compressed.
+struct ZstdSectionHeader {
+  uint32_t chunkBytes;  // decoded bytes per frame (the last one may hold fewer): a power of two in
+                        // [kMinZstdChunkBytes, kMaxZstdChunkBytes]
+  uint32_t frameCount;  // ceil(size / chunkBytes)
+  uint64_t reserved;    // 0
+};
+static_assert(sizeof(ZstdSectionHeader) == 16);
+inline constexpr uint32_t kMinZstdChunkBytes = uint32_t{1} << 12;
+inline constexpr uint32_t kMaxZstdChunkBytes = uint32_t{1} << 24;
 
 // A UTF-8 string in the "strings" section (not NUL-terminated). length 0: empty string.
 struct StringRef {

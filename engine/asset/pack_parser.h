@@ -9,9 +9,13 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "visbuf/asset/pack_format.h"
+#include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/pack_section_codec.h"
 #include "visbuf/core/result.h"
 #include "visbuf/scene/scene.h"
 
@@ -25,7 +29,11 @@ inline bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
 struct SectionView {
   pack::SectionEntry entry;
   std::string name;
+  // The section's decoded bytes (entry.size): in the file for a raw section, in the Parser's decoded_ for a zstd
+  // one -- except "texels", whose frames readTextures decodes straight into each class (`zstd` set, `data` then
+  // points at the stored bytes and is not read).
   const uint8_t* data = nullptr;
+  std::shared_ptr<const pack::ZstdSection> zstd;
 };
 
 inline bool allFinite(const double* v, int n) {
@@ -37,8 +45,8 @@ inline bool allFinite(const float* v, int n) {
 
 class Parser {
  public:
-  Parser(const uint8_t* data, size_t size, const std::string& label)
-      : data_(data), size_(size), label_(label) {}
+  Parser(const uint8_t* data, size_t size, const std::string& label, const PackReadOptions& options)
+      : data_(data), size_(size), label_(label), options_(options) {}
 
   Result<Scene> run();
   uint64_t peakScratchBytes() const { return peakScratch_; }
@@ -53,6 +61,8 @@ class Parser {
     return makeError(code, label_ + ": " + message);
   }
   Status parseTable();
+  Status checkEncoding(const SectionView& v) const;  // the entry's encoding fields (step 3)
+  Status decodeSections();                           // zstd sections: budget, frame checks, decode (step 4)
   template <typename T>
   T record(const SectionView& s,
            uint64_t i) const {  // caller guarantees i < count and size == count*sizeof(T)
@@ -67,6 +77,7 @@ class Parser {
   Status readObjects(Scene* scene);
   Status readMeshStreams(Scene* scene);
   Status readTextures(Scene* scene);
+  Status readTexels(const SectionView& texels, const std::vector<uint64_t>& firstBytes, Scene* scene);
   Result<TextureRef> readTextureSlot(const pack::TextureSlotRecord& r, size_t slot, const Scene& scene,
                                      const std::string& where) const;
   // An optional section, or an empty view named `name` when the pack has none.
@@ -86,6 +97,8 @@ class Parser {
   const uint8_t* data_;
   size_t size_;
   const std::string& label_;
+  PackReadOptions options_;
+  std::vector<std::vector<uint8_t>> decoded_;  // the decoded bytes of zstd sections (SectionView::data)
   std::map<std::string, SectionView, std::less<>> sections_;
   uint64_t peakScratch_ = 0;  // largest decode buffer besides the Scene's own storage
 };

@@ -1,10 +1,12 @@
 // Pack reader. Order of checks (docs/pack-format.md lists them for users):
 //   1. header: size, magic, version, header/entry sizes, flags, section count, table inside the file;
 //   2. header + table checksum;
-//   3. each section: name, alignment, count x elementSize (overflow), size, range inside the file, overlap,
-//      then the declared file size;
-//   4. each section's checksum; required sections present, once, with the expected record size; exactly one of
-//      "vertices" / "qvertices", "quantization" exactly with "qvertices";
+//   3. each section: name, alignment, count x elementSize (overflow), size, encoding fields, stored range inside
+//      the file, overlap, then the declared file size;
+//   4. each section's checksum (over its stored bytes); the zstd sections' decoded sizes against the budget, their
+//      frame tables and frame headers, their decode (texels: per class in readTextures); required sections
+//      present, once, with the expected record size; exactly one of "vertices" / "qvertices", "quantization"
+//      exactly with "qvertices";
 //   5. contents: string refs, mesh/LOD ranges, each mesh's encoded geometry (its "meshEncoding" record: counts,
 //      byte ranges, the codec's largest expansion before allocating, then the decode itself), index values,
 //      finite values, object references, then the optional animation sections (pack_animation.cpp);
@@ -13,6 +15,7 @@
 #include "visbuf/asset/pack_reader.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <bit>
@@ -155,9 +158,10 @@ Status Parser::parseTable() {
           fmt::format("{}: field 'offset' {} must be a multiple of {} after the section table (byte {})",
                       where, e.offset, pack::kAlignment, tableEnd));
     }
-    if (!rangeFits(e.offset, e.size, size_)) {
-      return fail(fmt::format("{} runs past the end of the file (offset {}, size {}, file {})", where,
-                              e.offset, e.size, size_));
+    if (Status s = checkEncoding(v); !s) return s;
+    if (!rangeFits(e.offset, e.storedSize, size_)) {
+      return fail(fmt::format("{} runs past the end of the file (offset {}, stored size {}, file {})", where,
+                              e.offset, e.storedSize, size_));
     }
     const uint32_t expected = expectedElementSize(v.name);
     if (expected != 0 && e.elementSize != expected) {
@@ -171,10 +175,10 @@ Status Parser::parseTable() {
   std::sort(views.begin(), views.end(),
             [](const SectionView& a, const SectionView& b) { return a.entry.offset < b.entry.offset; });
   for (size_t i = 1; i < views.size(); ++i) {
-    if (views[i].entry.offset < views[i - 1].entry.offset + views[i - 1].entry.size) {
-      return fail(fmt::format("section '{}' (offset {}) overlaps section '{}' (offset {}, size {})",
+    if (views[i].entry.offset < views[i - 1].entry.offset + views[i - 1].entry.storedSize) {
+      return fail(fmt::format("section '{}' (offset {}) overlaps section '{}' (offset {}, stored size {})",
                               views[i].name, views[i].entry.offset, views[i - 1].name,
-                              views[i - 1].entry.offset, views[i - 1].entry.size));
+                              views[i - 1].entry.offset, views[i - 1].entry.storedSize));
     }
   }
   if (h.fileSize != size_) {
@@ -182,7 +186,7 @@ Status Parser::parseTable() {
                             h.fileSize > size_ ? "truncated" : "trailing bytes"));
   }
   for (const SectionView& v : views) {
-    const uint32_t c = pack::crc32(v.data, v.entry.size);
+    const uint32_t c = pack::crc32(v.data, v.entry.storedSize);
     if (c != v.entry.crc32) {
       return fail(
           fmt::format("section '{}': checksum mismatch (stored {:#010x}, computed {:#010x}): the file is "
@@ -190,6 +194,7 @@ Status Parser::parseTable() {
                       v.name, v.entry.crc32, c));
     }
   }
+  if (Status s = decodeSections(); !s) return s;
   for (const char* name : kRequiredSections) {
     if (sections_.count(name) == 0) return fail(fmt::format("required section '{}' is missing", name));
   }
@@ -202,6 +207,51 @@ Status Parser::parseTable() {
   if (quantized != (sections_.count(pack::kQuantizationSection) != 0)) {
     return fail(quantized ? "section 'qvertices' needs section 'quantization'"
                           : "section 'quantization' is only valid with section 'qvertices'");
+  }
+  return {};
+}
+
+Status Parser::checkEncoding(const SectionView& v) const {
+  const pack::SectionEntry& e = v.entry;
+  if (e.reserved != 0)
+    return fail(fmt::format("section '{}': field 'reserved' is {}, expected 0", v.name, e.reserved));
+  if (e.encoding == pack::kSectionRaw) {
+    if (e.storedSize != e.size)
+      return fail(fmt::format("section '{}': field 'storedSize' {} differs from 'size' {} (raw encoding)", v.name,
+                              e.storedSize, e.size));
+    return {};
+  }
+  if (e.encoding != pack::kSectionZstd)
+    return fail(fmt::format("section '{}': field 'encoding' {} is unknown (0 raw, 1 zstd)", v.name, e.encoding));
+  if (e.size == 0 || e.storedSize == 0)
+    return fail(fmt::format("section '{}': a zstd section of size {} / stored size {}: empty sections are raw",
+                            v.name, e.size, e.storedSize));
+  return {};
+}
+
+// After the checksums: the zstd sections' declared sizes against the budget (before anything is allocated), then
+// each one's frame table and frame headers (ZstdSection::open), then the decode of every zstd section but
+// "texels" (readTextures decodes those per class, straight into the class).
+Status Parser::decodeSections() {
+  uint64_t total = 0;
+  for (const auto& [name, v] : sections_) {
+    if (v.entry.encoding != pack::kSectionZstd) continue;
+    if (__builtin_add_overflow(total, v.entry.size, &total) || total > options_.maxDecodedBytes)
+      return fail(fmt::format("the zstd sections decode to more than the reader's budget of {} bytes (section '{}' "
+                              "declares {}); raise it with --max-import-memory (PackReadOptions::maxDecodedBytes)",
+                              options_.maxDecodedBytes, name, v.entry.size),
+                  ErrorCode::CapacityExceeded);
+  }
+  for (auto& [name, v] : sections_) {
+    if (v.entry.encoding != pack::kSectionZstd) continue;
+    Result<pack::ZstdSection> z = pack::ZstdSection::open(v.data, v.entry.storedSize, v.entry.size);
+    if (!z) return fail(fmt::format("section '{}': {}", name, z.error().message));
+    v.zstd = std::make_shared<const pack::ZstdSection>(std::move(z.value()));
+    if (name == pack::kTexelsSection) continue;
+    std::vector<uint8_t>& out = decoded_.emplace_back(v.entry.size);
+    if (Status s = v.zstd->decode(0, v.entry.size, out.data()); !s)
+      return fail(fmt::format("section '{}': {}", name, s.error().message));
+    v.data = out.data();
   }
   return {};
 }
@@ -310,6 +360,7 @@ Status Parser::readTextures(Scene* scene) {
   const int present = (textures.data != nullptr) + (classes.data != nullptr) + (texels.data != nullptr);
   if (present == 0) return {};
   if (present != 3) return fail("sections 'textures', 'textureClasses' and 'texels' must appear together");
+  std::vector<uint64_t> ranges;  // each class's firstByte in "texels"
   for (uint64_t i = 0; i < classes.entry.count; ++i) {
     const auto r = record<pack::TextureClassRecord>(classes, i);
     const std::string where = fmt::format("section 'textureClasses' record {}", i);
@@ -338,9 +389,10 @@ Status Parser::readTextures(Scene* scene) {
     if (r.firstByte % pack::kAlignment != 0 || !rangeFits(r.firstByte, r.byteCount, texels.entry.size))
       return fail(fmt::format("{}: field 'firstByte' {} (+ {} bytes) is not 16-aligned inside section 'texels' ({} "
                               "bytes)", where, r.firstByte, r.byteCount, texels.entry.size));
-    c.texels.assign(texels.data + r.firstByte, texels.data + r.firstByte + r.byteCount);
     scene->textureClasses.push_back(std::move(c));
+    ranges.push_back(r.firstByte);
   }
+  if (Status s = readTexels(texels, ranges, scene); !s) return s;
   std::vector<std::vector<uint8_t>> used;
   for (const TextureClass& c : scene->textureClasses) used.emplace_back(c.layers, 0);
   for (uint64_t i = 0; i < textures.entry.count; ++i) {
@@ -359,6 +411,30 @@ Status Parser::readTextures(Scene* scene) {
     scene->textures.push_back({*name, r.sourceImage, ColorSpace(r.colorSpace), r.sizeClass, r.layer,
                                r.originalWidth, r.originalHeight});
   }
+  return {};
+}
+
+// Each class's texels from its checked range of "texels": copied from a raw section; from a zstd one, the frames
+// of all classes decoded in parallel straight into the classes (no decoded copy of the whole section).
+Status Parser::readTexels(const SectionView& texels, const std::vector<uint64_t>& firstBytes, Scene* scene) {
+  std::vector<TextureClass>& classes = scene->textureClasses;
+  if (!texels.zstd) {
+    for (size_t i = 0; i < classes.size(); ++i)
+      classes[i].texels.assign(texels.data + firstBytes[i], texels.data + firstBytes[i] + classes[i].totalBytes());
+    return {};
+  }
+  uint64_t scratch = 0;
+  for (size_t i = 0; i < classes.size(); ++i) {
+    classes[i].texels.resize(classes[i].totalBytes());
+    scratch += texels.zstd->scratchBytes(firstBytes[i], firstBytes[i] + classes[i].totalBytes());
+  }
+  noteScratch(scratch);
+  std::vector<Status> results(classes.size());
+  tbb::parallel_for(size_t{0}, classes.size(), [&](size_t i) {
+    results[i] = texels.zstd->decode(firstBytes[i], firstBytes[i] + classes[i].totalBytes(), classes[i].texels.data());
+  });
+  for (size_t i = 0; i < classes.size(); ++i)
+    if (!results[i]) return fail(fmt::format("section 'texels' (class {}): {}", i, results[i].error().message));
   return {};
 }
 
@@ -411,8 +487,13 @@ Result<Scene> Parser::run() {
 using pack_detail::Parser;
 
 Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label, PackReadStats* stats) {
+  return parsePack(data, size, label, PackReadOptions{}, stats);
+}
+
+Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& label, const PackReadOptions& options,
+                        PackReadStats* stats) {
   try {
-    Parser parser(data, size, label);
+    Parser parser(data, size, label, options);
     Result<Scene> scene = parser.run();
     if (stats) {
       stats->fileBytes = size;
@@ -431,12 +512,14 @@ Result<Scene> parsePack(const uint8_t* data, size_t size, const std::string& lab
 // overwrites the file in place meanwhile can neither raise SIGBUS nor change a byte after its checksum was
 // verified. A change during the read itself is caught by readFileSnapshot (size / mtime / ctime differ before and
 // after) or by the checksums.
-Result<Scene> readPack(const std::string& path, PackReadStats* stats) {
-  FileReadOptions options;
-  options.maxBytes = kMaxPackFileBytes;
-  Result<FileSnapshot> file = readFileSnapshot(path, options);
+Result<Scene> readPack(const std::string& path, PackReadStats* stats) { return readPack(path, PackReadOptions{}, stats); }
+
+Result<Scene> readPack(const std::string& path, const PackReadOptions& options, PackReadStats* stats) {
+  FileReadOptions fileOptions;
+  fileOptions.maxBytes = kMaxPackFileBytes;
+  Result<FileSnapshot> file = readFileSnapshot(path, fileOptions);
   if (!file) return file.error();
-  return parsePack(file->data(), file->size, path, stats);
+  return parsePack(file->data(), file->size, path, options, stats);
 }
 
 bool isPackFile(const std::string& path) {

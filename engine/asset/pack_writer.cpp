@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/stat.h>
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include "visbuf/asset/pack_animation.h"
 #include "visbuf/asset/pack_format.h"
 #include "visbuf/asset/pack_geometry.h"
+#include "visbuf/asset/pack_section_codec.h"
 #include "visbuf/core/image_io.h"
 #include "visbuf/core/temp_file.h"
 
@@ -472,7 +474,20 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
   const uint64_t stringCount = strings.bytes().size();
   sections.push_back({pack::kStringsSection, 1, stringCount, std::move(strings.bytes())});
 
-  // Layout: header, table, then each section at the next multiple of 16; the file ends 16-aligned.
+  // Section encodings (pack_section_codec.h), all sections in parallel; then the layout: header, table, then each
+  // section's stored bytes at the next multiple of 16; the file ends 16-aligned.
+  std::vector<pack::StoredSection> stored(sections.size());
+  std::vector<Status> storeErrors(sections.size());
+  tbb::parallel_for(size_t{0}, sections.size(), [&](size_t i) {
+    Result<pack::StoredSection> r = pack::storeSection(sections[i].bytes, options.compressionLevel);
+    if (r) stored[i] = std::move(r.value());
+    else storeErrors[i] = r.error();
+  });
+  for (const Status& s : storeErrors)
+    if (!s) return s.error();
+  auto storedBytes = [&](size_t i) -> const std::vector<uint8_t>& {
+    return stored[i].encoding == pack::kSectionRaw ? sections[i].bytes : stored[i].stored;
+  };
   const uint64_t tableEnd = sizeof(pack::Header) + sections.size() * sizeof(pack::SectionEntry);
   std::vector<pack::SectionEntry> table(sections.size());
   uint64_t cursor = alignUp(tableEnd);
@@ -484,8 +499,10 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
     e.size = sections[i].bytes.size();
     e.count = sections[i].count;
     e.elementSize = sections[i].elementSize;
-    e.crc32 = pack::crc32(sections[i].bytes.data(), sections[i].bytes.size());
-    cursor = alignUp(cursor + e.size);
+    e.storedSize = storedBytes(i).size();
+    e.encoding = stored[i].encoding;
+    e.crc32 = pack::crc32(storedBytes(i).data(), storedBytes(i).size());
+    cursor = alignUp(cursor + e.storedSize);
   }
   pack::Header header{};
   std::memcpy(header.magic, pack::kMagic, 4);
@@ -502,14 +519,14 @@ Result<std::vector<uint8_t>> serializePack(const Scene& scene, const PackWriteOp
   std::memcpy(out.data(), &header, sizeof(header));
   std::memcpy(out.data() + sizeof(header), table.data(), table.size() * sizeof(pack::SectionEntry));
   for (size_t i = 0; i < sections.size(); ++i) {
-    if (!sections[i].bytes.empty())
-      std::memcpy(out.data() + table[i].offset, sections[i].bytes.data(), sections[i].bytes.size());
+    if (!storedBytes(i).empty()) std::memcpy(out.data() + table[i].offset, storedBytes(i).data(), table[i].storedSize);
   }
   if (report) {
     report->fileBytes = out.size();
     report->sections.clear();
     for (size_t i = 0; i < sections.size(); ++i)
-      report->sections.push_back({sections[i].name, table[i].offset, table[i].size, table[i].count});
+      report->sections.push_back({sections[i].name, table[i].offset, table[i].size, table[i].count,
+                                  table[i].storedSize, table[i].encoding});
     report->quantization = std::move(quantization);
   }
   return out;

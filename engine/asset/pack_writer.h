@@ -13,8 +13,10 @@ namespace visbuf {
 struct PackSectionInfo {
   std::string name;
   uint64_t offset = 0;  // bytes from the start of the file
-  uint64_t size = 0;    // bytes
+  uint64_t size = 0;    // decoded bytes
   uint64_t count = 0;   // records
+  uint64_t storedSize = 0;  // bytes in the file (== size when stored raw)
+  uint32_t encoding = 0;    // pack::kSectionRaw or pack::kSectionZstd
 };
 
 // What --quantize cost, measured on the vertices the reader will decode against the scene's own.
@@ -44,6 +46,10 @@ struct PackWriteOptions {
   // contain the decoded vertices and its measured max position error is added to every LOD error, so culling
   // and LOD selection stay conservative. MalformedInput when a mesh's extent overflows float.
   bool quantize = false;
+  // zstd level of the section encoding (pack_section_codec.h: kMinZstdLevel..kMaxZstdLevel), 0: every section
+  // raw. Each section of at least 4 KiB is compressed in 1 MiB frames and stored so when that saves 1/32 of it.
+  // The decoded sections, and so the scene a reader gets, are the same at every level.
+  int compressionLevel = 9;  // pack::kDefaultZstdLevel
 };
 
 // Serialises `scene` into the bytes of a pack. The scene must pass validateScene(); additionally every mesh

@@ -72,7 +72,7 @@ const char* textureQualityName(TextureQuality quality) {
 
 TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque) {
   if (encoding == TextureEncoding::Rgba8) return TextureFormat::Rgba8;
-  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = 1u << 2, kOcclusion = 1u << 3;
+  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = kNormalSlotMask, kOcclusion = 1u << 3;
   if (colorSpace == ColorSpace::Srgb) return (slots & kBaseColor) && !opaque ? TextureFormat::Bc3 : TextureFormat::Bc1;
   // Only the normal slot reads xy (z is rebuilt), only the occlusion slot reads R alone; metallic-roughness (G,
   // B) and images shared by several data slots keep three channels.

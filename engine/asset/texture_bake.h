@@ -76,6 +76,9 @@ struct TextureBakeOptions {
   // fails on it. Budget refusals (CapacityExceeded), files that are not regular and builds without a decoder
   // (Unsupported) always fail: they say something the user must decide.
   bool dropUndecodableImages = true;
+  // Largest side of an image used only as a normal map (power of two; 0: maxTextureSize applies): its larger
+  // levels are dropped after the mip chain is built (`bake --normal-map-size`; docs/pack-format.md measures it).
+  uint32_t maxNormalMapSize = 0;
 };
 
 // A decoded image in linear light: width x height RGBA floats, row-major from the top row.
@@ -139,6 +142,7 @@ std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace
 // Bit i set: the image is used by texture slot i (textureSlots() order: base colour, metallic-roughness, normal,
 // occlusion, emissive).
 using TextureSlotMask = uint32_t;
+inline constexpr TextureSlotMask kNormalSlotMask = 1u << 2;  // an image used by normal slots only (BC5 or RGBA8)
 // The stored format of an image (step 5): `opaque` says every alpha of its RGBA8 mip 0 is 255.
 TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque);
 // Block-compresses one width x height RGBA8 image (rows top first, R first) into `format` (a BC format):

@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
+#include <bit>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -162,8 +163,8 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     return makeError(ErrorCode::InvalidArgument, fmt::format("maxTextureSize {} must be a power of two in [1, {}]",
                                                              options.maxTextureSize, kMaxTextureSize));
   }
-  if (options.maxImagePixels < 1)
-    return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be at least 1");
+  if (options.maxImagePixels < 1 || (options.maxNormalMapSize != 0 && !std::has_single_bit(options.maxNormalMapSize)))
+    return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be >= 1, maxNormalMapSize 0 or a power of two");
   scene->textures.clear();
   scene->textureClasses.clear();
   auto keys = assignTextures(imported, scene);
@@ -208,6 +209,11 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
                          options.maxImagePixels);
       });
       gate.release(reserved);
+      if (r && key.slots == kNormalSlotMask && options.maxNormalMapSize != 0 && options.maxNormalMapSize < r->size) {
+        // The level of that size and those below it, as a larger source's cap keeps them (box-filtered mips).
+        r->mips.erase(r->mips.begin(), r->mips.begin() + std::countr_zero(r->size / options.maxNormalMapSize));
+        r->size = options.maxNormalMapSize;
+      }
       return r;
     }();
     if (b) {

@@ -1,6 +1,7 @@
 // libFuzzer target: parsePack() (engine/asset/pack_reader.h) on arbitrary bytes. The reader promises an Error
-// (never a crash, an out-of-bounds read or an allocation larger than the file) for any damaged input, and a
-// scene that passes validateScene() for any input it accepts.
+// (never a crash, an out-of-bounds read or an allocation larger than 64 times the file plus the zstd sections'
+// decoded size, which the budget below bounds) for any damaged input, and a scene that passes validateScene() for
+// any input it accepts. Zstd sections (the seeds' "texels") are checked and decoded like every other section.
 //
 // Every section and the header + section table carry a CRC-32, so nearly every mutation would stop at a
 // checksum and never reach the record checks behind it. Each input is therefore parsed twice: as it is (the
@@ -21,7 +22,10 @@
 namespace {
 
 void parse(const uint8_t* data, size_t size) {
-  visbuf::Result<visbuf::Scene> scene = visbuf::parsePack(data, size, "fuzz.vbp");
+  // A budget under libFuzzer's memory limit: a few bytes of zstd frames may honestly decode to gigabytes.
+  visbuf::PackReadOptions options;
+  options.maxDecodedBytes = uint64_t{256} << 20;
+  visbuf::Result<visbuf::Scene> scene = visbuf::parsePack(data, size, "fuzz.vbp", options);
   if (!scene) {
     VISBUF_FUZZ_CHECK(!scene.error().message.empty(), "parsePack: error without a message");
     return;
@@ -45,8 +49,8 @@ bool fixChecksums(std::vector<uint8_t>& v) {
     uint8_t* at = v.data() + sizeof(Header) + i * sizeof(SectionEntry);
     SectionEntry e;
     std::memcpy(&e, at, sizeof e);
-    if (e.offset > v.size() || e.size > v.size() - e.offset) continue;
-    e.crc32 = crc32(v.data() + e.offset, size_t(e.size));
+    if (e.offset > v.size() || e.storedSize > v.size() - e.offset) continue;
+    e.crc32 = crc32(v.data() + e.offset, size_t(e.storedSize));
     std::memcpy(at, &e, sizeof e);
   }
   Header zeroed = h;

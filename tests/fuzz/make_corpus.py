@@ -11,7 +11,7 @@ input runs faster. Sources:
                      samplers, KHR_texture_transform, lights, a camera and a mirrored node, a minimal .gltf, and a
                      synthesised .gltf with rigid node animation.
   fuzz_pack_reader   packs baked by `visbuf bake` from some of those glTF seeds (animated, skinned, textured,
-                     rigid node animation).
+                     rigid node animation, RGBA8 texels in a zstd section).
   fuzz_image_decode  tiny PNGs (every colour type, 16-bit, Adam7, palette + tRNS) written here, tiny JPEGs
                      (baseline with Exif + IPTC, greyscale, progressive, 4:2:0) written by oiiotool, and
                      regression_*: inputs that once crashed or exhausted memory, derived from those.
@@ -343,6 +343,10 @@ def pack_seeds(visbuf, tmp):
                                ("SimpleMorph.vbp", "SimpleMorph.gltf", ["--lod-count", "2"]),
                                ("RiggedSimple.vbp", "RiggedSimple.glb", ["--lod-count", "1"]),
                                ("Textured.vbp", "Textured.glb", ["--max-texture-size", "4"]),
+                               # RGBA8 texels of 32^2 (5.4 KiB) from an in-repo asset: a zstd "texels" section
+                               ("Textured_zstd.vbp", os.path.join(ROOT, "assets", "BoxTexturedNonPowerOfTwo", "glTF",
+                                                                  "BoxTexturedNonPowerOfTwo.gltf"),
+                                ["--max-texture-size", "32", "--textures", "rgba8", "--lod-count", "1"]),
                                ("RigidSpin.vbp", "RigidSpin.gltf", ["--lod-count", "1"]),
                                ("BoxInterleaved_quantized.vbp", "BoxInterleaved.glb", ["--quantize", "--lod-count", "2"])]:
         src = os.path.join(tmp, source)

@@ -27,6 +27,7 @@
 #include "visbuf/asset/pack_format.h"
 #include "visbuf/asset/pack_geometry.h"
 #include "visbuf/asset/pack_reader.h"
+#include "visbuf/asset/pack_section_codec.h"
 #include "visbuf/asset/pack_writer.h"
 #include "visbuf/asset/scene_bake.h"
 #include "visbuf/scene/generate.h"
@@ -193,7 +194,10 @@ inline pack::SectionEntry entryOf(const std::vector<uint8_t>& bytes, size_t i) {
   return e;
 }
 
-inline void setEntry(std::vector<uint8_t>& bytes, size_t i, const pack::SectionEntry& e) {
+// Writes table entry i; a raw entry's storedSize follows its size (write the table bytes directly to make them
+// disagree).
+inline void setEntry(std::vector<uint8_t>& bytes, size_t i, pack::SectionEntry e) {
+  if (e.encoding == pack::kSectionRaw) e.storedSize = e.size;
   std::memcpy(bytes.data() + sizeof(pack::Header) + i * sizeof(pack::SectionEntry), &e, sizeof(e));
 }
 
@@ -215,9 +219,9 @@ inline void reseal(std::vector<uint8_t>& bytes) {
   if (tableEnd > bytes.size()) return;
   for (size_t i = 0; i < count; ++i) {
     pack::SectionEntry e = entryOf(bytes, i);
-    if (e.offset <= bytes.size() && e.size <= bytes.size() - e.offset) {
-      e.crc32 = pack::crc32(bytes.data() + e.offset, e.size);
-      setEntry(bytes, i, e);
+    if (e.offset <= bytes.size() && e.storedSize <= bytes.size() - e.offset) {
+      e.crc32 = pack::crc32(bytes.data() + e.offset, e.storedSize);
+      std::memcpy(bytes.data() + sizeof(pack::Header) + i * sizeof(pack::SectionEntry), &e, sizeof(e));
     }
   }
   h.headerCrc = 0;
@@ -247,14 +251,24 @@ inline ::testing::AssertionResult failsWith(const Result<Scene>& r, const std::s
 // can replace one mesh's encoded stream with one of another length.
 struct RawSection {
   pack::SectionEntry entry;
-  std::vector<uint8_t> bytes;
+  std::vector<uint8_t> bytes;  // as stored (splitPack: decoded, the entry raw)
 };
 
+// Sections come out decoded (zstd sections as raw ones), so edits work on decoded bytes; joinPack stores them raw.
 inline std::vector<RawSection> splitPack(const std::vector<uint8_t>& bytes) {
   std::vector<RawSection> out;
   for (size_t i = 0; i < headerOf(bytes).sectionCount; ++i) {
-    const pack::SectionEntry e = entryOf(bytes, i);
-    out.push_back({e, {bytes.begin() + int64_t(e.offset), bytes.begin() + int64_t(e.offset + e.size)}});
+    pack::SectionEntry e = entryOf(bytes, i);
+    std::vector<uint8_t> stored(bytes.begin() + int64_t(e.offset), bytes.begin() + int64_t(e.offset + e.storedSize));
+    if (e.encoding == pack::kSectionZstd) {
+      Result<pack::ZstdSection> z = pack::ZstdSection::open(stored.data(), stored.size(), e.size);
+      std::vector<uint8_t> decoded(e.size);
+      EXPECT_TRUE(z && z->decode(0, e.size, decoded.data()));
+      stored = std::move(decoded);
+      e.encoding = pack::kSectionRaw;
+      e.storedSize = e.size;
+    }
+    out.push_back({e, std::move(stored)});
   }
   return out;
 }
@@ -267,10 +281,13 @@ inline std::vector<uint8_t> joinPack(const std::vector<uint8_t>& original, const
   for (const RawSection& r : sections) {
     pack::SectionEntry e = r.entry;
     e.offset = cursor;
-    e.size = r.bytes.size();
-    e.count = e.elementSize ? e.size / e.elementSize : 0;
+    e.storedSize = r.bytes.size();  // RawSection::bytes are the stored bytes: decoded ones for a raw section
+    if (e.encoding == pack::kSectionRaw) {
+      e.size = r.bytes.size();
+      e.count = e.elementSize ? e.size / e.elementSize : 0;
+    }
     table.push_back(e);
-    cursor += (e.size + 15) / 16 * 16;
+    cursor += (e.storedSize + 15) / 16 * 16;
   }
   h.fileSize = cursor;
   std::vector<uint8_t> out(cursor, 0);
@@ -406,11 +423,11 @@ inline bool hasSection(const std::vector<uint8_t>& bytes, const std::string& nam
   return false;
 }
 
-// The pack with one more section appended (every existing section moves 48 bytes for the longer table), resealed.
+// The pack with one more section appended (every existing section moves 64 bytes for the longer table), resealed.
 inline std::vector<uint8_t> withExtraSection(const std::vector<uint8_t>& bytes, const char* name, uint32_t elementSize,
                                       const std::vector<uint8_t>& data) {
   pack::Header h = headerOf(bytes);
-  const uint64_t shift = sizeof(pack::SectionEntry);  // 48, a multiple of 16
+  const uint64_t shift = sizeof(pack::SectionEntry);  // 64, a multiple of 16
   const uint64_t tableEnd = sizeof(pack::Header) + uint64_t{h.sectionCount} * sizeof(pack::SectionEntry);
   std::vector<uint8_t> out(bytes.size() + shift + (data.size() + 15) / 16 * 16, 0);
   std::memcpy(out.data() + tableEnd + shift, bytes.data() + tableEnd, bytes.size() - tableEnd);
@@ -434,9 +451,12 @@ inline std::vector<uint8_t> withExtraSection(const std::vector<uint8_t>& bytes, 
   return out;
 }
 
+// A section's decoded bytes.
 inline std::vector<uint8_t> sectionBytes(const std::vector<uint8_t>& bytes, const std::string& name) {
-  const pack::SectionEntry e = entryOf(bytes, sectionIndex(bytes, name));
-  return {bytes.begin() + int64_t(e.offset), bytes.begin() + int64_t(e.offset + e.size)};
+  for (RawSection& r : splitPack(bytes))
+    if (std::string(r.entry.name) == name) return std::move(r.bytes);
+  ADD_FAILURE() << "no section " << name;
+  return {};
 }
 
 inline pack::MeshEncodingRecord encodingOf(const std::vector<uint8_t>& bytes, size_t mesh) {

@@ -363,5 +363,48 @@ TEST(TextureCompression, BcBakeRoundTripsThroughThePackAndMatchesTheRgba8Bake) {
   }
 }
 
+// --normal-map-size: the normal-only image keeps the levels from that size down -- byte for byte the lower levels
+// of the uncapped bake (the same box-filtered chain, compressed level by level) -- and no other image shrinks.
+TEST(TextureCompression, NormalMapSizeKeepsTheUncappedBakesLowerLevels) {
+  SKIP_WITHOUT_OIIO();
+  const auto path = test::assetPath("NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf");
+  Result<ImportedScene> imported = importGltfScene(path.string());
+  ASSERT_TRUE(imported) << imported.error().message;
+  auto bake = [&](uint32_t normalMapSize) -> Result<Scene> {
+    Result<Scene> scene = buildImportedScene(*imported);
+    if (!scene) return scene.error();
+    TextureBakeOptions options;
+    options.maxTextureSize = 128;
+    options.maxNormalMapSize = normalMapSize;
+    if (Status s = bakeTextures(*imported, options, &scene.value()); !s) return s.error();
+    return scene;
+  };
+  Result<Scene> full = bake(0), capped = bake(32);
+  ASSERT_TRUE(full && capped);
+  ASSERT_EQ(full->textures.size(), capped->textures.size());
+  const int normal = full->materials[0].normalTexture.baked;
+  ASSERT_GE(normal, 0);
+  for (size_t t = 0; t < full->textures.size(); ++t) {
+    const Texture& a = full->textures[t];
+    const Texture& b = capped->textures[t];
+    const TextureClass& ca = full->textureClasses[a.sizeClass];
+    const TextureClass& cb = capped->textureClasses[b.sizeClass];
+    ASSERT_EQ(ca.size, 128u);
+    ASSERT_EQ(cb.size, int(t) == normal ? 32u : 128u) << "texture " << t;
+    ASSERT_EQ(ca.format, cb.format);
+    const uint32_t skip = ca.mipCount - cb.mipCount;
+    for (uint32_t mip = 0; mip < cb.mipCount; ++mip)
+      EXPECT_TRUE(std::equal(cb.texels.begin() + int64_t(cb.offset(mip, b.layer)),
+                             cb.texels.begin() + int64_t(cb.offset(mip, b.layer) + cb.layerBytes(mip)),
+                             ca.texels.begin() + int64_t(ca.offset(mip + skip, a.layer))))
+          << "texture " << t << " level " << mip;
+  }
+  TextureBakeOptions bad;
+  bad.maxNormalMapSize = 48;
+  Result<Scene> scene = buildImportedScene(*imported);
+  ASSERT_TRUE(scene);
+  EXPECT_FALSE(bakeTextures(*imported, bad, &scene.value()));
+}
+
 }  // namespace
 }  // namespace visbuf
