@@ -223,6 +223,10 @@ int runView(const ViewCommand& c) {
   auto scene = loadScene(c.scene);
   if (!scene) return fail(scene.error());
   if (Status s = checkOutputs(outputs); !s) return fail(s.error());
+  if (camerasListRequested(c.camera)) {
+    std::fputs(describeCameras(*scene).c_str(), stdout);
+    return 0;
+  }
   auto startCamera = makeCamera(c.camera, *scene);
   if (!startCamera) return fail(startCamera.error());
 
