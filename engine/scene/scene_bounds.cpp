@@ -26,7 +26,7 @@ std::vector<double> sampleTimes(const AnimationClip& clip, size_t budget) {
   for (const AnimationSampler& s : clip.samplers)
     for (float t : s.times)
       if (times.size() < kMaxKeys && t >= 0.0f && double(t) <= clip.duration) times.insert(double(t));
-  const size_t grid = std::clamp<size_t>(size_t(std::ceil(clip.duration * 30.0)), 1, kMaxGrid);
+  const size_t grid = size_t(std::clamp(std::ceil(clip.duration * 30.0), 1.0, double(kMaxGrid)));
   for (size_t k = 0; k <= grid; ++k) times.insert(clip.duration * double(k) / double(grid));
   std::vector<double> all(times.begin(), times.end());
   budget = std::max<size_t>(budget, 2);
