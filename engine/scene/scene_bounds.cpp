@@ -73,11 +73,14 @@ glm::dvec4 animatedSceneBounds(const Scene& scene) {
     }
   }
   // Skinned (and morphed) objects: their vertices, skinned on the CPU at each sample time (the exact pose), boxed per
-  // sample. At most about 2^25 vertex evaluations per object: the sample count shrinks for large meshes.
+  // sample. About 2^25 vertex evaluations in all (a second or two): the sample count per clip shrinks with the
+  // scene's skinned vertices, to no fewer than the clip's two ends.
+  size_t skinnedVertices = 1;
+  for (const SkinnedObject& so : scene.skinnedObjects)
+    skinnedVertices += scene.meshes[scene.objects[so.object].mesh].vertices.size();
+  const size_t budget = std::max<size_t>(2, (size_t{1} << 25) / skinnedVertices / clips.size());
   for (const SkinnedObject& so : scene.skinnedObjects) {
     const Mesh& mesh = scene.meshes[scene.objects[so.object].mesh];
-    const size_t vertices = std::max<size_t>(mesh.vertices.size(), 1);
-    const size_t budget = std::max<size_t>(2, (size_t{1} << 25) / vertices / clips.size());
     for (int32_t clip : clips) {
       SkinnedObject posed = so;
       posed.clip = clip;
