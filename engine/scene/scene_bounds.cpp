@@ -58,20 +58,26 @@ glm::dvec4 animatedSceneBounds(const Scene& scene) {
   auto timesOf = [&](int32_t clip, size_t budget) {
     return clip < 0 ? std::vector<double>{0.0} : sampleTimes(scene.animations[size_t(clip)], budget);
   };
-  for (const RigidObject& ro : scene.rigidObjects) {
-    const Mesh& mesh = scene.meshes[scene.objects[ro.object].mesh];
-    for (int32_t clip : clips) {
-      RigidObject posed = ro;
-      posed.clip = clip;
-      posed.timeOffset = 0.0;  // (looping: the grid over the clip covers every phase)
+  // Rigid objects: one pose of the hierarchy per clip and time, shared by all (rigidObjectTransform's matrix,
+  // placement * global(node); the phase is irrelevant: the samples cover the whole looping clip), boxed per object.
+  std::vector<Box> rigidBoxes(scene.rigidObjects.size());
+  if (!scene.rigidObjects.empty())
+    for (int32_t clip : clips)
       for (double t : timesOf(clip, SIZE_MAX)) {
-        const glm::dmat4 m = rigidObjectTransform(scene, posed, t);
-        const glm::dvec3 c(m * glm::dvec4(glm::dvec3(mesh.boundsSphere), 1.0));
-        const double r = double(mesh.boundsSphere.w) * maxScaleOf(m);
-        if (std::isfinite(r) && std::isfinite(c.x + c.y + c.z)) spheres.push_back({c, r});
+        Pose pose = restPose(scene.nodes);
+        if (clip >= 0) sampleClip(scene.animations[size_t(clip)], t, true, pose);
+        const std::vector<glm::dmat4> global = globalMatrices(scene.nodes, pose);
+        for (size_t i = 0; i < scene.rigidObjects.size(); ++i) {
+          const RigidObject& ro = scene.rigidObjects[i];
+          const Mesh& mesh = scene.meshes[scene.objects[ro.object].mesh];
+          const glm::dmat4 m = ro.placement * global[size_t(ro.node)];
+          const glm::dvec3 c(m * glm::dvec4(glm::dvec3(mesh.boundsSphere), 1.0));
+          const double r = double(mesh.boundsSphere.w) * maxScaleOf(m);
+          if (std::isfinite(r) && std::isfinite(c.x + c.y + c.z)) rigidBoxes[i].add(c, r);
+        }
       }
-    }
-  }
+  for (const Box& b : rigidBoxes)
+    if (!b.empty()) spheres.push_back({(b.lo + b.hi) * 0.5, glm::length(b.hi - b.lo) * 0.5});
   // Skinned (and morphed) objects: their vertices, skinned on the CPU at each sample time (the exact pose), boxed per
   // sample. About 2^25 vertex evaluations in all (a second or two): the sample count per clip shrinks with the
   // scene's skinned vertices, to no fewer than the clip's two ends.
@@ -81,6 +87,7 @@ glm::dvec4 animatedSceneBounds(const Scene& scene) {
   const size_t budget = std::max<size_t>(2, (size_t{1} << 25) / skinnedVertices / clips.size());
   for (const SkinnedObject& so : scene.skinnedObjects) {
     const Mesh& mesh = scene.meshes[scene.objects[so.object].mesh];
+    Box box;
     for (int32_t clip : clips) {
       SkinnedObject posed = so;
       posed.clip = clip;
@@ -88,15 +95,14 @@ glm::dvec4 animatedSceneBounds(const Scene& scene) {
       for (double t : timesOf(clip, budget)) {
         const std::vector<glm::dmat4> joints = skinnedObjectJoints(scene, posed, t);
         const std::vector<double> weights = skinnedObjectMorphWeights(scene, posed, t);
-        Box box;
         for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
           const glm::dvec3 p = skinPosition(morphVertex(mesh, v, weights).position, mesh.skinVertices[v], joints);
-          box.add(glm::dvec3(so.placement * glm::dvec4(p, 1.0)), 0.0);
+          const glm::dvec3 w(so.placement * glm::dvec4(p, 1.0));
+          if (std::isfinite(w.x + w.y + w.z)) box.add(w, 0.0);
         }
-        if (!box.empty() && std::isfinite(box.lo.x + box.lo.y + box.lo.z + box.hi.x + box.hi.y + box.hi.z))
-          spheres.push_back({(box.lo + box.hi) * 0.5, glm::length(box.hi - box.lo) * 0.5});
       }
     }
+    if (!box.empty()) spheres.push_back({(box.lo + box.hi) * 0.5, glm::length(box.hi - box.lo) * 0.5});
   }
   Box all;
   for (const glm::dvec4& s : spheres) all.add(glm::dvec3(s), s.w);
