@@ -59,6 +59,9 @@ bool plainPerspective(const Camera& c) {
 Status serializeCameras(const Scene& scene, const AddString& addString, std::vector<SectionData>* out) {
   const bool withDefault = !plainPerspective(scene.defaultCamera);
   if (scene.cameras.empty() && !withDefault) return {};
+  if (!(scene.defaultCamera.nearPlane > 0.0))  // (the "scene" record's near plane must be a positive distance)
+    return makeError(ErrorCode::InvalidArgument,
+                     "pack: the default camera's near plane is 0 (orthographic); a pack stores a positive one");
   std::vector<uint8_t> bytes;
   auto add = [&](const CameraRecord& r) {
     const size_t at = bytes.size();
