@@ -140,7 +140,7 @@ TEST(CameraMath, OrthographicLodIgnoresDistance) {
   const FrameMath fm = computeFrameMath(cam, 300, 200);  // 50 pixels per unit
   EXPECT_EQ(selectLod(mesh, 1.0, 0.001, fm, cam.nearPlane, 1.0f), 1u);  // 0.5 px; 5 px
   EXPECT_EQ(selectLod(mesh, 1.0, 1000.0, fm, cam.nearPlane, 1.0f), 1u);
-  EXPECT_EQ(selectLod(mesh, 1.0, 1000.0, fm, cam.nearPlane, 5.0f), 2u);
+  EXPECT_EQ(selectLod(mesh, 1.0, 1000.0, fm, cam.nearPlane, 6.0f), 2u);  // 5 px <= 6
   EXPECT_EQ(selectLod(mesh, 1.0, 1000.0, fm, cam.nearPlane, 0.0f), 0u);  // LOD off
 }
 
