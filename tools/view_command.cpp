@@ -229,9 +229,11 @@ int runView(const ViewCommand& c) {
     return 0;
   }
   // A file with cameras starts from its first one unless the command line placed the camera.
-  if (c.camera.camera.empty() && c.camera.position.empty() && c.camera.target.empty() && !scene->cameras.empty())
-    c.camera.camera = "gltf";
-  auto startCamera = makeCamera(c.camera, *scene);
+  CameraOptions cameraOptions = c.camera;
+  if (cameraOptions.camera.empty() && cameraOptions.position.empty() && cameraOptions.target.empty() &&
+      !scene->cameras.empty())
+    cameraOptions.camera = "gltf";
+  auto startCamera = makeCamera(cameraOptions, *scene);
   if (!startCamera) return fail(startCamera.error());
 
   ViewHostOptions ho;
@@ -281,8 +283,8 @@ int runView(const ViewCommand& c) {
   if (!viewSupported(view)) return usage(fmt::format("--view {} needs --path visbuf", view));
   FlyCamera fly(*startCamera);
   // G cycles from here (makeCamera accepted the value: gltf or gltf:N).
-  size_t cameraIndex = c.camera.camera.empty()      ? scene->cameras.size()
-                       : c.camera.camera.size() > 5 ? size_t(std::stoull(c.camera.camera.substr(5)))
+  size_t cameraIndex = cameraOptions.camera.empty()      ? scene->cameras.size()
+                       : cameraOptions.camera.size() > 5 ? size_t(std::stoull(cameraOptions.camera.substr(5)))
                                                     : 0;
   KeyEdges keys;
   bool looking = false;
