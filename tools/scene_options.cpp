@@ -247,6 +247,10 @@ std::string describeCameras(const Scene& scene) {
 Result<Camera> makeCamera(const CameraOptions& o, const Scene& scene) {
   Camera c = scene.defaultCamera;
   if (!o.camera.empty()) {
+    std::string listed = describeCameras(scene);  // one line per camera; "; " between them in a message
+    listed.pop_back();
+    for (size_t at = listed.find('\n'); at != std::string::npos; at = listed.find('\n', at))
+      listed.replace(at, 1, "; ");
     const std::string& v = o.camera;
     size_t index = 0;
     bool known = v == "gltf";
@@ -257,13 +261,13 @@ Result<Camera> makeCamera(const CameraOptions& o, const Scene& scene) {
     }
     if (!known)
       return makeError(ErrorCode::InvalidArgument,
-                       fmt::format("--camera '{}': expected gltf, gltf:N or list; the scene's cameras:\n{}",
-                                   printable(v), describeCameras(scene)));
+                       fmt::format("--camera '{}': expected gltf, gltf:N or list; the scene's cameras: {}",
+                                   printable(v), listed));
     if (index >= scene.cameras.size())
       return makeError(ErrorCode::InvalidArgument,
                        fmt::format("--camera {}: the scene has {} camera(s){}", printable(v), scene.cameras.size(),
                                    scene.cameras.empty() ? " (only a glTF file's camera nodes give cameras)"
-                                                         : ":\n" + describeCameras(scene)));
+                                                         : ": " + listed));
     c = scene.cameras[index].camera;
   }
   if (!o.position.empty()) c.position = {o.position[0], o.position[1], o.position[2]};
