@@ -194,12 +194,43 @@ vec3 objectToCamera(ObjectData o, vec3 p) {
   return w;
 }
 
-// The camera position in the object's space: the inverse of objectToCamera at the camera-relative origin (the
-// micro-raster's back-face pre-pass and the clusters' cone test).
-vec3 cameraInObjectSpace(ObjectData o) {
+// The projection (FrameData.projection): orthographic or perspective.
+bool orthographic() { return frame.projection.z != 0.0; }
+
+// Reverse-Z depth at view distance d (= -z_view), and its inverse: perspective depth = B / d - A, orthographic
+// B - A d (A = proj[2][2], B = proj[3][2]; an infinite perspective has A = 0, B = near).
+float depthOfDistance(float d) {
+  return orthographic() ? frame.projection.y - frame.projection.x * d : frame.projection.y / d - frame.projection.x;
+}
+float distanceOfDepth(float depth) {
+  return orthographic() ? (frame.projection.y - depth) / frame.projection.x
+                        : frame.projection.y / (depth + frame.projection.x);
+}
+
+// The camera-relative world position seen at `ndc` with reverse-Z `depth` (the inverse of the projection; the
+// view is rotation only, so its inverse is its transpose).
+vec3 cameraRelativeAt(vec2 ndc, float depth) {
+  float d = distanceOfDepth(depth);
+  float s = orthographic() ? 1.0 : d;  // orthographic: x and y do not shrink with distance
+  vec3 viewPos = vec3(ndc.x * s / frame.projX, ndc.y * s / frame.projY, -d);
+  return transpose(mat3(frame.view)) * viewPos;
+}
+
+// Unit vector from the camera-relative point p towards the eye: perspective -normalize(p); orthographic the
+// constant opposite of the view direction (every view ray is parallel to it).
+vec3 towardsEye(vec3 p) {
+  return orthographic() ? vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]) : -normalize(p);
+}
+
+// The eye in the object's space, homogeneous (the micro-raster's back-face pre-pass and the clusters' cone test):
+// perspective (position, 1), the inverse of objectToCamera at the camera-relative origin; orthographic (direction,
+// 0), the point at infinity towards the eye, so that q * eye.w - eye.xyz runs from the eye to q either way and a
+// plane (n, w) faces the eye where dot(n, eye.xyz) + w * eye.w > 0.
+vec4 eyeInObjectSpace(ObjectData o) {
   mat3 m = transpose(mat3(o.row0.xyz, o.row1.xyz, o.row2.xyz));  // columns: objectToCamera's linear part
+  if (orthographic()) return vec4(inverse(m) * vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]), 0.0);
   vec3 t = vec3(o.row0.w, o.row1.w, o.row2.w) + frame.cameraOffset.xyz;
-  return inverse(m) * -t;
+  return vec4(inverse(m) * -t, 1.0);
 }
 
 // The clip position, computed identically by the visibility vertex shader, the shading pass and the

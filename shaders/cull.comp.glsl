@@ -94,9 +94,10 @@ void main() {
       }
     }
     if (draw && frame.lodErrorPixels > 0.0) {
-      // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist.
-      float dist = length(c) - r;
-      if (dist > frame.nearPlane) {
+      // Projected error of level l at the nearest point of the sphere: error * scale * lodScale / dist
+      // (orthographic: error * scale * lodScale at any distance, so dist = 1).
+      float dist = orthographic() ? 1.0 : length(c) - r;
+      if (orthographic() || dist > frame.nearPlane) {
         for (uint l = meshes[meshIndex].lodCount - 1; l > 0; --l) {
           if (meshLod(meshIndex, l).error * o.maxScale * frame.lodScale <= frame.lodErrorPixels * dist) {
             lod = l;

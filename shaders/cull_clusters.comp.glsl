@@ -35,7 +35,7 @@ void main() {
     int vertexOffset = int(meshes[o.meshIndex].vertexOffset);
     uint triangles = ld.indexCount / 3u;
     uint n = (triangles + CLUSTER_TRIANGLES - 1u) / CLUSTER_TRIANGLES;
-    vec3 eye = cameraInObjectSpace(o);
+    vec4 eye = eyeInObjectSpace(o);
     bool coneTest = list != DRAW_LIST_OPAQUE_DOUBLE_SIDED && list != DRAW_LIST_MASKED_DOUBLE_SIDED;
     bool swList = clustersMayUseMicroRaster(pc.phase, list);
     bool pyramidTest = frame.cullMode == CULL_OCCLUSION && pc.phase == CULL_PHASE_LATE;
@@ -58,7 +58,7 @@ void main() {
         // Back-face cone in object space (an affine map keeps which side of a plane the camera is on; a mirroring
         // one is drawn by a FLIPPED list, which keeps the object-space front faces), from its apex, with a margin of
         // 1e-3 on the cosine, where snapping could turn an edge-on triangle's projected winding.
-        vec3 toApex = cd.apex.xyz - eye;
+        vec3 toApex = cd.apex.xyz * eye.w - eye.xyz;  // (orthographic: the view direction)
         bool back = coneTest && dot(toApex, cd.cone.xyz) >= (cd.cone.w + 1e-3) * length(toApex);
         vec3 v;
         float rr;

@@ -76,23 +76,31 @@ bool frustumVisible(vec3 c, float r) {
   bool visible = true;
   for (int i = 0; i < 5; ++i)
     if (dot(frame.frustum[i].xyz, c) + frame.frustum[i].w < -(r + margin)) visible = false;
+  if (dot(frame.farPlane.xyz, c) + frame.farPlane.w < -(r + margin)) visible = false;  // (infinite: never)
   return visible;
 }
 
-// Screen rectangle (NDC) of the sphere's bounding cube; false if the sphere touches the near plane. v: the centre in
-// view space, rr: the radius widened for rounding. Every corner is then in front of the camera, so the hull of the
-// projected corners contains the projected sphere. The corners have two depths and two x (y) values: the hull's
-// bounds are among their four quotients each (two reciprocals instead of eight divisions; the occlusion test's
-// 0.01-pixel margin covers the ulp this rounds differently).
+// Screen rectangle (NDC) of the sphere's bounding cube; false if the sphere touches the near plane or a finite far
+// plane. v: the centre in view space, rr: the radius widened for rounding. Every corner is then in front of the
+// camera, so the hull of the projected corners contains the projected sphere. Perspective: the corners have two
+// depths and two x (y) values: the hull's bounds are among their four quotients each (two reciprocals instead of
+// eight divisions; the occlusion test's 0.01-pixel margin covers the ulp this rounds differently). Orthographic: the
+// cube's x (y) extent scaled, whatever its depth.
 bool screenRect(vec3 c, float r, out vec3 v, out float rr, out vec2 lo, out vec2 hi) {
   v = (frame.view * vec4(c, 0.0)).xyz;  // view space, camera looks down -z
   rr = r * (1.0 + 1e-5) + 1e-6;
   lo = vec2(1e30);
   hi = vec2(-1e30);
   if (-(v.z + rr) <= frame.nearPlane * 1.001) return false;
-  float nearInv = 1.0 / -(v.z + rr), farInv = 1.0 / -(v.z - rr);
+  if (frame.projection.w > 0.0 && -(v.z - rr) >= frame.projection.w * 0.999) return false;
   vec2 proj = vec2(frame.projX, frame.projY);
   vec2 a = proj * (v.xy - rr), b = proj * (v.xy + rr);
+  if (orthographic()) {
+    lo = min(a, b);
+    hi = max(a, b);
+    return true;
+  }
+  float nearInv = 1.0 / -(v.z + rr), farInv = 1.0 / -(v.z - rr);
   lo = min(min(a * nearInv, a * farInv), min(b * nearInv, b * farInv));
   hi = max(max(a * nearInv, a * farInv), max(b * nearInv, b * farInv));
   return true;
@@ -149,8 +157,9 @@ uint occlusionTest(bool rect, vec3 v, float rr, vec2 lo, vec2 hi, bool refine, b
   int top = int(frame.pyramidLevels) - 1;
   int level = min(max(int(ceil(log2(float(extent)))), PYRAMID_FIRST_TESTED_LEVEL), top);
   if ((1 << level) < extent) level = min(level + 1, top);  // guard log2 rounding
-  // The object's nearest possible depth, rounded towards nearer.
-  float nearest = frame.nearPlane / -(v.z + rr) * (1.0 + 1e-5);
+  // The object's nearest possible depth, rounded towards nearer (the depth's rounding is relative for perspective;
+  // an orthographic depth is linear in [0, 1], so its rounding is absolute).
+  float nearest = depthOfDistance(-(v.z + rr)) * (1.0 + 1e-5) + (orthographic() ? 1e-6 : 1e-6 * frame.projection.x);
   // That level's texels may reach past the rectangle by up to their own size per axis (up to 4x its area): what it
   // does not prove occluded is tested again three levels finer, in at most 9x9 texels that reach past it by at most
   // 1/4 of its extent per axis. The peer field (1M kittens): 61,487 objects drawn with the coarse level alone,

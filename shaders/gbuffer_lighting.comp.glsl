@@ -15,20 +15,16 @@ layout(set = 1, binding = GBUFFER_LIGHTING_BINDING_COLOR, rgba16f) uniform write
 layout(std430, set = 1, binding = GBUFFER_LIGHTING_BINDING_ATTRIBUTES) writeonly buffer AttributeBlock { float attributes[]; };
 #endif
 
-// Inverse of the reverse-Z infinite projection (render/frame_math.cpp): depth = near / -z_view,
-// ndc.xy = proj.xy * view.xy / -z_view; the view is rotation only, so its inverse is its transpose.
+// The pixel centre's camera-relative position at `depth` (common.glsl's inverse of the projection).
 vec3 cameraRelativePosition(ivec2 p, float depth) {
-  vec2 ndc = (vec2(p) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
-  float distance = frame.nearPlane / depth;  // -z_view
-  vec3 viewPos = vec3(ndc.x * distance / frame.projX, ndc.y * distance / frame.projY, -distance);
-  return transpose(mat3(frame.view)) * viewPos;
+  return cameraRelativeAt((vec2(p) + 0.5) * frame.viewport.zw * 2.0 - 1.0, depth);
 }
 
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (p.x >= int(frame.viewport.x) || p.y >= int(frame.viewport.y)) return;
   float depth = texelFetch(gbufferDepth, p, 0).x;
-  if (depth <= 0.0) return;  // nothing drawn (cleared to 0 = infinitely far)
+  if (depth <= 0.0) return;  // nothing drawn (cleared to 0 = the far plane)
   vec4 base = texelFetch(gbuffer[0], p, 0);      // sRGB decoded by the sampler: linear
   vec2 oct = texelFetch(gbuffer[1], p, 0).xy;
   vec4 material = texelFetch(gbuffer[2], p, 0);

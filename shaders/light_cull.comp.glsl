@@ -52,17 +52,23 @@ void main() {
     tilesOut[base] = 0u;
     return;
   }
-  // View distances (reverse-Z infinite: depth = near / distance), widened.
-  float zNear = frame.nearPlane / dMax * (1.0 - 1e-4);
-  float zFar = frame.nearPlane / dMin * (1.0 + 1e-4);
-  // Side planes through the origin and the tile's pixel edges, in view space (x right, y up, looking down -z):
-  // a point is inside when x/(-z) lies between the edges' ndc.x / projX (likewise y with projY < 0).
+  // View distances (common.glsl's distanceOfDepth), widened (orthographic: also by an absolute 1e-5 of the far
+  // distance, as a linear depth's rounding is absolute).
+  float widen = orthographic() ? 1e-5 * frame.projection.w : 0.0;
+  float zNear = distanceOfDepth(dMax) * (1.0 - 1e-4) - widen;
+  float zFar = distanceOfDepth(dMin) * (1.0 + 1e-4) + widen;
+  // Side planes through the tile's pixel edges, in view space (x right, y up, looking down -z). Perspective: through
+  // the origin, a point is inside when x/(-z) lies between the edges' ndc.x / projX (likewise y with projY < 0);
+  // orthographic: when x itself does.
   vec2 ndcLo = vec2(lo) * frame.viewport.zw * 2.0 - 1.0, ndcHi = vec2(hi) * frame.viewport.zw * 2.0 - 1.0;
   float x0 = ndcLo.x / frame.projX, x1 = ndcHi.x / frame.projX;
   float y0 = min(ndcLo.y / frame.projY, ndcHi.y / frame.projY), y1 = max(ndcLo.y / frame.projY, ndcHi.y / frame.projY);
-  // Inward unit normals: x - x0 (-z) >= 0  ->  n = (1, 0, x0); -x + x1 (-z) >= 0  ->  n = (-1, 0, -x1).
-  vec3 left = normalize(vec3(1.0, 0.0, x0)), right = normalize(vec3(-1.0, 0.0, -x1));
-  vec3 bottom = normalize(vec3(0.0, 1.0, y0)), top = normalize(vec3(0.0, -1.0, -y1));
+  // Inward unit normals: x - x0 (-z) >= 0  ->  n = (1, 0, x0); -x + x1 (-z) >= 0  ->  n = (-1, 0, -x1); orthographic:
+  // x - x0 >= 0 -> (1, 0, 0), offset -x0 (offsets 0 for perspective).
+  float p = orthographic() ? 0.0 : 1.0, q = 1.0 - p;
+  vec3 left = normalize(vec3(1.0, 0.0, p * x0)), right = normalize(vec3(-1.0, 0.0, -p * x1));
+  vec3 bottom = normalize(vec3(0.0, 1.0, p * y0)), top = normalize(vec3(0.0, -1.0, -p * y1));
+  vec4 offsets = q * vec4(-x0, x1, -y0, y1);  // (left, right, bottom, top)
 
   uint count = 0u;
   for (uint i = 0u; i < frame.pointLightCount; ++i) {
@@ -73,8 +79,9 @@ void main() {
     if (!inside) {
       vec3 c = (frame.view * vec4(pr.xyz + frame.cameraOffset.xyz, 1.0)).xyz;
       float r = pr.w * (1.0 + 1e-4) + 1e-4 * (abs(c.x) + abs(c.y) + abs(c.z));
-      inside = -c.z + r >= zNear && -c.z - r <= zFar && dot(left, c) >= -r && dot(right, c) >= -r &&
-               dot(bottom, c) >= -r && dot(top, c) >= -r;
+      r += 1e-4 * (abs(offsets.x) + abs(offsets.y) + abs(offsets.z) + abs(offsets.w));  // (their rounding)
+      inside = -c.z + r >= zNear && -c.z - r <= zFar && dot(left, c) + offsets.x >= -r &&
+               dot(right, c) + offsets.y >= -r && dot(bottom, c) + offsets.z >= -r && dot(top, c) + offsets.w >= -r;
     }
     if (inside) {
       if (count < LIGHTS_PER_TILE) tilesOut[base + 1u + count] = i;

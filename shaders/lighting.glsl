@@ -93,7 +93,7 @@ vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
 // every light (the forward reference, and the all-lights comparison). Both loops visit lights in ascending
 // index order, and a light missing from a tile contributes exactly zero there, so the sums are the same.
 vec3 shadeSurface(Surface s, uvec2 pixel) {
-  vec3 v = -normalize(s.position);
+  vec3 v = towardsEye(s.position);
   vec3 cDiff = mix(s.baseColor, vec3(0.0), s.metallic);
   vec3 f0 = mix(vec3(0.04), s.baseColor, s.metallic);
   vec3 color = AMBIENT_RADIANCE * (cDiff + f0) * s.occlusion;

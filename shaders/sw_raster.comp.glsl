@@ -34,9 +34,9 @@ layout(set = 0, binding = SCENE_BINDING_TRIANGLE_PLANES) uniform samplerBuffer t
 // the mesh's bounding sphere centre plus its radius), i.e. the cosine between the normal and the direction to the
 // camera is below -1e-3. Front (counter-clockwise seen from outside) in object space is what both single-sided
 // lists keep: a mirroring transform flips the screen winding and DRAW_LIST_OPAQUE_FLIPPED flips it back.
-bool clearlyBackFacing(DrawCommand d, vec3 eye, float reach, uint t) {
+bool clearlyBackFacing(DrawCommand d, vec4 eye, float reach, uint t) {
   vec4 plane = texelFetch(trianglePlanes, int(d.firstIndex / 3u + t));
-  return dot(plane.xyz, eye) + plane.w < -1e-3 * reach;
+  return dot(plane.xyz, eye.xyz) + plane.w * eye.w < -1e-3 * reach;
 }
 #endif
 
@@ -89,8 +89,9 @@ uint rasterTriangle(uint slot, DrawCommand d, ObjectData o, uint list, uint t) {
   vec4 c0 = clipPosition(o, meshPosition(o.meshIndex, v.x));
   vec4 c1 = clipPosition(o, meshPosition(o.meshIndex, v.y));
   vec4 c2 = clipPosition(o, meshPosition(o.meshIndex, v.z));
-  // The cull pass routes only objects wholly beyond the near plane; a frozen frame's camera may have moved since.
-  if (!(c0.w >= frame.nearPlane && c1.w >= frame.nearPlane && c2.w >= frame.nearPlane)) return 1u;
+  // The cull pass routes only objects wholly within the depth range (reverse-Z: 0 <= z_clip <= w_clip, beyond the near
+  // plane and before a far plane); a frozen frame's camera may have moved since.
+  if (!(c0.z <= c0.w && c1.z <= c1.w && c2.z <= c2.w && min(c0.z, min(c1.z, c2.z)) >= 0.0)) return 1u;
   vec2 g0 = gridPosition(c0), g1 = gridPosition(c1), g2 = gridPosition(c2);
   ivec2 p0 = snapToGrid(g0), p1 = snapToGrid(g1), p2 = snapToGrid(g2);
   ivec2 lo = min(p0, min(p1, p2)), hi = max(p0, max(p1, p2));
@@ -195,9 +196,10 @@ void main() {
     // for every lane of a batch, so skipping work takes fewer loop passes, not a branch. Only clear back faces are
     // dropped (a margin of 1e-3 of the cosine, where snapping could turn the projected winding); the raster's own
     // integer winding test decides the rest, as before. (On an H100 the queue cost more than it saved.)
-    vec3 eye = cameraInObjectSpace(o);
+    vec4 eye = eyeInObjectSpace(o);
     vec4 sphere = meshBoundsSphere(o.meshIndex);
-    float reach = length(eye - sphere.xyz) + sphere.w;
+    // (orthographic: eye.xyz is a direction, the plane test a cosine times its length)
+    float reach = eye.w == 0.0 ? length(eye.xyz) : length(eye.xyz - sphere.xyz) + sphere.w;
     // (the planes are the rest pose's: a skinned or morphed instance's slot is not tested)
     bool cullBack = VB_TEXELS != 0u && list != DRAW_LIST_OPAQUE_DOUBLE_SIDED &&
                     (VB_SKINNED == 0u || uvec2(meshes[o.meshIndex].skinnedVertexLow,

@@ -125,7 +125,8 @@ Result<std::vector<float>> buildDebugView(const std::string& view, const FrameRe
       glm::dvec2 lo(1e30), hi(-1e30);
       for (int c = 0; c < 8; ++c) {
         glm::dvec3 q = v + s.w * glm::dvec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
-        glm::dvec2 ndc(fm.proj[0][0] * q.x / -q.z, fm.proj[1][1] * q.y / -q.z);
+        const double w = fm.orthographic ? 1.0 : -q.z;
+        glm::dvec2 ndc(fm.proj[0][0] * q.x / w, fm.proj[1][1] * q.y / w);
         lo = glm::min(lo, ndc);
         hi = glm::max(hi, ndc);
       }

@@ -336,6 +336,10 @@ int runRender(const RenderCommand& c) {
                                                                                          size->first, size->second));
       !s)
     return fail(s.error());
+  if (camerasListRequested(c.camera)) {
+    std::fputs(describeCameras(*scene).c_str(), stdout);
+    return 0;
+  }
   auto camera = makeCamera(c.camera, *scene);
   if (!camera) return fail(camera.error());
 

@@ -226,23 +226,78 @@ void addCameraOptions(CLI::App& app, CameraOptions& o) {
       ->expected(3)
       ->delimiter(',')
       ->check(finiteNumber());
-  app.add_option("--fov", o.fovDegrees, "vertical field of view in degrees, in (0, 179)")
-      ->check(finiteNumber(0.0, 179.0, true, true))
-      ->capture_default_str();
-  app.add_option("--near", o.nearPlane, "near plane distance > 0 (reverse-Z, infinite far; default: the scene's)")
+  app.add_option("--camera", o.camera,
+                 "start from a camera of the file: gltf (its first) or gltf:N; `--camera` alone or `--camera list` "
+                 "lists them (default: a camera framing the scene over its whole animation)")
+      ->expected(0, 1)
+      ->default_str("list");
+  app.add_option("--fov", o.fovDegrees, "vertical field of view in degrees, in (0, 179) (default: the camera's; 60 "
+                                        "for the default camera)")
+      ->check(finiteNumber(0.0, 179.0, true, true));
+  app.add_option("--near", o.nearPlane, "near plane distance > 0 (reverse-Z; default: the camera's)")
       ->check(finiteNumber(0.0, std::numeric_limits<double>::infinity(), true));
+}
+
+bool camerasListRequested(const CameraOptions& o) { return o.camera == "list"; }
+
+std::string describeCameras(const Scene& scene) {
+  if (scene.cameras.empty()) return "the scene has no cameras\n";
+  std::string out;
+  for (size_t i = 0; i < scene.cameras.size(); ++i) {
+    const Camera& c = scene.cameras[i].camera;
+    std::string projection;
+    const std::string far = std::isfinite(c.farPlane) ? fmt::format("{:g}", c.farPlane) : std::string("infinite");
+    if (c.projection == Projection::Orthographic)
+      projection = fmt::format("orthographic xmag {:g} ymag {:g} znear {:g} zfar {}", c.xmag, c.ymag, c.nearPlane, far);
+    else
+      projection = fmt::format("perspective yfov {:.4g} deg aspect {} znear {:g} zfar {}", glm::degrees(c.fovY),
+                               c.aspectRatio > 0.0 ? fmt::format("{:.4g}", c.aspectRatio) : std::string("viewport"),
+                               c.nearPlane, far);
+    const glm::dvec3 d = glm::normalize(c.target - c.position);
+    out += fmt::format("{}  '{}'  {}  position {:.6g},{:.6g},{:.6g}  direction {:.4f},{:.4f},{:.4f}\n", i,
+                       printable(scene.cameras[i].name), projection, c.position.x, c.position.y, c.position.z, d.x,
+                       d.y, d.z);
+  }
+  return out;
 }
 
 Result<Camera> makeCamera(const CameraOptions& o, const Scene& scene) {
   Camera c = scene.defaultCamera;
+  if (!o.camera.empty()) {
+    std::string listed = describeCameras(scene);  // one line per camera; "; " between them in a message
+    listed.pop_back();
+    for (size_t at = listed.find('\n'); at != std::string::npos; at = listed.find('\n', at))
+      listed.replace(at, 1, "; ");
+    const std::string& v = o.camera;
+    size_t index = 0;
+    bool known = v == "gltf";
+    if (!known && v.rfind("gltf:", 0) == 0 && v.size() > 5 && v.size() <= 14 &&
+        std::all_of(v.begin() + 5, v.end(), [](char ch) { return ch >= '0' && ch <= '9'; })) {
+      index = std::stoull(v.substr(5));
+      known = true;
+    }
+    if (!known)
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("--camera '{}': expected gltf, gltf:N or list; the scene's cameras: {}",
+                                   printable(v), listed));
+    if (index >= scene.cameras.size())
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("--camera {}: the scene has {} camera(s){}", printable(v), scene.cameras.size(),
+                                   scene.cameras.empty() ? " (only a glTF file's camera nodes give cameras)"
+                                                         : ": " + listed));
+    c = scene.cameras[index].camera;
+  }
   if (!o.position.empty()) c.position = {o.position[0], o.position[1], o.position[2]};
   if (!o.target.empty()) c.target = {o.target[0], o.target[1], o.target[2]};
-  if (!(o.fovDegrees > 0.0 && o.fovDegrees < 179.0))
-    return makeError(ErrorCode::InvalidArgument, fmt::format("--fov {}: must be in (0, 179) degrees", o.fovDegrees));
-  c.fovY = glm::radians(o.fovDegrees);
+  if (o.fovDegrees != 0.0) {
+    if (!(o.fovDegrees > 0.0 && o.fovDegrees < 179.0))
+      return makeError(ErrorCode::InvalidArgument, fmt::format("--fov {}: must be in (0, 179) degrees", o.fovDegrees));
+    c.fovY = glm::radians(o.fovDegrees);
+  }
   if (o.nearPlane < 0.0 || !std::isfinite(o.nearPlane))
     return makeError(ErrorCode::InvalidArgument, "--near must be a positive distance");
   if (o.nearPlane > 0.0) c.nearPlane = o.nearPlane;
+  if (Status s = validateCamera(c); !s) return makeError(ErrorCode::InvalidArgument, s.error().message);
   return c;
 }
 

@@ -45,14 +45,23 @@ bool isLayoutName(const std::string& scene);
 Result<Scene> loadScene(const SceneOptions& options);
 
 struct CameraOptions {
-  std::vector<double> position;  // x,y,z; empty = the scene's default camera
+  std::string camera;            // --camera: empty (the scene's default camera), "gltf" / "gltf:N", "list"
+  std::vector<double> position;  // x,y,z; empty = the chosen camera's
   std::vector<double> target;
-  double fovDegrees = 60.0;
-  double nearPlane = 0.0;        // 0 = the scene's default
+  double fovDegrees = 0.0;       // 0 = the chosen camera's (perspective only)
+  double nearPlane = 0.0;        // 0 = the chosen camera's
 };
 
 void addCameraOptions(CLI::App& app, CameraOptions& options);
+// The camera a command starts from: the scene's default camera or, with --camera gltf[:N], the file's camera N
+// (Scene::cameras; 0 without N), then --camera-pos / --camera-target / --fov / --near over it. InvalidArgument for
+// a camera index the scene does not have or an unknown --camera value (its message lists the scene's cameras).
 Result<Camera> makeCamera(const CameraOptions& options, const Scene& scene);
+// True when --camera asks for the list (`--camera` alone or `--camera list`): the command prints
+// describeCameras() to stdout and exits 0 instead of rendering.
+bool camerasListRequested(const CameraOptions& options);
+// One line per camera of the scene: index, name, type and parameters (degrees for angles), pose.
+std::string describeCameras(const Scene& scene);
 
 // Parses "WxH".
 Result<std::pair<uint32_t, uint32_t>> parseSize(const std::string& text);

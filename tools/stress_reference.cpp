@@ -32,7 +32,7 @@ std::optional<PixelReference> referenceAtPixel(const Scene& scene, const Camera&
   PixelReference r;
   r.lambda = hit->second;
   r.faceNormal = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
-  r.position = hit->first * pixelRay(math, cx, cy);
+  r.position = pixelRay(math, cx, cy).at(hit->first);
   const glm::dvec4 clip = math.viewProj * glm::dvec4(r.position, 1.0);
   r.depth = clip.z / clip.w;
   glm::dvec3 n(0.0);

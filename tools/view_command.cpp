@@ -38,6 +38,7 @@ constexpr const char* kKeys =
     "  V            debug view: shaded -> objects -> triangles -> lod -> culled -> pyramid -> overdraw (render --view;\n"
     "               built from read-back IDs, draw lists and pyramid levels: each such frame is a renderFrame)\n"
     "  R            back to the start camera          P   print the newest finished frame's stats\n"
+    "  G            next camera of the file (glTF cameras, then the framing default camera)\n"
     "  Esc          quit\n";
 
 int fail(const Error& e) {
@@ -223,7 +224,16 @@ int runView(const ViewCommand& c) {
   auto scene = loadScene(c.scene);
   if (!scene) return fail(scene.error());
   if (Status s = checkOutputs(outputs); !s) return fail(s.error());
-  auto startCamera = makeCamera(c.camera, *scene);
+  if (camerasListRequested(c.camera)) {
+    std::fputs(describeCameras(*scene).c_str(), stdout);
+    return 0;
+  }
+  // A file with cameras starts from its first one unless the command line placed the camera.
+  CameraOptions cameraOptions = c.camera;
+  if (cameraOptions.camera.empty() && cameraOptions.position.empty() && cameraOptions.target.empty() &&
+      !scene->cameras.empty())
+    cameraOptions.camera = "gltf";
+  auto startCamera = makeCamera(cameraOptions, *scene);
   if (!startCamera) return fail(startCamera.error());
 
   ViewHostOptions ho;
@@ -272,6 +282,10 @@ int runView(const ViewCommand& c) {
   };
   if (!viewSupported(view)) return usage(fmt::format("--view {} needs --path visbuf", view));
   FlyCamera fly(*startCamera);
+  // G cycles from here (makeCamera accepted the value: gltf or gltf:N).
+  size_t cameraIndex = cameraOptions.camera.empty()      ? scene->cameras.size()
+                       : cameraOptions.camera.size() > 5 ? size_t(std::stoull(cameraOptions.camera.substr(5)))
+                                                    : 0;
   KeyEdges keys;
   bool looking = false;
   double lastX = 0.0, lastY = 0.0;
@@ -354,6 +368,14 @@ int runView(const ViewCommand& c) {
         std::printf("view %s\n", view.c_str());
       }
       if (keys.pressed(window, GLFW_KEY_R)) fly.reset();
+      if (keys.pressed(window, GLFW_KEY_G) && !scene->cameras.empty()) {  // (index cameras.size(): the default)
+        cameraIndex = (cameraIndex + 1) % (scene->cameras.size() + 1);
+        const bool file = cameraIndex < scene->cameras.size();
+        fly = FlyCamera(file ? scene->cameras[cameraIndex].camera : scene->defaultCamera);
+        std::printf("camera %s\n", file ? fmt::format("{} '{}'", cameraIndex,
+                                                      printable(scene->cameras[cameraIndex].name)).c_str()
+                                        : "default");
+      }
       if (keys.pressed(window, GLFW_KEY_P)) {
         if (const auto& st = (*renderer)->completedStats()) std::printf("%s", formatStats(*st).c_str());
       }

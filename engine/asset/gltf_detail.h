@@ -287,6 +287,7 @@ class Importer {
   // just {world} when the node does not use the extension (or uses it where it cannot apply: see the .cpp).
   Result<std::vector<glm::dmat4>> meshInstances(int node, const glm::dmat4& world, bool sceneImport);
   Status emitNodeLight(int node, const glm::dmat4& world, ImportedScene* scene);
+  Status emitNodeCamera(int node, const glm::dmat4& world, ImportedScene* scene);  // gltf_cameras.cpp
 
   // Scene import: one ImportedMesh per (glTF mesh, glTF material or -1, mirrored, morph weights, morphed,
   // one-joint). `morphed` marks a mesh that keeps its morph targets (its node's weights are animated);

@@ -263,6 +263,12 @@ struct ImportedScene {
   // angles outside 0 <= innerConeAngle < outerConeAngle <= pi/2, a node transform that maps -Z to a zero
   // direction. Lights of unknown type are skipped with a warning.
   std::vector<PointLight> pointLights;
+  // The cameras of the default scene's nodes, in the order the nodes are visited (gltf_cameras.cpp): each placed
+  // by its node's world matrix at rest, scale removed; named by the camera, else by its node. MalformedInput,
+  // naming node and camera, for values glTF forbids (yfov outside (0, pi), znear <= 0 perspective or < 0
+  // orthographic, zfar <= znear, aspectRatio, xmag or ymag <= 0, non-finite values); unknown types are skipped
+  // with a warning.
+  std::vector<NamedCamera> cameras;
 };
 
 // Imports the default scene of the glTF file at `path` as meshes + materials + instances (see above).

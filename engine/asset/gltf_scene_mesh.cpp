@@ -103,9 +103,10 @@ Status Importer::checkSkinnedNode(int nodeIndex, const std::vector<DecodedPrimit
   return {};
 }
 
-// A node's light (once, at the node) and its mesh: once, or once per EXT_mesh_gpu_instancing instance.
+// A node's light and camera (once, at the node) and its mesh: once, or once per EXT_mesh_gpu_instancing instance.
 Status Importer::emitSceneNode(int nodeIndex, const glm::dmat4& world, ImportedScene* scene) {
   if (Status s = emitNodeLight(nodeIndex, world, scene); !s) return s;
+  if (Status s = emitNodeCamera(nodeIndex, world, scene); !s) return s;
   auto worlds = meshInstances(nodeIndex, world, true);
   if (!worlds) return worlds.error();
   for (const glm::dmat4& w : *worlds)

@@ -496,7 +496,8 @@ uint32_t animationSectionElementSize(const std::string& name) {
       {kAnimChannelsSection, sizeof(AnimChannelRecord)},
       {kAnimTimesSection, sizeof(float)},
       {kAnimValuesSection, sizeof(float)},
-      {kRigidObjectsSection, sizeof(RigidObjectRecord)}};
+      {kRigidObjectsSection, sizeof(RigidObjectRecord)},
+      {kCamerasSection, sizeof(CameraRecord)}};
   for (const auto& [section, size] : kSizes)
     if (name == section) return size;
   return 0;
@@ -510,6 +511,7 @@ Result<std::vector<SectionData>> serializeAnimationSections(const Scene& scene, 
   writeMorphTargets(scene, w);
   if (Status s = writeAnimations(scene, w); !s) return s.error();
   serializeRigidObjects(scene, &w.sections);
+  if (Status s = serializeCameras(scene, addString, &w.sections); !s) return s.error();
   return std::move(w.sections);
 }
 
@@ -522,7 +524,8 @@ Status readAnimationSections(const FindSection& find, const ReadString& readStri
   if (Status s = r.readSkinnedObjects(); !s) return s;
   if (Status s = r.readMorphTargets(); !s) return s;
   if (Status s = r.readAnimations(); !s) return s;
-  return readRigidObjects(find, label, scene);
+  if (Status s = readRigidObjects(find, label, scene); !s) return s;
+  return readCameras(find, readString, label, scene);
 }
 
 }  // namespace visbuf::pack

@@ -48,4 +48,10 @@ Status readAnimationSections(const FindSection& find, const ReadString& readStri
 void serializeRigidObjects(const Scene& scene, std::vector<SectionData>* out);
 Status readRigidObjects(const FindSection& find, const std::string& label, Scene* scene);
 
+// Section "cameras" (pack_cameras.cpp), written and read with the animation sections: Scene::cameras and the
+// default camera's projection (none for a scene without cameras whose default camera is an infinite perspective
+// with the viewport's aspect); the reader checks every camera with validateCamera().
+Status serializeCameras(const Scene& scene, const AddString& addString, std::vector<SectionData>* out);
+Status readCameras(const FindSection& find, const ReadString& readString, const std::string& label, Scene* scene);
+
 }  // namespace visbuf::pack

@@ -144,6 +144,20 @@ struct RigidObjectRecord {
 static_assert(sizeof(RigidObjectRecord) == 152 && offsetof(RigidObjectRecord, timeOffset) == 16 &&
               offsetof(RigidObjectRecord, placement) == 24);
 
+// Section "cameras" (pack_cameras.cpp; absent when the scene has no cameras and a plain default camera): the
+// scene's cameras (Scene::cameras, in order), then at most one record with flags bit 0 set: the default camera's
+// projection (its pose and fovY / near stay in the "scene" record, which a reader of a pack without this section
+// takes as an infinite reverse-Z perspective). Every value is checked with validateCamera() on reading.
+struct CameraRecord {
+  StringRef name;
+  uint32_t projection;  // Projection: 0 perspective, 1 orthographic
+  uint32_t flags;       // bit 0: the default camera's projection (name empty); other bits 0
+  double position[3], target[3], up[3];
+  double fovY, nearPlane, farPlane;  // farPlane may be +infinity (perspective)
+  double aspectRatio, xmag, ymag;
+};
+static_assert(sizeof(CameraRecord) == 136 && offsetof(CameraRecord, position) == 16);
+
 inline constexpr const char* kNodesSection = "nodes";
 inline constexpr const char* kSkinsSection = "skins";
 inline constexpr const char* kSkinJointsSection = "skinJoints";
@@ -160,5 +174,6 @@ inline constexpr const char* kAnimChannelsSection = "animChannels";
 inline constexpr const char* kAnimTimesSection = "animTimes";
 inline constexpr const char* kAnimValuesSection = "animValues";
 inline constexpr const char* kRigidObjectsSection = "rigidObjects";
+inline constexpr const char* kCamerasSection = "cameras";
 
 }  // namespace visbuf::pack

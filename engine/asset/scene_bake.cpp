@@ -27,6 +27,7 @@ Result<Scene> buildImportedScene(const ImportedScene& imported, const MeshBuildO
   Scene scene;
   scene.name = imported.name;
   scene.pointLights = imported.pointLights;
+  scene.cameras = imported.cameras;
   // Meshes build in parallel (oneTBB; tbb::global_control limits the threads); each result goes to its own slot,
   // so the scene, and the pack written from it, do not depend on the thread count or the schedule.
   const size_t count = imported.meshes.size();
@@ -101,7 +102,7 @@ glm::dvec4 sceneBounds(const Scene& scene) {
 }
 
 void frameScene(Scene& scene) {
-  const glm::dvec4 b = sceneBounds(scene);
+  const glm::dvec4 b = animatedSceneBounds(scene);
   const double radius = std::max(b.w, 1e-6);
   Camera& c = scene.defaultCamera;
   const double dist = radius / std::sin(c.fovY * 0.5) * 1.05;

@@ -37,9 +37,10 @@ int32_t firstClipMoving(const Scene& scene, int32_t node);
 // Returns (0,0,0,0) for a scene without objects.
 glm::dvec4 sceneBounds(const Scene& scene);
 
-// Sets scene.anchor to the centre of sceneBounds() and the default camera to look at that centre from the
-// (0.35, 0.3, 1) direction, far enough for the bounding sphere to fit the camera's vertical field of view
-// (plus 5 %), with a near plane of 1e-3 x the radius (at least 1e-4).
+// Sets scene.anchor to the centre of animatedSceneBounds() (scene.h: every object over every clip, so that animated
+// parts stay in frame) and the default camera to look at that centre from the (0.35, 0.3, 1) direction, far enough
+// for the bounding sphere to fit the camera's vertical field of view (plus 5 %), with a near plane of 1e-3 x the
+// radius (at least 1e-4).
 void frameScene(Scene& scene);
 
 }  // namespace visbuf

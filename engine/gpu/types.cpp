@@ -20,7 +20,7 @@ static_assert(sizeof(TextureSlotData) == 48);
 static_assert(sizeof(MaterialData) == 64 + 48 * TEXTURE_SLOTS);
 static_assert(offsetof(MaterialData, textures) == 64);
 static_assert(sizeof(DrawCommand) == 20, "VkDrawIndexedIndirectCommand layout");
-static_assert(sizeof(FrameData) == 368);
+static_assert(sizeof(FrameData) == 400 && offsetof(FrameData, projection) == 368);
 static_assert(offsetof(FrameData, swRaster) == 320);
 static_assert(offsetof(FrameData, view) == 64);
 static_assert(offsetof(FrameData, cameraOffset) == 128);

@@ -29,7 +29,7 @@ glm::dvec3 brdfCosineReference(const SurfaceReference& s, const glm::dvec3& v, c
 }
 
 glm::dvec3 shadeReference(const SurfaceReference& s, const Scene& scene, const glm::dvec3& cameraPosition) {
-  const glm::dvec3 v = -glm::normalize(s.position);
+  const glm::dvec3 v = s.towardsEye != glm::dvec3(0.0) ? s.towardsEye : -glm::normalize(s.position);
   const glm::dvec3 cDiff = s.baseColor * (1.0 - s.metallic);
   const glm::dvec3 f0 = glm::dvec3(0.04) * (1.0 - s.metallic) + s.baseColor * s.metallic;
   glm::dvec3 color = AMBIENT_RADIANCE * (cDiff + f0) * s.occlusion;

@@ -20,6 +20,9 @@ struct SurfaceReference {
   glm::dvec3 baseColor{1.0};
   double metallic = 0.0, roughness = 1.0, occlusion = 1.0;
   glm::dvec3 emissive{0.0};
+  // Unit vector towards the eye; 0: -normalize(position) (perspective). An orthographic view's is the opposite of
+  // its view direction everywhere.
+  glm::dvec3 towardsEye{0.0};
 };
 
 // glTF BRDF x n.l for unit normal n, view v and light l directions (0 when n.l <= 0).

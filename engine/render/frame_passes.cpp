@@ -16,6 +16,9 @@ gpu::FrameData Renderer::Impl::frameData(const Camera& camera, const FrameMath& 
   f.pyramidLevels = plan.usePyramid ? pyramid.levels() : 0;
   f.cameraOffset = glm::vec4(glm::vec3(scene.anchor - camera.position), 0.0f);
   for (int i = 0; i < 5; ++i) f.frustum[i] = glm::vec4(math.planes[size_t(i)]);
+  f.farPlane = glm::vec4(math.planes[5]);
+  f.projection = glm::vec4(float(math.proj[2][2]), float(math.proj[3][2]), math.orthographic ? 1.0f : 0.0f,
+                           std::isfinite(camera.farPlane) ? float(camera.farPlane) : 0.0f);
   f.lightDir = glm::vec4(glm::normalize(scene.lightDirection), scene.lightIntensity);
   f.pointLightCount = uint32_t(scene.pointLights.size());
   f.lightTilesX = plan.lightsCulled ? lightCull.tilesX() : 0u;

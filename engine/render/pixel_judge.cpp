@@ -11,18 +11,21 @@
 
 namespace visbuf {
 
-glm::dvec3 pixelRay(const FrameMath& math, double px, double py) {
+PixelRay pixelRay(const FrameMath& math, double px, double py) {
   const double nx = px / math.width * 2.0 - 1.0, ny = py / math.height * 2.0 - 1.0;
-  const glm::dvec3 viewDir(nx / math.proj[0][0], ny / math.proj[1][1], -1.0);
-  return glm::transpose(glm::dmat3(math.view)) * viewDir;  // the view is a pure rotation
+  const glm::dmat3 toWorld = glm::transpose(glm::dmat3(math.view));  // the view is a pure rotation
+  const glm::dvec3 onPlane(nx / math.proj[0][0], ny / math.proj[1][1], 0.0);
+  if (math.orthographic) return {toWorld * onPlane, toWorld * glm::dvec3(0.0, 0.0, -1.0)};
+  return {glm::dvec3(0.0), toWorld * (onPlane + glm::dvec3(0.0, 0.0, -1.0))};
 }
 
-std::optional<std::pair<double, glm::dvec3>> intersectTriangle(const glm::dvec3 v[3], const glm::dvec3& dir) {
+std::optional<std::pair<double, glm::dvec3>> intersectTriangle(const glm::dvec3 v[3], const PixelRay& ray) {
+  const glm::dvec3& dir = ray.dir;
   const glm::dvec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
   const glm::dvec3 pvec = glm::cross(dir, e2);
   const double det = glm::dot(e1, pvec);
   if (std::abs(det) < 1e-300) return std::nullopt;
-  const glm::dvec3 tvec = -v[0];  // ray origin: the camera, at 0
+  const glm::dvec3 tvec = ray.origin - v[0];
   const double u = glm::dot(tvec, pvec) / det;
   const glm::dvec3 qvec = glm::cross(tvec, e1);
   const double w = glm::dot(dir, qvec) / det;
@@ -147,12 +150,14 @@ glm::dvec3 exactColor(const Scene& scene, const Camera& camera, const FrameMath&
     texel[k] = textures.sample(*slots[k], in.uv[set], in.duvdx[set], in.duvdy[set]);
   }
   SurfaceReference s;
-  s.position = c.t * pixelRay(math, cx, cy);
+  const PixelRay ray = pixelRay(math, cx, cy);
+  s.position = ray.at(c.t);
+  if (math.orthographic) s.towardsEye = -ray.dir;
   glm::dvec3 n = glm::normalize(normalToWorld(linear, in.normal));
-  // Front faces are counter-clockwise on screen: the triangle's geometric normal faces the camera (at the
-  // origin), the winding reversed for a mirroring transform (shade.comp.glsl's frontFacing). Back faces of
-  // double-sided materials flip the whole tangent frame.
-  const bool facing = glm::dot(glm::cross(c.v[1] - c.v[0], c.v[2] - c.v[0]), c.v[0]) < 0.0;
+  // Front faces are counter-clockwise on screen: the triangle's geometric normal faces the ray's origin (the
+  // camera; orthographic: the pixel's point on the camera plane), the winding reversed for a mirroring transform
+  // (shade.comp.glsl's frontFacing). Back faces of double-sided materials flip the whole tangent frame.
+  const bool facing = glm::dot(glm::cross(c.v[1] - c.v[0], c.v[2] - c.v[0]), c.v[0] - ray.origin) < 0.0;
   const bool frontFacing = facing != (glm::determinant(linear) < 0.0);
   const double side = m.doubleSided && !frontFacing ? -1.0 : 1.0;
   glm::dvec3 t, b;
@@ -208,7 +213,7 @@ float heat(double error) { return float(std::clamp((std::log10(std::max(error, 1
 // The claim of a path that shows triangle `triangle` of object ID `id` (object + 1) at LOD `lod` at pixel (x, y),
 // with the hit of the ray `dir` on it.
 Result<Claim> makeClaim(const Scene& scene, const std::vector<glm::dmat4>& transforms, const Camera& camera,
-                        uint32_t id, uint32_t triangle, uint32_t lod, uint32_t x, uint32_t y, const glm::dvec3& dir) {
+                        uint32_t id, uint32_t triangle, uint32_t lod, uint32_t x, uint32_t y, const PixelRay& dir) {
   if (id > scene.objects.size())
     return makeError(ErrorCode::InvalidArgument,
                      fmt::format("judge: pixel ({}, {}) shows object ID {} of {}", x, y, id - 1, scene.objects.size()));
@@ -340,7 +345,7 @@ Result<PixelJudgement> judgePixels(const Scene& scene, const Camera& camera, con
     if (idV == 0 && idF == 0) continue;
     ++j.covered;
     const uint32_t x = uint32_t(i % w), y = uint32_t(i / w);
-    const glm::dvec3 dir = pixelRay(math, x + 0.5, y + 0.5);
+    const PixelRay dir = pixelRay(math, x + 0.5, y + 0.5);
     // Each path's claim, with the ray's hit on it.
     Claim claims[2];
     size_t count = 0;

@@ -29,13 +29,20 @@
 
 namespace visbuf {
 
-// The ray through pixel position (px, py) (pixel units from the top-left corner; the centre of pixel (x, y) is
-// (x + 0.5, y + 0.5)), in camera-relative world space (the camera at the origin), not normalised.
-glm::dvec3 pixelRay(const FrameMath& math, double px, double py);
+// A view ray in camera-relative world space (the camera at the origin): origin + t dir.
+struct PixelRay {
+  glm::dvec3 origin{0.0};  // perspective: the camera (0); orthographic: the pixel's point on the plane z_view = 0
+  glm::dvec3 dir{0.0, 0.0, -1.0};  // not normalised (orthographic: the unit view direction)
+  glm::dvec3 at(double t) const { return origin + t * dir; }
+};
 
-// Moller-Trumbore from the origin along `dir` against triangle v (camera-relative), without the inside test
-// (derivative rays may leave the triangle): (t, barycentrics). nullopt when the ray is parallel to its plane.
-std::optional<std::pair<double, glm::dvec3>> intersectTriangle(const glm::dvec3 v[3], const glm::dvec3& dir);
+// The ray through pixel position (px, py) (pixel units from the top-left corner; the centre of pixel (x, y) is
+// (x + 0.5, y + 0.5)).
+PixelRay pixelRay(const FrameMath& math, double px, double py);
+
+// Moller-Trumbore along `ray` against triangle v (camera-relative), without the inside test (derivative rays may
+// leave the triangle): (t, barycentrics). nullopt when the ray is parallel to its plane.
+std::optional<std::pair<double, glm::dvec3>> intersectTriangle(const glm::dvec3 v[3], const PixelRay& ray);
 
 // One path's colour against the exact colour, over the pixels judged (RGB, unclamped: rgba16f keeps values above
 // 1, and so does the reference).

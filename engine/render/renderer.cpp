@@ -115,14 +115,7 @@ std::vector<uint32_t> supportedMsaaSamples(gpu::Device& device) {
 // The checks of a frame's camera and options, and what a frame needs created first (each once: not part of any
 // frame's CPU time).
 Status Renderer::Impl::prepareFrame(const Camera& camera, const FrameOptions& options) {
-  for (double v : {camera.position.x, camera.position.y, camera.position.z, camera.target.x, camera.target.y,
-                   camera.target.z, camera.fovY, camera.nearPlane})
-    if (!std::isfinite(v)) return makeError(ErrorCode::InvalidArgument, "camera has a non-finite component");
-  if (glm::length(camera.target - camera.position) <= 0.0 || camera.nearPlane <= 0.0 || camera.fovY <= 0.0 ||
-      camera.fovY >= M_PI)
-    return makeError(ErrorCode::InvalidArgument, "camera: target must differ from position, near > 0, 0 < fov < 180 deg");
-  if (glm::length(glm::cross(glm::normalize(camera.target - camera.position), glm::normalize(camera.up))) < 1e-9)
-    return makeError(ErrorCode::InvalidArgument, "camera: view direction is parallel to the up vector");
+  if (Status s = validateCamera(camera); !s) return s;
 
   if (options.readIds && options.path == RenderPath::GBuffer)
     return makeError(ErrorCode::InvalidArgument, "the G-buffer path writes no IDs (readIds: visbuf or forward)");

@@ -115,6 +115,12 @@ Status validateScene(const Scene& scene) {
                        fmt::format("object {}: degenerate (zero-scale) transform", i));
   }
   if (Status s = validatePointLights(scene.pointLights); !s) return s;
+  if (Status s = validateCamera(scene.defaultCamera); !s)
+    return makeError(ErrorCode::MalformedInput, "default " + s.error().message);
+  for (size_t i = 0; i < scene.cameras.size(); ++i)
+    if (Status s = validateCamera(scene.cameras[i].camera); !s)
+      return makeError(ErrorCode::MalformedInput, fmt::format("camera {} '{}': {}", i, scene.cameras[i].name,
+                                                              s.error().message));
   if (!(scene.lightIntensity >= 0.0f) || !std::isfinite(scene.lightIntensity))
     return makeError(ErrorCode::MalformedInput, "directional light: intensity must be finite and >= 0");
   return validateSceneAnimation(scene);

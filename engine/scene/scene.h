@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -107,12 +108,46 @@ struct Object {
   uint32_t material = 0;
 };
 
+// How a camera projects (glTF camera.type). Values are stored in packs: never renumber.
+enum class Projection : uint32_t { Perspective = 0, Orthographic = 1 };
+
+// A camera: a rigid pose and a projection (render/frame_math.h builds the matrices the renderer consumes).
+// The pose is held in look-at form: the camera sits at `position`, looks towards `target` and `up` picks the roll
+// (any vector not parallel to the view direction). setCameraPose() / setCameraView() set it from a camera -> world
+// or world -> view matrix instead (glTF cameras: the node's world transform, scale removed).
+// The depth buffer is reverse-Z (1 at the near plane, 0 at the far plane or at infinity) for both projections.
+// Aspect: the projection's authored window (perspective: tan(fovY/2) * aspectRatio by tan(fovY/2); orthographic:
+// xmag by ymag) is fitted inside the viewport without distortion: the axis where the viewport is relatively wider
+// sees more than authored, the other exactly what was authored. aspectRatio 0 (glTF: absent) is the viewport's, so
+// fovY is then always the vertical field of view.
 struct Camera {
   glm::dvec3 position{0.0, 0.0, 5.0};
   glm::dvec3 target{0.0};
   glm::dvec3 up{0.0, 1.0, 0.0};
-  double fovY = glm::radians(60.0);  // vertical field of view, radians
-  double nearPlane = 0.1;            // reverse-Z, infinite far plane
+  Projection projection = Projection::Perspective;
+  double fovY = glm::radians(60.0);  // perspective: vertical field of view, radians, in (0, pi)
+  double nearPlane = 0.1;            // distance along the view direction: perspective > 0, orthographic >= 0
+  // Perspective: > nearPlane, or +infinity (an infinite far plane, the default); orthographic: finite, > nearPlane.
+  double farPlane = INFINITY;
+  double aspectRatio = 0.0;          // perspective: authored width / height (> 0), or 0: the viewport's
+  double xmag = 1.0, ymag = 1.0;     // orthographic: half width and half height of the view volume (world units)
+};
+
+// Clear errors (InvalidArgument, naming the field) for a camera the renderer cannot draw: non-finite values, position
+// == target, an up vector parallel to the view direction, fovY outside (0, pi), nearPlane <= 0 (perspective) or < 0
+// (orthographic), farPlane <= nearPlane, an infinite orthographic farPlane, aspectRatio < 0, xmag or ymag <= 0.
+Status validateCamera(const Camera& camera);
+// Sets the pose from a camera -> world matrix (affine; its scale and shear are removed: the columns are
+// orthonormalised, -Z the view direction, +Y up). Error where the linear part is singular or non-finite.
+Status setCameraPose(Camera& camera, const glm::dmat4& cameraToWorld);
+// The same from a world -> view matrix (its inverse).
+Status setCameraView(Camera& camera, const glm::dmat4& worldToView);
+
+// A camera a file carries (glTF: a node with a camera), for `render --camera gltf:N` and hosts.
+struct NamedCamera {
+  std::string name;  // the glTF camera's name, else its node's (may be empty)
+  Camera camera;
+  bool operator==(const NamedCamera& o) const;
 };
 
 // An object drawn with skinning: its mesh's vertices are skinned by `skin` each frame (the object's
@@ -165,6 +200,7 @@ struct Scene {
   std::vector<RigidObject> rigidObjects;  // at most one entry per object, none for a skinned object
   glm::dvec3 anchor{0.0};  // GPU positions are relative to this point
   Camera defaultCamera;
+  std::vector<NamedCamera> cameras;  // the file's cameras (glTF: every camera node of the default scene, in node order)
   glm::vec3 lightDirection = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));  // towards the light
   // Its illuminance (0: none). 0.85 pi: a white Lambertian surface facing it reflects 0.85 (lighting.glsl).
   float lightIntensity = 2.6703538f;
@@ -216,6 +252,13 @@ glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object);
 // The same with maxScaleOf(object.transform) already computed (per-object loops need it twice).
 glm::dvec4 objectBoundsWorld(const Scene& scene, const Object& object, double maxScale);
 double maxScaleOf(const glm::dmat4& m);
+// World-space bounding sphere (xyz centre, w radius; double precision) of every object over the whole animation:
+// static objects as objectBoundsWorld; rigid objects (rigidObjectTransform) and skinned / morphed objects (their
+// vertices skinned on the CPU, skinnedObjectJoints + skinnedObjectMorphWeights) at the rest pose and at sampled times
+// of every clip of the scene (each clip's key times and a 30 Hz grid over [0, duration], thinned for large skinned
+// meshes), whatever clip or phase the object plays. (0,0,0,0) for a scene without objects. Between samples a pose may
+// reach a little further: framing adds a margin.
+glm::dvec4 animatedSceneBounds(const Scene& scene);
 
 // The scene's objects in spatial order: sorted along a Morton (Z-order) curve of their bounding spheres' centres,
 // quantised to 2^21 cells on the longest side of the centres' box (ties keep the scene's order). order[k] is the

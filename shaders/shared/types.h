@@ -158,7 +158,7 @@ struct FrameData {
   vec4 frustum[5];      // camera-relative planes (left, right, bottom, top, near): dot(n,p)+w >= 0 inside
   vec4 lightDir;        // xyz: unit direction towards the light (world), w: intensity
   vec4 viewport;        // x: width, y: height, z: 1/width, w: 1/height
-  float lodScale;       // pixels per world unit at distance 1: height / (2 tan(fovY/2))
+  float lodScale;       // perspective: pixels per world unit at distance 1: height / (2 tan(fovY/2)); ortho: per unit
   float lodErrorPixels; // LOD threshold in pixels; <= 0 disables LOD (always level 0)
   float nearPlane;
   uint objectCount;
@@ -166,8 +166,8 @@ struct FrameData {
   uint cullMode;        // CULL_NONE / CULL_FRUSTUM
   uint triangleBits;    // ID split: low bits = triangle index within the draw's LOD
   uint wideIds;         // 1: visibility target is rg32ui (x: slot+1, y: triangle); 0: r32ui packed
-  float projX;          // proj[0][0]: ndc.x = projX * x / -z
-  float projY;          // proj[1][1] (negative: Vulkan y down): ndc.y = projY * y / -z
+  float projX;          // proj[0][0]: ndc.x = projX * x / -z (orthographic: projX * x)
+  float projY;          // proj[1][1] (negative: Vulkan y down): ndc.y = projY * y / -z (orthographic: projY * y)
   uint pyramidLevels;   // valid levels of the depth pyramid (0 when occlusion is off)
   uint objectSplit;     // objects [0, objectSplit) are in SCENE_BINDING_OBJECTS, the rest in SCENE_BINDING_OBJECTS_HIGH
   uint vertexWindowShift;  // vertex i is in window i >> shift (SCENE_BINDING_VERTICES, SCENE_BINDING_VERTICES_1..3)
@@ -194,6 +194,12 @@ struct FrameData {
   // The micro-raster's bound on an object's (or cluster's) screen box area per triangle, in pixels (a lane loops over
   // a triangle's box serially, so large triangles belong to the hardware raster): FrameOptions::swRasterArea.
   float swMaxAreaPerTriangle;
+  // The projection (render/frame_math.h): x = proj[2][2], y = proj[3][2] (reverse-Z depth of the view distance
+  // d = -z_view: perspective y / d - x, x = 0 for an infinite far plane; orthographic y - x d); z: 1 orthographic
+  // (w_clip = 1, ndc.xy = (projX x, projY y), every view ray parallel to the view direction), 0 perspective; w: the
+  // far plane's view distance, 0 where it is infinite. common.glsl's depthOfDistance / viewPositionAt read it.
+  vec4 projection;
+  vec4 farPlane;        // camera-relative far plane like frustum[] (0, 0, 0, 1 where it is infinite: never culls)
 };
 
 // A KHR_lights_punctual light (64 bytes): position relative to the scene anchor (like object translations;

@@ -47,6 +47,19 @@ Camera randomCamera(std::mt19937& rng, const Scene& scene) {
   c.up = std::abs(dir.y) > 0.99 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
   c.fovY = glm::radians(20.0 + 90.0 * u(rng));
   c.nearPlane = 0.05 + u(rng);
+  // A third of them orthographic (a box with a far plane), a third perspective with a finite far plane and an
+  // authored aspect ratio, the rest infinite perspective with the viewport's aspect.
+  const double kind = u(rng), far = c.nearPlane + 5.0 + u(rng) * glm::length(ext);
+  if (kind < 1.0 / 3.0) {
+    c.projection = Projection::Orthographic;
+    c.xmag = 1.0 + u(rng) * 0.3 * glm::length(ext);
+    c.ymag = c.xmag * (0.3 + u(rng));
+    c.nearPlane = u(rng) < 0.3 ? 0.0 : c.nearPlane;
+    c.farPlane = far;
+  } else if (kind < 2.0 / 3.0) {
+    c.farPlane = far;
+    c.aspectRatio = 0.5 + 2.0 * u(rng);
+  }
   return c;
 }
 
@@ -128,8 +141,10 @@ struct PathEvent {
 // identical decoded ID images. Occlusion mode keeps its history across frames, so the path exercises
 // the two-phase scheme with stale history, cuts and resizes.
 // msaa > 1: every sample's ID is compared (the sub-pixel test and the pyramid must keep any covered sample).
+// `cameras` (when not empty) replaces the path (label: what the log calls it).
 void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint32_t h,
-                     CullMode mode = CullMode::Frustum, std::vector<PathEvent> events = {}, uint32_t msaa = 1) {
+                     CullMode mode = CullMode::Frustum, std::vector<PathEvent> events = {}, uint32_t msaa = 1,
+                     const std::vector<Camera>& cameras = {}, const char* label = nullptr) {
   gpu::Device& dev = test::testDevice();
   auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
   ASSERT_TRUE(renderer.ok()) << renderer.error().message;
@@ -147,7 +162,7 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
   on.swRaster = off.swRaster = SwRasterMode::Off;
   size_t covered = 0, culledTotal = 0, occludedTotal = 0, drawnTotal = 0, visibleTotal = 0;
   int index = 0;
-  for (const Camera& cam : cameraPath(scene, frames, city)) {
+  for (const Camera& cam : cameras.empty() ? cameraPath(scene, frames, city) : cameras) {
     for (const PathEvent& e : events) {
       if (e.frame != index) continue;
       if (e.width) {
@@ -176,7 +191,7 @@ void checkIdEquality(const Scene& scene, bool city, int frames, uint32_t w, uint
   if (msaa > 1) std::printf("msaa %u, every sample: ", msaa);
   std::printf("%s %ux%u %s: %d frames identical to no culling (%zu covered pixels, %zu objects culled, %zu "
               "occluded; drawn %zu vs %zu visible in the image = %.2fx)\n",
-              city ? "city" : "field", w, h, cullModeName(mode), frames, covered, culledTotal, occludedTotal,
+              label ? label : city ? "city" : "field", w, h, cullModeName(mode), index, covered, culledTotal, occludedTotal,
               drawnTotal, visibleTotal, visibleTotal ? double(drawnTotal) / double(visibleTotal) : 0.0);
   EXPECT_GT(covered, 0u);
   EXPECT_GT(culledTotal, 0u) << "the path must exercise culling";
@@ -196,6 +211,32 @@ GPU_TEST(Occlusion, IdImageUnchangedByOcclusionCullingCity) {
   checkIdEquality(cityScene(1200), true, 100, 317, 229, CullMode::Occlusion,
                   {{40, 0, 0, true}, {60, 160, 90, false}, {61, 0, 0, false}, {80, 319, 181, true}});
 }
+// Orthographic views (cull_tests.glsl: box-shaped frustum with a far plane, screen rectangles without the divide, a
+// linear depth for the pyramid test, the cone test along the view direction): LOD off, the ID image with occlusion
+// culling equals the one without. Street level along the city's avenues (buildings hide each other) and from above
+// at a slant, a near plane of 0 and one cutting through buildings, a far plane cutting the city; non-square windows.
+GPU_TEST(Occlusion, IdImageUnchangedByOcclusionCullingOrthographic) {
+  Scene city = cityScene(1200);
+  std::vector<Camera> views;
+  const glm::dvec3 eye = city.defaultCamera.position;
+  for (int i = 0; i < 10; ++i) {
+    Camera c;
+    c.projection = Projection::Orthographic;
+    const double t = i / 10.0;
+    c.position = eye + glm::dvec3(10.0 * std::sin(t * 6.0), 1.0 + 60.0 * t * t, -40.0 * t);
+    const double yaw = std::sin(t * 9.0) * 0.8;
+    c.target = c.position + glm::dvec3(std::sin(yaw), -0.05 - 0.8 * t, -std::cos(yaw));
+    c.xmag = 20.0 + 30.0 * t;
+    c.ymag = 12.0 + 10.0 * t;
+    c.nearPlane = i % 3 == 0 ? 0.0 : 5.0;
+    c.farPlane = i % 4 == 1 ? 120.0 : 2000.0;
+    views.push_back(c);
+  }
+  checkIdEquality(city, true, int(views.size()), 317, 229, CullMode::Occlusion, {{5, 0, 0, true}}, 1, views,
+                  "city orthographic");
+  checkIdEquality(city, true, int(views.size()), 317, 229, CullMode::Frustum, {}, 1, views, "city orthographic");
+}
+
 GPU_TEST(Occlusion, IdImageUnchangedByOcclusionCullingField) {
   checkIdEquality(fieldScene(1500, true), false, 100, 317, 229, CullMode::Occlusion,
                   {{50, 211, 97, false}, {75, 0, 0, true}});

@@ -3,6 +3,7 @@
 // against every light at every pixel; the light cull pass skipped (and no light buffers) without point lights;
 // tile overflow counted.
 #include <algorithm>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -137,16 +138,24 @@ GPU_TEST(Lights, TiledEqualsAllLights) {
   Camera cam;
   cam.position = {0.0, 8.0, 60.0};
   cam.target = {0.0, 0.0, 0.0};
-  for (auto [w, h] : {std::pair{333u, 207u}, std::pair{160u, 96u}}) {  // partial edge tiles, then exact ones
+  // And an orthographic view (light_cull.comp: tiles are boxes, depths linear).
+  Camera ortho = cam;
+  ortho.projection = Projection::Orthographic;
+  ortho.xmag = 30.0;
+  ortho.ymag = 20.0;
+  ortho.nearPlane = 0.0;
+  ortho.farPlane = 120.0;
+  // Partial edge tiles, then exact ones.
+  for (auto [w, h, view] : {std::tuple{333u, 207u, cam}, std::tuple{160u, 96u, cam}, std::tuple{333u, 207u, ortho}}) {
     auto renderer = Renderer::create(dev, scene, {.width = w, .height = h});
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
     FrameOptions fo;
     fo.lodErrorPixels = 0.0f;
-    auto tiled = (*renderer)->renderFrame(cam, fo);
+    auto tiled = (*renderer)->renderFrame(view, fo);
     fo.tiledLights = false;
-    auto all = (*renderer)->renderFrame(cam, fo);
+    auto all = (*renderer)->renderFrame(view, fo);
     fo.path = RenderPath::Forward;
-    auto forward = (*renderer)->renderFrame(cam, fo);
+    auto forward = (*renderer)->renderFrame(view, fo);
     ASSERT_TRUE(tiled.ok() && all.ok() && forward.ok());
     EXPECT_TRUE(tiled->stats.lights.culled);
     EXPECT_FALSE(all->stats.lights.culled);
@@ -162,7 +171,8 @@ GPU_TEST(Lights, TiledEqualsAllLights) {
     if (dev.isCpu()) {
       EXPECT_GE(f.psnr, 80.0);
     }
-    test::saveOnFailure(fmt::format("lights_tiled_{}x{}", w, h), *tiled, *all);
+    const char* kind = view.projection == Projection::Orthographic ? "_ortho" : "";
+    test::saveOnFailure(fmt::format("lights_tiled_{}x{}{}", w, h, kind), *tiled, *all);
   }
 }
 

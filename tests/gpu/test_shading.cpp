@@ -232,3 +232,33 @@ GPU_TEST(Renderer, OverdrawCountsAgreeWithCoverage) {
     EXPECT_GT(writes, 160u * 60u);
   }
 }
+
+// An orthographic camera (every view ray parallel: shade.comp's constant view vector, the G-buffer-free paths' clip
+// math with w = 1) against the forward path and the exact colour: the field from a slant, its far plane cutting it.
+GPU_TEST(Shading, MatchesForwardReferenceOrthographic) {
+  FieldParams p;
+  p.objects = 400;
+  p.seed = 9;
+  p.extent = 40.0;
+  Scene scene = makeFieldScene(p).value();
+  Camera cam;
+  cam.projection = Projection::Orthographic;
+  cam.position = {0.0, 30.0, 70.0};
+  cam.target = {0.0, 0.0, 0.0};
+  cam.xmag = 30.0;
+  cam.ymag = 18.0;
+  cam.nearPlane = 0.0;
+  cam.farPlane = 90.0;
+  compareWithForward(scene, cam, 480, 270, "shading_field_orthographic");
+}
+
+// A perspective camera with an authored aspect ratio (2.5, wider than the 4:3 viewport: the viewport shows more
+// height) and a finite far plane.
+GPU_TEST(Shading, MatchesForwardReferencePerspectiveAspectFiniteFar) {
+  Scene scene = makeCityScene({.objects = 600, .seed = 2}).value();
+  Camera cam = scene.defaultCamera;
+  cam.aspectRatio = 2.5;
+  cam.fovY = 0.6;
+  cam.farPlane = 60.0;
+  compareWithForward(scene, cam, 400, 300, "shading_city_aspect_far");
+}
