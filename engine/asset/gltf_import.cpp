@@ -50,7 +50,7 @@ namespace gltf_detail {
 bool requiredExtensionSupported(const std::string& ext) {
   static constexpr const char* kIgnorablePrefixes[] = {"KHR_materials_", "KHR_texture_",  "EXT_texture_",
                                                        "KHR_lights_",    "MSFT_texture_", "KHR_xmp"};
-  if (ext == kMeshoptExt || ext == kQuantizationExt || ext == kInstancingExt) return true;
+  if (ext == kMeshoptExt || ext == kQuantizationExt || ext == kInstancingExt || ext == kDracoExt) return true;
   return std::any_of(std::begin(kIgnorablePrefixes), std::end(kIgnorablePrefixes),
                      [&](const char* prefix) { return ext.rfind(prefix, 0) == 0; });
 }
