@@ -5,11 +5,12 @@ stated quantisation bits, renders through visbuf like its uncompressed original.
 For each asset: `draco_transcoder -i ORIGINAL -o TWIN.glb -qp 16 -qt 14 -qn 12 -qc 10 -qw 12`, then
 `visbuf render --scene FILE --validation --size 240x180` (default camera: framed on the scene's bounds, which
 quantisation moves by less than 2^-16 of their extent) of both, and `oiiotool --diff` of the two images: the
-PSNR must be at least MIN_PSNR. Quantised positions move silhouettes by at most about 1/300 of a pixel here and
-12-bit octahedral normals turn shading normals by about 1e-3 rad, so a correct decode stays far above it; a wrong
-point order, attribute or index permutation drops it below 20 dB. The twin must be refused by no one (exit 0)
-and its render must not print a validation message. Also ../shared/assets' Box/glTF-Draco against Box/glTF when
-VISBUF_EXTRA_ASSETS names that corpus.
+PSNR must be at least MIN_PSNR. Measured (lavapipe): CesiumMilkTruck 49.5 dB, CesiumMan 39.4 dB (texture
+edges on the head move with the 14-bit texture coordinates; a few silhouette pixels flip); a wrong point order,
+attribute or index permutation scrambles the mesh and falls far below. Fox is not rendered here: it has no
+normals, and the transcoder welds the vertices the original keeps apart, so the generated normals differ (the
+unit test compares its triangles, skin included). The twin's render must print no validation message. Also
+../shared/assets' Box/glTF-Draco against Box/glTF when VISBUF_EXTRA_ASSETS names that corpus.
 
 usage: cli_draco_twins.py VISBUF ASSETS OUT_FOLDER
 """
@@ -20,10 +21,10 @@ import shutil
 import subprocess
 import sys
 
-MIN_PSNR = 45.0
+MIN_PSNR = 36.0
 SIZE = ["--size", "240x180"]
 BITS = ["-qp", "16", "-qt", "14", "-qn", "12", "-qc", "10", "-qw", "12"]
-ASSETS = ["BoxInterleaved/glTF/BoxInterleaved.gltf", "Fox/glTF-Binary/Fox.glb",
+ASSETS = ["BoxInterleaved/glTF/BoxInterleaved.gltf", "CesiumMan/glTF/CesiumMan.gltf",
           "CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb", "MultiUVTest/glTF/MultiUVTest.gltf"]
 
 

@@ -8,8 +8,6 @@
 // imported with a 256 MiB budget. The seeds (corpus/fuzz_draco_decode/, tests/fuzz/make_draco_corpus.py) are
 // draco_transcoder and draco_encoder streams (edgebreaker standard and valence, sequential) with their true
 // counts, so that mutations start from streams that decode.
-#include <unistd.h>
-
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -28,13 +26,7 @@ namespace {
 constexpr uint64_t kMaxMemoryBytes = uint64_t{256} << 20;
 constexpr size_t kPrefix = 6;
 
-std::string g_dir;
 std::string g_path;
-
-void removeDir() {
-  std::error_code ec;
-  std::filesystem::remove_all(g_dir, ec);
-}
 
 void put32(std::vector<uint8_t>* out, uint32_t v) {
   for (int i = 0; i < 4; ++i) out->push_back(static_cast<uint8_t>(v >> (8 * i)));
@@ -81,14 +73,7 @@ std::vector<uint8_t> wrap(const uint8_t* data, size_t size) {
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  std::string pattern = (std::filesystem::temp_directory_path() / "visbuf-fuzz-draco-XXXXXX").string();
-  if (mkdtemp(pattern.data()) == nullptr) {
-    std::perror("mkdtemp");
-    std::abort();
-  }
-  g_dir = pattern;
-  g_path = g_dir + "/input.glb";
-  std::atexit(removeDir);
+  g_path = visbuf::fuzz::privateInputPath("visbuf-fuzz-draco", "input.glb");
   return 0;
 }
 
@@ -96,11 +81,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace visbuf;
   if (size < kPrefix) return 0;
   const std::vector<uint8_t> glb = wrap(data, size);
-  std::FILE* f = std::fopen(g_path.c_str(), "wb");
-  if (!f || std::fwrite(glb.data(), 1, glb.size(), f) != glb.size() || std::fclose(f) != 0) {
-    std::perror(g_path.c_str());
-    std::abort();
-  }
+  visbuf::fuzz::writeInput(g_path, glb.data(), glb.size());
   GltfImportOptions options;
   options.maxMemoryBytes = kMaxMemoryBytes;
   Result<ImportedScene> scene = importGltfScene(g_path, options);
