@@ -335,5 +335,44 @@ TEST_F(GltfDraco, MorphTargetsBesideACompressedPrimitive) {
   }
 }
 
+
+// A primitive with both a Draco stream and uncompressed accessors (bufferViews), the extension only used: a stream
+// that cannot be decoded leaves the uncompressed data, with a warning naming the stream; the same file requiring
+// the extension is refused, naming it.
+TEST_F(GltfDraco, UncompressedFallbackWhenTheStreamCannotBeDecoded) {
+  const fs::path src = test::assetPath("BoxInterleaved/glTF/BoxInterleaved.gltf");
+  REQUIRE_ASSET(src.string());
+  json doc = json::parse(readBytes(src));
+  std::vector<uint8_t> bin = readBytes(src.parent_path() / doc["buffers"][0]["uri"].get<std::string>());
+  const size_t garbage = bin.size();
+  for (int i = 0; i < 64; ++i) bin.push_back(static_cast<uint8_t>(i * 37 + 11));
+  doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", garbage}, {"byteLength", 64}});
+  doc["buffers"][0] = {{"uri", "box.bin"}, {"byteLength", bin.size()}};
+  json& prim = doc["meshes"][0]["primitives"][0];
+  prim["extensions"][kDracoExtName] = {{"bufferView", doc["bufferViews"].size() - 1},
+                                       {"attributes", {{"POSITION", 0}, {"NORMAL", 1}}}};
+  doc["extensionsUsed"] = {kDracoExtName};
+  std::ofstream(dir_ / "box.bin", std::ios::binary).write(reinterpret_cast<const char*>(bin.data()), std::streamsize(bin.size()));
+  std::ofstream(dir_ / "used.gltf") << doc.dump();
+  doc["extensionsRequired"] = {kDracoExtName};
+  std::ofstream(dir_ / "required.gltf") << doc.dump();
+
+  auto original = importGltfMesh(src.string());
+  ASSERT_TRUE(original.ok()) << original.error().message;
+  GltfImportReport report;
+  auto used = importGltfMesh((dir_ / "used.gltf").string(), {}, &report);
+  ASSERT_TRUE(used.ok()) << used.error().message;
+  EXPECT_EQ(used->positions, original->positions);
+  EXPECT_EQ(used->indices, original->indices);
+  bool warned = false;
+  for (const std::string& w : report.warnings)
+    warned = warned || (w.find("Draco stream") != std::string::npos && w.find("uncompressed data") != std::string::npos);
+  EXPECT_TRUE(warned) << "no warning names the stream and the fallback";
+  auto required = importGltfMesh((dir_ / "required.gltf").string());
+  ASSERT_FALSE(required.ok());
+  EXPECT_EQ(required.error().code, ErrorCode::MalformedInput);
+  EXPECT_NE(required.error().message.find("Draco stream"), std::string::npos) << required.error().message;
+}
+
 }  // namespace
 }  // namespace visbuf
