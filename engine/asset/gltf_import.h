@@ -35,6 +35,17 @@
 //     Zero-length normals in the file are replaced the same way (with a warning).
 //   - EXT_meshopt_compression (vertex codec v0, index buffer / index sequence codecs, OCTAHEDRAL, QUATERNION
 //     and EXPONENTIAL filters), including fallback buffers without a uri.
+//   - KHR_draco_mesh_compression (also when required; libdraco, Draco bitstream 2.2 and older): TRIANGLES
+//     primitives whose extension.attributes name any of the primitive's attributes (POSITION, NORMAL, TANGENT,
+//     TEXCOORD_n, COLOR_n, JOINTS_n, WEIGHTS_n, ...) by Draco unique id; the decoded points fill those accessors
+//     (dequantised by the decoder, converted to each accessor's declared component type) and the faces fill
+//     the indices accessor, which then go through the same checks and budgets as any accessor. Attributes
+//     outside the stream and morph targets are read as usual, in the decoded point order. The stream is
+//     untrusted: its counts must be the accessors' (points == each attribute's count, faces x 3 == the indices
+//     count), its ids must exist and not repeat, and the decoder's allocations are capped at a working set
+//     charged to options.maxMemoryBytes (gltf_draco.cpp). A stream that cannot be decoded is MalformedInput
+//     (Unsupported for a non-TRIANGLES primitive) unless the extension is only used and every accessor has a
+//     bufferView: then the uncompressed data is used, with a warning.
 //   - EXT_mesh_gpu_instancing (also when required): a node's TRANSLATION / ROTATION / SCALE accessors (any
 //     subset; the extension's table: TRANSLATION and SCALE VEC3 of FLOAT, ROTATION VEC4 of FLOAT or normalized
 //     BYTE / SHORT, decoded as glTF normalized integers) give one instance per element, at
@@ -67,8 +78,7 @@
 //     anywhere among the file's nodes (not only the scene's); coordinates beyond kMaxImportCoordinate;
 //     an external uri outside the allowed folders or with a scheme other than data:;
 //     JSON nested deeper than 512 levels; a scene that produces no triangles ("no triangle geometry").
-//   - Unsupported: a required extension that changes geometry and is not handled (e.g.
-//     KHR_draco_mesh_compression; required extensions of the KHR_materials_ / KHR_texture_ / EXT_texture_ /
+//   - Unsupported: a required extension that changes geometry and is not handled (required extensions of the KHR_materials_ / KHR_texture_ / EXT_texture_ /
 //     KHR_lights_ / MSFT_texture_ families only concern shading and are imported as far as supported, with
 //     warnings for what is dropped), EXT_mesh_gpu_instancing on a skinned or animated node while the file
 //     requires the extension, an EXT_meshopt_compression view that cannot be decoded while the extension
@@ -77,8 +87,7 @@
 //   - CapacityExceeded: more than 2^32-1 vertices, memory exhausted, or more than options.maxMemoryBytes.
 // Nothing in the file's contents can make the importer assert or crash.
 //
-// Not supported: KHR_draco_mesh_compression (Unsupported when required; when only used, the plain primitives
-// are imported), TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas of baked targets (the base
+// Not supported: TEXCOORD_2+ / COLOR_1+ (ignored), morph target TANGENT deltas of baked targets (the base
 // tangents are kept; animated targets keep them, see importGltfScene), JOINTS_2+ / WEIGHTS_2+ (more than 8
 // influences per vertex: ignored with a warning, the first 8 renormalised), KHR_animation_pointer channels
 // (ignored with a warning), KHR_texture_basisu images (KTX2 / Basis Universal: the texture's fallback `source`
