@@ -6,7 +6,7 @@
 #                                           a new random seed each run, and a corpus that persists and grows in
 #                                           build-clang/fuzz/TARGET-corpus/ (seeded from the committed one), so
 #                                           successive runs go deeper; still stops at the first finding.
-# TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode | fuzz_mesh_build.
+# TARGET: fuzz_gltf_import | fuzz_pack_reader | fuzz_image_decode | fuzz_mesh_build | fuzz_draco_decode.
 #
 # Configures and builds the clang build (build-clang/: clang, RelWithDebInfo, -Werror, ASan + UBSan, libFuzzer
 # instrumentation; the same configuration as scripts/test.sh) when needed, then fuzzes a COPY of the committed
@@ -23,7 +23,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-targets=(fuzz_gltf_import fuzz_pack_reader fuzz_image_decode fuzz_mesh_build)
+targets=(fuzz_gltf_import fuzz_pack_reader fuzz_image_decode fuzz_mesh_build fuzz_draco_decode)
 usage() {
   echo "usage: scripts/fuzz.sh TARGET SECONDS | scripts/fuzz.sh --long [TARGET] [SECONDS]" >&2
   echo "       TARGET: ${targets[*]}" >&2
@@ -51,6 +51,7 @@ case "$target" in
   fuzz_pack_reader) max_len=32768 ;;   # the seed packs are up to 17 KB
   fuzz_image_decode) max_len=8192 ;;   # tiny PNG / JPEG seeds; the pixel budget is in the target
   fuzz_mesh_build) max_len=8192 ;;     # raw meshes are repeated to 20k triangles; small glTF seeds
+  fuzz_draco_decode) max_len=4096 ;;   # Draco streams of a few hundred bytes (make_draco_corpus.py)
   *) usage ;;
 esac
 [[ "$seconds" =~ ^[1-9][0-9]*$ ]] || usage

@@ -26,8 +26,8 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
   build-clang/tests/visbuf_unit_tests --gtest_brief=1
 # A fixed libFuzzer seed: CI explores the same inputs on every run (new ones come from running
 # scripts/fuzz.sh by hand, without FUZZ_SEED).
-# 20 s each keeps the targets within the two minutes CI gives fuzzing (scripts/fuzz.sh --long for more).
-for target in fuzz_gltf_import fuzz_pack_reader fuzz_image_decode fuzz_mesh_build; do
+# 20 s each keeps the five targets within the two minutes CI gives fuzzing (scripts/fuzz.sh --long for more).
+for target in fuzz_gltf_import fuzz_pack_reader fuzz_image_decode fuzz_mesh_build fuzz_draco_decode; do
   FUZZ_SEED=1 scripts/fuzz.sh "$target" 20
 done
 

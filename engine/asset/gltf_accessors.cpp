@@ -355,6 +355,17 @@ Result<AccessorPlan> Importer::planAccessor(int index, const std::string& where)
   plan.elementSize = plan.componentSize * static_cast<uint64_t>(plan.numComponents);
   plan.count = acc.count;
 
+  // Filled from a Draco stream (gltf_draco.cpp): the accessor's bufferView and byteOffset, if any, are the
+  // uncompressed fallback and are ignored, as the extension says; the decode has checked the count.
+  if (auto fill = dracoFills_.find(index); fill != dracoFills_.end()) {
+    if (acc.sparse.isSparse) return malformed(where + ": an accessor filled from a Draco stream cannot be sparse");
+    if (fill->second.bytes.size() != plan.count * plan.elementSize) {
+      return malformed(where + ": count " + str(plan.count) + " does not match the Draco stream's data");
+    }
+    plan.dense = fill->second.bytes.data();
+    plan.stride = plan.elementSize;
+    return plan;
+  }
   if (acc.bufferView >= 0) {
     auto bytes = viewBytes(acc.bufferView, where);
     if (!bytes) return bytes.error();

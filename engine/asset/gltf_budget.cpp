@@ -48,7 +48,8 @@ Status Importer::checkMeshFits(int meshIndex) {
       {"JOINTS_0", sizeof(glm::vec4)},   {"WEIGHTS_0", sizeof(glm::vec4)}, {"JOINTS_1", sizeof(glm::vec4)},
       {"WEIGHTS_1", sizeof(glm::vec4)}};
   std::set<int> targets;
-  for (const tinygltf::Primitive& prim : mesh.primitives) {
+  for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+    const tinygltf::Primitive& prim = mesh.primitives[p];
     if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
         prim.mode != TINYGLTF_MODE_TRIANGLE_FAN)
       continue;
@@ -58,7 +59,8 @@ Status Importer::checkMeshFits(int meshIndex) {
     for (const Attribute& a : kAttributes)
       if (auto it = prim.attributes.find(a.semantic); it != prim.attributes.end()) add(countOf(it->second), 2 * a.bytes);
     add(vertices, sizeof(glm::vec3) + sizeof(uint8_t));  // emitted normals and their "needs a normal" flags
-    add(prim.indices >= 0 ? countOf(prim.indices) : vertices, 3 * 3 * sizeof(uint32_t));  // strips: 3 per index
+    const int indices = primitiveIndices(meshIndex, static_cast<int>(p));
+    add(indices >= 0 ? countOf(indices) : vertices, 3 * 3 * sizeof(uint32_t));  // strips: 3 per index
     for (const auto& target : prim.targets)
       for (const auto& [semantic, accessor] : target)
         if (morphDeltaCache_.count(accessor) == 0 && targets.insert(accessor).second)

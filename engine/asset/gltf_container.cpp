@@ -198,12 +198,10 @@ bool isMeshoptFallback(const nlohmann::json& buffer) {
 // EXT_meshopt_compression allows a "fallback" buffer with no uri (and, in a GLB, no data): every bufferView
 // in it is meant to be decoded from a compressed buffer instead. tinygltf 2.7 insists on loading every buffer
 // and fails on those, so we give such buffers a 4-byte placeholder data URI. The buffer keeps its extension
-// object, which is how the importer later knows never to read it. Returns nullopt when nothing changes
-// (including when the JSON did not parse: tinygltf then reports the syntax error itself).
-std::optional<std::string> neutraliseMeshoptFallbackBuffers(nlohmann::json& doc) {
-  if (doc.is_discarded() || !doc.is_object()) return std::nullopt;
+// object, which is how the importer later knows never to read it. Returns whether the document changed.
+bool neutraliseMeshoptFallbackBuffers(nlohmann::json& doc) {
   auto buffers = doc.find("buffers");
-  if (buffers == doc.end() || !buffers->is_array()) return std::nullopt;
+  if (buffers == doc.end() || !buffers->is_array()) return false;
   bool changed = false;
   for (auto& buffer : *buffers) {
     if (!isMeshoptFallback(buffer)) continue;
@@ -211,8 +209,37 @@ std::optional<std::string> neutraliseMeshoptFallbackBuffers(nlohmann::json& doc)
     buffer["byteLength"] = 4;
     changed = true;
   }
-  if (!changed) return std::nullopt;
-  return doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return changed;
+}
+
+// A KHR_draco_mesh_compression primitive's indices accessor has no bufferView (its data is the Draco stream's
+// faces), which tinygltf 2.7 refuses ("invalid bufferView"). Such primitives lose "indices" before tinygltf
+// parses; the importer finds the accessor in refs->dracoIndices instead (validateGltfDocument has checked it is
+// an accessor index). Returns whether the document changed.
+bool detachDracoIndices(nlohmann::json& doc, LoadedReferences* refs) {
+  auto meshes = doc.find("meshes");
+  auto accessors = doc.find("accessors");
+  if (meshes == doc.end() || !meshes->is_array() || accessors == doc.end() || !accessors->is_array()) return false;
+  bool changed = false;
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    auto prims = (*meshes)[m].is_object() ? (*meshes)[m].find("primitives") : (*meshes)[m].end();
+    if (!(*meshes)[m].is_object() || prims == (*meshes)[m].end() || !prims->is_array()) continue;
+    for (size_t p = 0; p < prims->size(); ++p) {
+      nlohmann::json& prim = (*prims)[p];
+      if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() ||
+          !prim["extensions"].contains(kDracoExt))
+        continue;
+      auto indices = prim.find("indices");
+      if (indices == prim.end() || !indices->is_number_unsigned() || indices->get<uint64_t>() >= accessors->size())
+        continue;
+      const nlohmann::json& accessor = (*accessors)[indices->get<size_t>()];
+      if (accessor.is_object() && accessor.contains("bufferView")) continue;  // tinygltf accepts it as it is
+      refs->dracoIndices[{static_cast<int>(m), static_cast<int>(p)}] = indices->get<int>();
+      prim.erase(indices);
+      changed = true;
+    }
+  }
+  return changed;
 }
 
 // tinygltf converts the JSON DOM recursively, so absurd nesting (e.g. 200k nested arrays in "extras") would
@@ -432,7 +459,12 @@ Status loadModel(const std::string& path, const GltfImportOptions& options, Memo
   // them with a message that does not say why; every used one it does not read fully is warned about once.
   if (Status s = auditGltfExtensions(doc, path, options.ignoreRequiredExtensions, warnings); !s) return s;
   gate.maxBytes = budget->limit();  // sizes were charged above; a file that grew since is refused by tinygltf
-  const std::optional<std::string> patched = neutraliseMeshoptFallbackBuffers(doc);
+  std::optional<std::string> patched;
+  if (doc.is_object()) {  // (a document that did not parse: tinygltf reports the syntax error itself)
+    const bool meshopt = neutraliseMeshoptFallbackBuffers(doc);
+    if (detachDracoIndices(doc, references) || meshopt)
+      patched = doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  }
   nlohmann::json().swap(doc);  // freed before tinygltf builds its own
   const std::string_view json = patched ? std::string_view(*patched) : text;
 

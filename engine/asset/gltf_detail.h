@@ -47,6 +47,7 @@
 namespace visbuf::gltf_detail {
 
 inline constexpr const char* kMeshoptExt = "EXT_meshopt_compression";
+inline constexpr const char* kDracoExt = "KHR_draco_mesh_compression";
 
 // True when [offset, offset + size) lies within [0, limit).
 inline bool rangeFits(uint64_t offset, uint64_t size, uint64_t limit) {
@@ -84,6 +85,9 @@ class MemoryBudget {
   uint64_t limit() const { return limit_; }
   uint64_t used() const { return used_; }
   uint64_t remaining() const { return limit_ - used_; }
+  // Gives back `bytes` charged earlier for a transient allocation that has been freed (the Draco decoder's
+  // working set).
+  void release(uint64_t bytes) { used_ -= bytes < used_ ? bytes : used_; }
 
  private:
   uint64_t limit_;
@@ -94,6 +98,10 @@ class MemoryBudget {
 struct LoadedReferences {
   // glTF image i's external file, resolved by the URI rule (uri_resolver.h); "" for embedded images.
   std::vector<std::string> imagePaths;
+  // (mesh, primitive) -> indices accessor of a KHR_draco_mesh_compression primitive whose indices accessor has
+  // no bufferView: loadModel takes "indices" out of such primitives before tinygltf parses (it refuses an
+  // indices accessor without a bufferView); Importer::primitiveIndices puts it back.
+  std::map<std::pair<int, int>, int> dracoIndices;
 };
 
 // Reads the file ourselves (only a regular file, opened without blocking: core/file_read.h; FileNotFound /
@@ -242,6 +250,13 @@ class Importer {
   Result<Bytes> plainViewBytes(int view, const std::string& where);
   Result<Bytes> meshoptViewBytes(int view, const std::string& where);
 
+  // The primitive's indices accessor (-1: none), including a Draco primitive's (LoadedReferences::dracoIndices).
+  int primitiveIndices(int mesh, int primitive) const;
+  // KHR_draco_mesh_compression (gltf_draco.cpp): decodes the primitive's Draco stream, once, into dracoFills_
+  // (the accessors it names, in their declared types), so that planAccessor reads them like any accessor.
+  // Unsupported / MalformedInput / CapacityExceeded naming the problem; when the stream cannot be decoded, the
+  // extension is not required and every accessor has a bufferView, warns and leaves the uncompressed data.
+  Status decodeDraco(int mesh, int primitive, const std::string& where);
   Result<AccessorPlan> planAccessor(int accessor, const std::string& where);
   template <typename Fn>
   Status forEachElement(const AccessorPlan& plan, const std::string& where, Fn&& fn);
@@ -312,6 +327,14 @@ class Importer {
   bool instancingRequired_ = false;
   std::map<int, std::vector<uint8_t>> decodedViews_;  // meshopt scratch, by bufferView index
   std::map<int, SharedVec3> morphDeltaCache_;          // decoded morph target accessors, by accessor index
+  // Accessors filled from a Draco stream: tightly packed elements of the accessor's type, and the (bufferView,
+  // Draco attribute id or -1 for indices) they came from (one accessor filled from two streams is refused).
+  struct DracoFill {
+    std::vector<uint8_t> bytes;
+    int view = -1;
+    int id = -1;
+  };
+  std::map<int, DracoFill> dracoFills_;
   uint64_t instancesEmitted_ = 0;                       // against GltfImportOptions::maxInstances
   std::vector<std::optional<std::vector<DecodedPrimitive>>> meshCache_;
   bool warnedZeroNormals_ = false;

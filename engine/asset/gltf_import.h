@@ -35,6 +35,17 @@
 //     Zero-length normals in the file are replaced the same way (with a warning).
 //   - EXT_meshopt_compression (vertex codec v0, index buffer / index sequence codecs, OCTAHEDRAL, QUATERNION
 //     and EXPONENTIAL filters), including fallback buffers without a uri.
+//   - KHR_draco_mesh_compression (also when required; libdraco, Draco bitstream 2.2 and older): TRIANGLES
+//     primitives whose extension.attributes name any of the primitive's attributes (POSITION, NORMAL, TANGENT,
+//     TEXCOORD_n, COLOR_n, JOINTS_n, WEIGHTS_n, ...) by Draco unique id; the decoded points fill those accessors
+//     (dequantised by the decoder, converted to each accessor's declared component type) and the faces fill
+//     the indices accessor, which then go through the same checks and budgets as any accessor. Attributes
+//     outside the stream and morph targets are read as usual, in the decoded point order. The stream is
+//     untrusted: its counts must be the accessors' (points == each attribute's count, faces x 3 == the indices
+//     count), its ids must exist and not repeat, and the decoder's allocations are capped at a working set
+//     charged to options.maxMemoryBytes (gltf_draco.cpp). A stream that cannot be decoded is MalformedInput
+//     (Unsupported for a non-TRIANGLES primitive) unless the extension is only used and every accessor has a
+//     bufferView: then the uncompressed data is used, with a warning.
 //   - EXT_mesh_gpu_instancing (also when required): a node's TRANSLATION / ROTATION / SCALE accessors (any
 //     subset; the extension's table: TRANSLATION and SCALE VEC3 of FLOAT, ROTATION VEC4 of FLOAT or normalized
 //     BYTE / SHORT, decoded as glTF normalized integers) give one instance per element, at

@@ -109,6 +109,10 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
     out.skipped = true;
     return out;
   }
+  if (prim.extensions.count(kDracoExt) != 0) {
+    if (Status s = decodeDraco(meshIndex, primIndex, where); !s) return s.error();
+  }
+  const int indicesAccessor = primitiveIndices(meshIndex, primIndex);
 
   // Vertex attributes. All must have POSITION's count.
   if (Status s = readVec3(positionIt->second, AttributeKind::Position,
@@ -179,9 +183,9 @@ Result<DecodedPrimitive> Importer::decodePrimitive(int meshIndex, int primIndex)
 
   // Indices: explicit or sequential; then convert the topology to a triangle list.
   std::vector<uint32_t> indices;
-  if (prim.indices >= 0) {
-    const std::string w = accessorWhere(prim.indices, "indices");
-    if (Status s = readIndices(prim.indices, w, &indices); !s) return s.error();
+  if (indicesAccessor >= 0) {
+    const std::string w = accessorWhere(indicesAccessor, "indices");
+    if (Status s = readIndices(indicesAccessor, w, &indices); !s) return s.error();
     for (size_t i = 0; i < indices.size(); ++i) {
       if (indices[i] >= vertexCount) {
         return malformed(w + ": index value " + str(uint64_t{indices[i]}) + " at position " +

@@ -100,6 +100,9 @@ std::vector<Rule> buildRules() {
   oneOf("meshes[].primitives[].mode", {0, 1, 2, 3, 4, 5, 6});
   index("meshes[].primitives[].targets[]{}", "accessors");
   numbers("meshes[].weights", 1, kMax53);
+  const std::string draco = "meshes[].primitives[].extensions.KHR_draco_mesh_compression";
+  index(draco + ".bufferView", "bufferViews");
+  integer(draco + ".attributes{}", "Draco attribute id", 0, kMaxInt);
 
   // Accessors (sparse: tinygltf keeps count and offsets in an int).
   index("accessors[].bufferView", "bufferViews");

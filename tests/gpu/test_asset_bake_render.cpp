@@ -80,26 +80,6 @@ const std::map<std::string, std::string>& expectedFailures() {
   return failures;
 }
 
-// Geometry extensions visbuf does not decode: a file that lists one in extensionsRequired must be refused as
-// Unsupported, naming it (read here from the file's own JSON, not from the importer).
-const char* const kUnsupportedGeometryExtensions[] = {"KHR_draco_mesh_compression"};
-
-std::string requiredUnsupportedExtension(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (bytes.size() >= 20 && bytes.compare(0, 4, "glTF") == 0) {  // GLB: the JSON chunk follows the header
-    uint32_t length = 0;
-    std::memcpy(&length, bytes.data() + 12, 4);
-    bytes = bytes.substr(20, std::min<size_t>(length, bytes.size() - 20));
-  }
-  const nlohmann::json doc = nlohmann::json::parse(bytes, nullptr, false);
-  if (!doc.is_object() || !doc.contains("extensionsRequired") || !doc["extensionsRequired"].is_array()) return {};
-  for (const nlohmann::json& ext : doc["extensionsRequired"])
-    for (const char* unsupported : kUnsupportedGeometryExtensions)
-      if (ext.is_string() && ext.get<std::string>() == unsupported) return unsupported;
-  return {};
-}
-
 // Every .gltf / .glb under assets/ and the extra corpora (VISBUF_EXTRA_ASSETS), sorted per folder (so
 // failures read the same on every run); a file of an extra corpus that assets/ also has is swept once.
 std::vector<fs::path> assetFiles() {
@@ -289,15 +269,6 @@ TEST_F(AssetBakeRender, EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake) {
     SCOPED_TRACE(name);
     std::vector<std::string> warnings;
     auto memory = bakeInMemory(file, warnings);
-    if (const std::string ext = requiredUnsupportedExtension(file); !ext.empty()) {
-      ASSERT_FALSE(memory.ok()) << name << " requires " << ext << " and must be refused";
-      EXPECT_EQ(memory.error().code, ErrorCode::Unsupported) << memory.error().message;
-      EXPECT_NE(memory.error().message.find("required extension '" + ext + "' is not supported"), std::string::npos)
-          << memory.error().message;
-      std::printf("%s: refused as expected: %s\n", name.c_str(), memory.error().message.c_str());
-      ++rejected;
-      continue;
-    }
     const auto bad = expectedFailures().find(file.filename().string());
     if (bad != expectedFailures().end()) {
       ASSERT_FALSE(memory.ok()) << name << " must be rejected";

@@ -495,9 +495,9 @@ TEST_F(GltfImportTest, UnsupportedRequiredExtension) {
   DocBuilder b;
   const int pos = b.addVec3(kTriangle);
   json doc = b.build(triangleMesh(pos), {{{"mesh", 0}}});
-  doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
-  doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
-  auto mesh = importGltfMesh(write("draco.gltf", doc));
+  doc["extensionsUsed"] = {"EXT_unknown_geometry_codec"};
+  doc["extensionsRequired"] = {"EXT_unknown_geometry_codec"};
+  auto mesh = importGltfMesh(write("unknown.gltf", doc));
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.error().code, ErrorCode::Unsupported);
 }
