@@ -41,27 +41,6 @@ std::array<float, 255> makeSrgbMidpoints() {
   return mid;
 }
 
-// An external image: a regular file only, opened without blocking (core/file_read.h), within the size budget.
-Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image) {
-  const std::string shown = quoteForMessage(image.name);
-  uint64_t size = 0;
-  const FileKind kind = probeFile(image.path, &size, /*noFollow=*/true);
-  if (kind == FileKind::Missing) {
-    return makeError(ErrorCode::FileNotFound, fmt::format("image '{}': file '{}' not found", shown, image.path));
-  }
-  if (kind != FileKind::Regular) {
-    return makeError(ErrorCode::InvalidArgument, fmt::format("image '{}': '{}' is not a regular file ({}); only regular "
-                                                          "files are read",
-                                                          shown, image.path, fileKindName(kind)));
-  }
-  FileReadOptions options;
-  options.maxBytes = kMaxImageFileBytes;
-  options.noFollow = true;  // the importer's paths are link-free (uri_resolver.h): a link here was swapped in
-  Result<std::vector<uint8_t>> bytes = readRegularFile(image.path, options);
-  if (!bytes) return makeError(bytes.error().code, fmt::format("image '{}': {}", shown, bytes.error().message));
-  return bytes;
-}
-
 // A texture to bake: one (image, colour space) pair and the slots that use it.
 struct TextureKey {
   int32_t image = -1;
@@ -70,7 +49,7 @@ struct TextureKey {
 };
 
 // Numbers the (image, colour space) pairs in order of first use and points every reference at its number.
-Result<std::vector<TextureKey>> assignTextures(const ImportedScene& imported, Scene* scene) {
+Result<std::vector<TextureKey>> assignTextures(size_t imageCount, Scene* scene) {
   std::vector<TextureKey> keys;
   std::map<std::pair<int32_t, ColorSpace>, int32_t> index;
   for (Material& m : scene->materials) {
@@ -79,10 +58,10 @@ Result<std::vector<TextureKey>> assignTextures(const ImportedScene& imported, Sc
       TextureRef* ref = slots[slot];
       const ColorSpace colorSpace = textureSlotColorSpace(slot);
       if (ref->image < 0) continue;
-      if (size_t(ref->image) >= imported.images.size()) {
+      if (size_t(ref->image) >= imageCount) {
         return makeError(ErrorCode::MalformedInput,
                          fmt::format("material '{}': image {} does not exist ({} images)", m.name, ref->image,
-                                     imported.images.size()));
+                                     imageCount));
       }
       auto [it, added] = index.emplace(std::pair{ref->image, colorSpace}, int32_t(keys.size()));
       if (added) keys.push_back({ref->image, colorSpace, 0});
@@ -158,12 +137,14 @@ const char* textureQualityName(TextureQuality quality) {
 
 TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque) {
   if (encoding == TextureEncoding::Rgba8) return TextureFormat::Rgba8;
-  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = 1u << 2, kOcclusion = 1u << 3;
+  constexpr TextureSlotMask kBaseColor = 1u << TEXTURE_SLOT_BASE_COLOR;
+  constexpr TextureSlotMask kNormals = 1u << TEXTURE_SLOT_NORMAL | 1u << TEXTURE_SLOT_CLEARCOAT_NORMAL;
+  constexpr TextureSlotMask kRedOnly = 1u << TEXTURE_SLOT_OCCLUSION | 1u << TEXTURE_SLOT_CLEARCOAT;
   if (colorSpace == ColorSpace::Srgb) return (slots & kBaseColor) && !opaque ? TextureFormat::Bc3 : TextureFormat::Bc1;
-  // Only the normal slot reads xy (z is rebuilt), only the occlusion slot reads R alone; metallic-roughness (G,
-  // B) and images shared by several data slots keep three channels.
-  if (slots == kNormal) return TextureFormat::Bc5;
-  if (slots == kOcclusion) return TextureFormat::Bc4;
+  // The normal slots read xy (z is rebuilt), occlusion and clearcoat R alone; metallic-roughness (G, B), clearcoat
+  // roughness (G) and images shared across those groups keep three channels.
+  if ((slots & ~kNormals) == 0) return TextureFormat::Bc5;
+  if ((slots & ~kRedOnly) == 0) return TextureFormat::Bc4;
   return TextureFormat::Bc1;
 }
 
@@ -434,6 +415,12 @@ Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::strin
                              uint32_t maxTextureSize, uint64_t maxPixels) {
   Result<DecodedImage> decoded = decodeImageForBake(bytes, size, name, colorSpace, maxPixels);
   if (!decoded) return decoded.error();
+  return bakeDecodedImage(std::move(decoded.value()), name, colorSpace, maxTextureSize);
+}
+
+Result<BakedImage> bakeDecodedImage(DecodedImage decodedImage, const std::string& name, ColorSpace colorSpace,
+                                    uint32_t maxTextureSize) {
+  DecodedImage* decoded = &decodedImage;
   BakedImage baked;
   const uint32_t width = decoded->width, height = decoded->height;
   baked.originalWidth = width;
@@ -494,7 +481,14 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be at least 1");
   scene->textures.clear();
   scene->textureClasses.clear();
-  auto keys = assignTextures(imported, scene);
+  std::vector<ImportedImage> derived;  // converted spec-gloss textures: image imported.images.size() + i
+  std::vector<std::string> conversionNotes;
+  if (Status s = convertSpecGlossTextures(imported, options, scene, &derived, &conversionNotes); !s) return s;
+  if (report) report->notes.insert(report->notes.end(), conversionNotes.begin(), conversionNotes.end());
+  const auto imageAt = [&](int32_t i) -> const ImportedImage& {
+    return size_t(i) < imported.images.size() ? imported.images[size_t(i)] : derived[size_t(i) - imported.images.size()];
+  };
+  auto keys = assignTextures(imported.images.size() + derived.size(), scene);
   if (!keys) return keys.error();
   // Images in parallel (each one's levels in parallel too: oneTBB nests); messages, textures and classes are
   // assembled afterwards in key order, so the result is that of a serial bake. After a failure, images behind
@@ -509,10 +503,13 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   tbb::parallel_for(size_t{0}, count, [&](size_t t) {
     if (t > firstFailed.load()) return;
     const TextureKey& key = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(key.image)];
+    const ImportedImage& image = imageAt(key.image);
     const std::string name =
         fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), key.image, quoteForMessage(image.name));
     Result<BakedImage> b = [&]() -> Result<BakedImage> {
+      if (!image.rgba8.empty())  // (a derived image: decoded already)
+        return bakeDecodedImage({image.width, image.height, image.rgba8, {}}, name, key.colorSpace,
+                                options.maxTextureSize);
       // Memory: the file's bytes are reserved while it is read, then with the estimate of its bake
       // (imageBakePeakBytes); released and reserved again, never held while waiting for more.
       uint64_t fileBytes = image.bytes.size();  // embedded: copied below
@@ -559,7 +556,7 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     compressBakedImage(&results[t]->value(), classKeys[t].format, options.quality);
     if (progress) {
       std::lock_guard<std::mutex> lock(progressMutex);
-      progress(++done, count, imported.images[size_t((*keys)[t].image)].name);
+      progress(++done, count, imageAt((*keys)[t].image).name);
     }
   });
   std::vector<BakedImage> baked;
@@ -567,12 +564,13 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   for (size_t t = 0; t < count; ++t) {
     Result<BakedImage>& b = *results[t];
     const TextureKey& key = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(key.image)];
+    const ImportedImage& image = imageAt(key.image);
     if (report && !b->resizeNote.empty()) {
       report->notes.push_back(fmt::format("{}: image {} '{}': {}", quoteForMessage(imported.name), key.image,
                                           quoteForMessage(image.name), b->resizeNote));
     }
-    scene->textures.push_back({image.name, key.image, key.colorSpace, 0, 0, b->originalWidth, b->originalHeight});
+    const int32_t source = size_t(key.image) < imported.images.size() ? key.image : -1;  // (derived: no glTF image)
+    scene->textures.push_back({image.name, source, key.colorSpace, 0, 0, b->originalWidth, b->originalHeight});
     baked.push_back(std::move(b.value()));
   }
   buildClasses(baked, scene);
