@@ -66,9 +66,13 @@ void print(const char* what, const PathAccuracy& a) {
 
 // Every path of a scene against the exact colour. The visbuf paths and forward: judged pixel by pixel (bounds as
 // the pixel judge's own tests: float shading and rgba16f output). MSAA 4x: the resolved colour against the mean of
-// the exact sample colours. The G-buffer path stores base colour in sRGB8 and normals in snorm16 (the coat's in
-// rgba16f): compared with the forward path within the G-buffer tests' allowance.
-void judgeEveryPath(const Scene& scene, const Camera& cam, const char* name, double maxAbs, double minPsnr) {
+// the exact sample colours; an edge pixel is shaded once per triangle at its samples' centroid, which differs from
+// the mean of its samples where the colour is not linear over the pixel (a coat's sharp highlight, the x3 emission
+// against the background): bounded by the mean (as Msaa.* do). The G-buffer path stores base colour in sRGB8,
+// normals in snorm16 and the coat's in rgba16f: compared with the forward path by PSNR, and by a maximum that
+// allows the coat's roughness-0.1 highlight to magnify the stored coat normal's rounding.
+void judgeEveryPath(const Scene& scene, const Camera& cam, const char* name, double maxAbs, double minPsnr,
+                    double msaaMean) {
   auto r = Renderer::create(test::testDevice(), scene, {.width = 256, .height = 128});
   ASSERT_TRUE(r.ok()) << r.error().message;
   const FrameResult forward = render(**r, cam, RenderPath::Forward, ShadingMode::Auto);
@@ -95,8 +99,9 @@ void judgeEveryPath(const Scene& scene, const Camera& cam, const char* name, dou
   auto jm = judgeMsaaPixels(scene, cam, visMs, fwdMs, 4);
   ASSERT_TRUE(jm.ok()) << jm.error().message;
   print("visbuf msaa 4x", jm->visbuf);
-  EXPECT_LE(jm->visbuf.maxAbs, maxAbs) << name << " msaa";
-  EXPECT_GE(jm->visbuf.psnr, minPsnr) << name << " msaa";
+  print("forward msaa 4x", jm->forward);
+  EXPECT_EQ(jm->judged, jm->covered) << name << " msaa";
+  EXPECT_LE(jm->visbuf.meanAbs, msaaMean) << name << " msaa";
   // G-buffer: against the forward frame (same raster, same derivatives).
   const FrameResult gbuffer = render(**r, cam, RenderPath::GBuffer, ShadingMode::Auto, 1, false);
   const FrameResult fwdColor = render(**r, cam, RenderPath::Forward, ShadingMode::Auto, 1, false);
@@ -112,8 +117,8 @@ void judgeEveryPath(const Scene& scene, const Camera& cam, const char* name, dou
   }
   const double gPsnr = 10.0 * std::log10(1.0 / std::max(gSq / double(gN), 1e-30));
   std::printf("  %-22s max %.2e PSNR %.1f dB (against forward)\n", "gbuffer", gMax, gPsnr);
-  EXPECT_LE(gMax, 0.05) << name << " gbuffer";
-  EXPECT_GE(gPsnr, 45.0) << name << " gbuffer";
+  EXPECT_LE(gMax, 0.15) << name << " gbuffer";
+  EXPECT_GE(gPsnr, 55.0) << name << " gbuffer";
 }
 
 class MaterialExtensionsGpu : public test::GpuFixture<test::TempDirTest> {
@@ -129,20 +134,23 @@ class MaterialExtensionsGpu : public test::GpuFixture<test::TempDirTest> {
 
 }  // namespace
 
-// The generated extensions file on every path. Measured on lavapipe: see the figures printed. Bounds as the pixel
-// judge's tests (PixelJudge.*): about twice the largest error measured, PSNR 5 dB under it.
+// The generated extensions file on every path. Measured on lavapipe (256x128): uber, classified and covered max
+// 1.95e-3, 67.4 dB; forward 63.7 dB; MSAA 4x mean 1.9e-3; G-buffer against forward max 0.072, 62.3 dB. Bounds as the
+// pixel judge's tests (PixelJudge.*): about twice the largest error measured, PSNR 5 dB or more under it.
 TEST_F(MaterialExtensionsGpu, EveryPathMatchesTheCpuReference) {
   SKIP_WITHOUT_OIIO();
   const test::MaterialExtensionFiles files = write();
   const Scene scene = loadBaked(files.extensions);
   ASSERT_EQ(scene.materials.size(), test::kExtSpheres);
   // The emissive sphere's radiance is above 1 (emissive_strength 3): rgba16f keeps it.
-  judgeEveryPath(scene, rowCamera(test::kExtSpheres), "material extensions", 4e-3, 60.0);
+  judgeEveryPath(scene, rowCamera(test::kExtSpheres), "material extensions", 4e-3, 60.0, 4e-3);
 }
 
 // The spec-gloss file against its metal-rough twin: both rendered through the visbuf path. The textured twins
 // differ by the conversion (exact for dielectric and metal texels, spec_gloss.h) and by the 8-bit rounding of the
 // twin's texels; the factors twin is half metallic and coloured, which the conversion cannot match exactly.
+// Measured on lavapipe (192x128): textured max 0.0022, 73.1 dB; factors max 0.0156, 61.7 dB. Each scene against its
+// own exact colour: max 0.0128 (the metallic texels' roughness-0.16 highlights, radiance above 2).
 TEST_F(MaterialExtensionsGpu, SpecularGlossinessRendersLikeItsMetalRoughTwin) {
   SKIP_WITHOUT_OIIO();
   const test::MaterialExtensionFiles files = write();
@@ -157,7 +165,10 @@ TEST_F(MaterialExtensionsGpu, SpecularGlossinessRendersLikeItsMetalRoughTwin) {
     const FrameResult fwd = render(**r, cam, RenderPath::Forward, ShadingMode::Auto);
     auto j = judgePixels(k == 0 ? metalRough : specGloss, cam, frames[k], fwd);
     ASSERT_TRUE(j.ok()) << j.error().message;
-    EXPECT_LE(j->visbuf.maxAbs, 4e-3);
+    EXPECT_LE(j->visbuf.maxAbs, 0.03);
+    EXPECT_GE(j->visbuf.psnr, 60.0);
+    std::printf("%s scene against its exact colour: max %.2e PSNR %.1f dB\n", k == 0 ? "metal-rough" : "spec-gloss",
+                j->visbuf.maxAbs, j->visbuf.psnr);
   }
   // Per sphere (left: textured, right: factors), over the pixels both frames cover.
   const uint32_t w = frames[0].width, h = frames[0].height;
@@ -181,7 +192,8 @@ TEST_F(MaterialExtensionsGpu, SpecularGlossinessRendersLikeItsMetalRoughTwin) {
     std::printf("spec-gloss vs metal-rough twin, %s sphere: max %.4f PSNR %.1f dB\n", s == 0 ? "textured" : "factors",
                 maxAbs[s], psnr);
     // Bounds: the measured figures (docs/materials.md) with a margin.
-    EXPECT_GE(psnr, s == 0 ? 35.0 : 30.0) << "sphere " << s;
+    EXPECT_GE(psnr, s == 0 ? 65.0 : 55.0) << "sphere " << s;
+    EXPECT_LE(maxAbs[s], s == 0 ? 0.01 : 0.04) << "sphere " << s;
   }
 }
 
@@ -191,14 +203,18 @@ GPU_EXTRA_ASSET_TEST(MaterialExtensionAssets, UnlitTestMatchesTheCpuReference, "
   const Scene scene = loadBaked(asset);
   ASSERT_FALSE(scene.materials.empty());
   EXPECT_TRUE(std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.unlit; }));
-  judgeEveryPath(scene, scene.defaultCamera, "UnlitTest", 4e-3, 60.0);
+  judgeEveryPath(scene, scene.defaultCamera, "UnlitTest", 4e-3, 60.0, 4e-3);
 }
 
 GPU_EXTRA_ASSET_TEST(MaterialExtensionAssets, ClearCoatTestMatchesTheCpuReference,
                      "ClearCoatTest/glTF-Binary/ClearCoatTest.glb") {
   SKIP_WITHOUT_OIIO();
-  const Scene scene = loadBaked(asset);
+  Scene scene = loadBaked(asset);
   EXPECT_TRUE(std::any_of(scene.materials.begin(), scene.materials.end(),
                           [](const Material& m) { return m.clearcoat > 0.0f; }));
-  judgeEveryPath(scene, scene.defaultCamera, "ClearCoatTest", 4e-3, 60.0);
+  // Its "partial coating" row is BLEND, which the judge cannot judge (pixel_judge.h): drawn opaque here, the coat's
+  // shading is what is judged.
+  for (Material& m : scene.materials)
+    if (m.alphaMode == AlphaMode::Blend) m.alphaMode = AlphaMode::Opaque;
+  judgeEveryPath(scene, scene.defaultCamera, "ClearCoatTest", 4e-3, 60.0, 4e-3);
 }
