@@ -22,6 +22,9 @@ layout(constant_id = 3) const uint VB_TEXELS = 0u;
 // when no lane takes it). Set per renderer (gpu::Specialization::extras, ::pointLights).
 layout(constant_id = 4) const uint VB_EXTRAS = 1u;
 layout(constant_id = 5) const uint VB_POINT_LIGHTS = 1u;
+// MATERIAL_FEATURE_* bits a pipeline may meet (config.h): the shading code of the others is removed. Set per
+// renderer and, for classified shading, per material (gpu::Specialization::materialFeatures).
+layout(constant_id = 6) const uint VB_MATERIAL_FEATURES = MATERIAL_FEATURES_ALL;
 layout(set = 0, binding = SCENE_BINDING_VERTEX_TEXELS) uniform usamplerBuffer vertexTexels;  // 2 texels per Vertex
 layout(set = 0, binding = SCENE_BINDING_OBJECT_TEXELS) uniform usamplerBuffer objectTexels;  // 4 texels per ObjectData
 layout(set = 0, binding = SCENE_BINDING_MESH_TEXELS) uniform usamplerBuffer meshTexels;  // MESH_TEXELS per MeshData
@@ -174,11 +177,11 @@ MaterialData materialAt(uint i) {
   m.params = uintBitsToFloat(texelFetch(materialTexels, t + 2));
   m.flags = h.x;
   m.slotCount = h.y;
-  m.pad1 = h.z;
-  m.pad2 = h.w;
+  m.clearcoat = uintBitsToFloat(h.z);
+  m.clearcoatRoughness = uintBitsToFloat(h.w);
   for (int s = 0; s < TEXTURE_SLOTS; ++s) {
     uvec4 a = texelFetch(materialTexels, t + 4 + 3 * s);
-    m.textures[s] = TextureSlotData(a.x, a.y, a.z, a.w, uintBitsToFloat(texelFetch(materialTexels, t + 5 + 3 * s)),
+    m.textures[s] = TextureSlotData(a.x, a.y, uintBitsToFloat(a.z), a.w, uintBitsToFloat(texelFetch(materialTexels, t + 5 + 3 * s)),
                                     uintBitsToFloat(texelFetch(materialTexels, t + 6 + 3 * s)));
   }
   return m;

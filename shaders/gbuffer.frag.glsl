@@ -5,8 +5,10 @@
 //   RT0 rgba8 sRGB   base colour (linear in the shader, sRGB-encoded by the target), alpha
 //   RT1 rg16 snorm   unit world normal (after normal mapping), octahedral (octahedral.glsl), or rg16f where snorm
 //                    cannot be rendered to
-//   RT2 rgba8 unorm  metallic, roughness, occlusion, unused
+//   RT2 rgba8 unorm  metallic, roughness, occlusion, 1 where unlit (KHR_materials_unlit)
 //   RT3 b10g11r11    emissive radiance (rgba16f where that format cannot be rendered to)
+//   RT4 rgba16f      KHR_materials_clearcoat: the coat's octahedral normal, roughness, weight (r8 unorm, unread,
+//                    in scenes without a coated material)
 // plus the D32 reverse-Z depth, from which gbuffer_lighting.comp rebuilds the position.
 // ALPHA_MASK variant (masked draw lists): the same cut-out as the masked visibility raster.
 #extension GL_GOOGLE_include_directive : require
@@ -21,6 +23,7 @@ layout(location = 0) out vec4 outBaseColor;
 layout(location = 1) out vec2 outNormal;
 layout(location = 2) out vec4 outMaterial;
 layout(location = 3) out vec4 outEmissive;
+layout(location = 4) out vec4 outCoat;
 #if COUNT_OVERDRAW
 #if !ALPHA_MASK
 layout(early_fragment_tests) in;  // (not with discard: a cut-out fragment must not write depth)
@@ -41,6 +44,7 @@ void main() {
   Surface s = evaluateMaterial(inMaterial, si);
   outBaseColor = vec4(s.baseColor, s.alpha);
   outNormal = unpackSnorm2x16(octEncode(s.normal));  // exactly representable in snorm16
-  outMaterial = vec4(s.metallic, s.roughness, s.occlusion, 0.0);
+  outMaterial = vec4(s.metallic, s.roughness, s.occlusion, surfaceUnlit(s) ? 1.0 : 0.0);
   outEmissive = vec4(s.emissive, 0.0);
+  outCoat = vec4(unpackSnorm2x16(octEncode(s.clearcoatNormal)), s.clearcoatRoughness, s.clearcoat);
 }

@@ -38,6 +38,11 @@ void main() {
   s.roughness = material.y;
   s.occlusion = material.z;
   s.emissive = emissive;
+  s.unlit = material.w > 0.5;
+  vec4 coat = (VB_MATERIAL_FEATURES & MATERIAL_FEATURE_CLEARCOAT) != 0u ? texelFetch(gbuffer[4], p, 0) : vec4(0.0);
+  s.clearcoatNormal = octDecode(packSnorm2x16(coat.xy));
+  s.clearcoatRoughness = coat.z;
+  s.clearcoat = coat.w;
   imageStore(colorOut, p, vec4(shadeSurface(s, uvec2(p)), 1.0));
 #if WRITE_ATTRIBUTES
   uint record = (uint(p.y) * uint(frame.viewport.x) + uint(p.x)) * ATTRIBUTE_FLOATS;

@@ -8,6 +8,10 @@
 // intensity in w) and KHR_lights_punctual point and spot lights (inverse-square falloff windowed to zero at the
 // range; spot: times the cone attenuation) and directional lights (engine/scene/light.h). Plus a uniform
 // ambient environment AMBIENT_RADIANCE x (c_diff + f0), scaled by occlusion, and the emissive radiance.
+// KHR_materials_clearcoat (specification's layering): every term of the base (lights, ambient, emissive) times
+// 1 - clearcoat x Fc, with Fc = Schlick(f0 0.04, n_c.v), plus clearcoat x the coat's GGX specular lobe (f0 0.04, its
+// own roughness and normal n_c) per light and clearcoat x Fc x AMBIENT_RADIANCE x occlusion of ambient.
+// KHR_materials_unlit: the base colour is returned as is.
 // engine/render/brdf_reference.cpp is the double-precision CPU twin the tests compare with.
 #ifndef VISBUF_LIGHTING_GLSL
 #define VISBUF_LIGHTING_GLSL
@@ -30,15 +34,31 @@ struct Surface {
   float roughness; // [0,1] (perceptual)
   float occlusion; // [0,1], 1: unoccluded (already lerped by the material's occlusion strength)
   vec3 emissive;   // linear RGB radiance added as is
+  bool unlit;                // KHR_materials_unlit: the colour is baseColor
+  float clearcoat;           // KHR_materials_clearcoat weight [0,1], 0: no coat
+  float clearcoatRoughness;  // [0,1] (perceptual)
+  vec3 clearcoatNormal;      // unit world normal of the coat (flipped as `normal` is)
 };
 
 // A surface with only a base colour and a normal (everything else at the glTF defaults of a plain
-// material: dielectric, fully rough, unoccluded, not emissive).
+// material: dielectric, fully rough, unoccluded, not emissive, lit, no coat).
 Surface plainSurface(vec3 position, vec3 normal, vec3 baseColor) {
-  return Surface(position, normal, baseColor, 1.0, 0.0, 1.0, 1.0, vec3(0.0));
+  return Surface(position, normal, baseColor, 1.0, 0.0, 1.0, 1.0, vec3(0.0), false, 0.0, 0.0, normal);
 }
 
+// Whether the pipeline may meet the feature (VB_MATERIAL_FEATURES) and the surface has it.
+bool surfaceUnlit(Surface s) { return (VB_MATERIAL_FEATURES & MATERIAL_FEATURE_UNLIT) != 0u && s.unlit; }
+bool surfaceCoated(Surface s) { return (VB_MATERIAL_FEATURES & MATERIAL_FEATURE_CLEARCOAT) != 0u && s.clearcoat > 0.0; }
+
 const float kPi = 3.14159265358979;
+
+// GGX D x height-correlated Smith V (folded with 1 / (4 n.l n.v)) for a2 = alpha^2 = roughness^4.
+float ggxDV(float ndoth, float ndotv, float ndotl, float a2) {
+  float dDenom = ndoth * ndoth * (a2 - 1.0) + 1.0;
+  float d = a2 / (kPi * dDenom * dDenom);
+  float vis = 0.5 / (ndotl * sqrt(ndotv * ndotv * (1.0 - a2) + a2) + ndotv * sqrt(ndotl * ndotl * (1.0 - a2) + a2));
+  return d * vis;
+}
 
 // The BRDF of glTF 2.0 appendix B times n.l: radiance reflected towards v per unit irradiance arriving along l
 // (normal incidence). n, v, l unit vectors.
@@ -56,10 +76,31 @@ vec3 brdfCosine(Surface s, vec3 v, vec3 l) {
   float alpha = s.roughness * s.roughness;
   float a2 = alpha * alpha;
   vec3 f = f0 + (vec3(1.0) - f0) * pow(1.0 - vdoth, 5.0);
-  float dDenom = ndoth * ndoth * (a2 - 1.0) + 1.0;
-  float d = a2 / (kPi * dDenom * dDenom);
-  float vis = 0.5 / (ndotl * sqrt(ndotv * ndotv * (1.0 - a2) + a2) + ndotv * sqrt(ndotl * ndotl * (1.0 - a2) + a2));
-  return ((vec3(1.0) - f) * cDiff / kPi + f * (d * vis)) * ndotl;
+  return ((vec3(1.0) - f) * cDiff / kPi + f * ggxDV(ndoth, ndotv, ndotl, a2)) * ndotl;
+}
+
+// The coat's Fresnel towards the viewer, Schlick with f0 0.04 (ior 1.5) at |n_c.v|: what the coat reflects and
+// takes from the base.
+float coatFresnel(Surface s, vec3 v) {
+  return 0.04 + 0.96 * pow(1.0 - min(abs(dot(s.clearcoatNormal, v)), 1.0), 5.0);
+}
+
+// The coat's specular lobe x n_c.l (no weight): GGX D, V, Schlick F with f0 0.04, the coat's roughness and normal.
+float coatCosine(Surface s, vec3 v, vec3 l) {
+  float ndotl = dot(s.clearcoatNormal, l);
+  if (ndotl <= 0.0) return 0.0;
+  vec3 h = normalize(l + v);
+  float ndotv = max(abs(dot(s.clearcoatNormal, v)), 1e-4);
+  float alpha = s.clearcoatRoughness * s.clearcoatRoughness;
+  float f = 0.04 + 0.96 * pow(1.0 - max(dot(v, h), 0.0), 5.0);
+  return f * ggxDV(max(dot(s.clearcoatNormal, h), 0.0), ndotv, ndotl, alpha * alpha) * ndotl;
+}
+
+// brdfCosine with the coat layered over it where the surface has one.
+vec3 surfaceCosine(Surface s, vec3 v, vec3 l) {
+  vec3 base = brdfCosine(s, v, l);
+  if (!surfaceCoated(s)) return base;
+  return base * (1.0 - s.clearcoat * coatFresnel(s, v)) + vec3(s.clearcoat * coatCosine(s, v, l));
 }
 
 // One KHR_lights_punctual light's reflected radiance. Point and spot lights: exactly zero beyond the light's
@@ -68,7 +109,7 @@ vec3 brdfCosine(Surface s, vec3 v, vec3 l) {
 // light's arithmetic is its own branch, so adding the other types does not change a point light's rounding.
 vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
   if (light.type == LIGHT_DIRECTIONAL)
-    return brdfCosine(s, v, -light.direction.xyz) * light.colorIntensity.rgb * light.colorIntensity.w;
+    return surfaceCosine(s, v, -light.direction.xyz) * light.colorIntensity.rgb * light.colorIntensity.w;
   vec3 toLight = light.positionRange.xyz + frame.cameraOffset.xyz - s.position;
   float d2 = max(dot(toLight, toLight), 1e-12);
   float range = light.positionRange.w;
@@ -85,7 +126,7 @@ vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
     window *= cone * cone;
     if (window <= 0.0) return vec3(0.0);
   }
-  return brdfCosine(s, v, l) * light.colorIntensity.rgb * (light.colorIntensity.w * window / d2);
+  return surfaceCosine(s, v, l) * light.colorIntensity.rgb * (light.colorIntensity.w * window / d2);
 }
 
 // Ambient + directional + point lights + emissive. `pixel` is the pixel being shaded: when this frame built
@@ -93,11 +134,18 @@ vec3 pointLightRadiance(Surface s, vec3 v, PointLightData light) {
 // every light (the forward reference, and the all-lights comparison). Both loops visit lights in ascending
 // index order, and a light missing from a tile contributes exactly zero there, so the sums are the same.
 vec3 shadeSurface(Surface s, uvec2 pixel) {
+  if (surfaceUnlit(s)) return s.baseColor;
   vec3 v = towardsEye(s.position);
   vec3 cDiff = mix(s.baseColor, vec3(0.0), s.metallic);
   vec3 f0 = mix(vec3(0.04), s.baseColor, s.metallic);
   vec3 color = AMBIENT_RADIANCE * (cDiff + f0) * s.occlusion;
-  color += brdfCosine(s, v, frame.lightDir.xyz) * frame.lightDir.w;
+  vec3 emissive = s.emissive;
+  if (surfaceCoated(s)) {  // the base's ambient and emission under the coat, and the coat's ambient reflection
+    float fc = s.clearcoat * coatFresnel(s, v);
+    color = color * (1.0 - fc) + vec3(AMBIENT_RADIANCE * fc * s.occlusion);
+    emissive *= 1.0 - fc;
+  }
+  color += surfaceCosine(s, v, frame.lightDir.xyz) * frame.lightDir.w;
   if (VB_POINT_LIGHTS != 0u && frame.pointLightCount > 0u) {
     if (frame.lightTilesX > 0u) {
       uint tile = (pixel.y / LIGHT_TILE_SIZE) * frame.lightTilesX + pixel.x / LIGHT_TILE_SIZE;
@@ -108,7 +156,7 @@ vec3 shadeSurface(Surface s, uvec2 pixel) {
       for (uint i = 0u; i < frame.pointLightCount; ++i) color += pointLightRadiance(s, v, pointLights[i]);
     }
   }
-  return color + s.emissive;
+  return color + emissive;
 }
 
 #endif

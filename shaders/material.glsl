@@ -151,6 +151,22 @@ bool tangentFrame(SurfaceInputs si, vec3 n, bool secondSet, out vec3 t, out vec3
   return true;
 }
 
+// The unit normal of a normal-mapped slot (TEXTURE_SLOT_NORMAL, TEXTURE_SLOT_CLEARCOAT_NORMAL) at the pixel: texel
+// (the slot's sample) in the tangent frame of unit geometric normal n, its xy times `scale`; side -1 flips the whole
+// frame (back faces of double-sided materials). side * n where the slot has no texture or the frame is degenerate.
+vec3 mappedNormal(SurfaceInputs si, vec3 n, float side, TextureSlotData ns, vec4 texel, float scale) {
+  if (VB_TEXTURED == 0 || VB_TEXTURE_CLASSES == 0u || ns.image == TEXTURE_NONE) return side * n;
+  vec3 t, b;
+  bool second = ((ns.samplerBits >> TEXTURE_SAMPLER_TEXCOORD_SHIFT) & 0xffu) == 1u;
+  if (!tangentFrame(si, n, second, t, b)) return side * n;
+  vec3 tn = texel.xyz * 2.0 - 1.0;
+  // A two-channel (BC5) normal map stores x and y of a unit vector: z is rebuilt before the normal scale.
+  if ((ns.samplerBits & TEXTURE_SAMPLER_TWO_CHANNEL) != 0u) tn.z = sqrt(max(0.0, 1.0 - tn.x * tn.x - tn.y * tn.y));
+  tn.xy *= scale;
+  vec3 mapped = side * (t * tn.x + b * tn.y + n * tn.z);
+  return dot(mapped, mapped) > 0.0 ? normalize(mapped) : side * n;
+}
+
 Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
   MaterialData m = materialAt(materialIndex);
   vec3 n = normalize(si.normal);
@@ -158,37 +174,33 @@ Surface evaluateMaterial(uint materialIndex, SurfaceInputs si) {
   float side = !si.frontFacing && (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u ? -1.0 : 1.0;
   // Every slot's texel in one loop whose bound is read from the material: the sampling code (a switch over the
   // texture classes) is then compiled once, not once per slot (lavapipe's compile time).
-  vec4 texel[TEXTURE_SLOTS] = vec4[](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
+  vec4 texel[TEXTURE_SLOTS];
+  for (int slot = 0; slot < TEXTURE_SLOTS; ++slot) texel[slot] = vec4(1.0);
 #if VB_TEXTURED
   for (uint slot = 0u; slot < m.slotCount; ++slot) texel[slot] = sampleSlot(m.textures[slot], si);
 #endif
   vec4 base = m.baseColor * si.color * texel[TEXTURE_SLOT_BASE_COLOR];
+  Surface s = plainSurface(si.position, side * n, base.rgb);
+  s.alpha = base.a;
+  if ((VB_MATERIAL_FEATURES & MATERIAL_FEATURE_UNLIT) != 0u && (m.flags & MATERIAL_FLAG_UNLIT) != 0u) {
+    s.unlit = true;  // (nothing else of the material is read)
+    return s;
+  }
   vec4 mr = texel[TEXTURE_SLOT_METALLIC_ROUGHNESS];
-  float occlusion = 1.0;
+  s.metallic = clamp(m.params.x * mr.b, 0.0, 1.0);
+  s.roughness = clamp(m.params.y * mr.g, 0.0, 1.0);
   // (untextured variants: no occlusion texture, and no fetch of its slot per pixel)
   if (VB_TEXTURED != 0 && m.textures[TEXTURE_SLOT_OCCLUSION].image != TEXTURE_NONE)
-    occlusion = 1.0 + m.params.z * (texel[TEXTURE_SLOT_OCCLUSION].r - 1.0);
-  vec3 emissive = m.emissive.rgb * texel[TEXTURE_SLOT_EMISSIVE].rgb;
-  TextureSlotData ns = m.textures[TEXTURE_SLOT_NORMAL];
-  if (VB_TEXTURED != 0 && VB_TEXTURE_CLASSES > 0u && ns.image != TEXTURE_NONE) {
-    vec3 t, b;
-    bool second = ((ns.samplerBits >> TEXTURE_SAMPLER_TEXCOORD_SHIFT) & 0xffu) == 1u;
-    if (tangentFrame(si, n, second, t, b)) {
-      vec3 tn = texel[TEXTURE_SLOT_NORMAL].xyz * 2.0 - 1.0;
-      // A two-channel (BC5) normal map stores x and y of a unit vector: z is rebuilt before the normal scale.
-      if ((ns.samplerBits & TEXTURE_SAMPLER_TWO_CHANNEL) != 0u)
-        tn.z = sqrt(max(0.0, 1.0 - tn.x * tn.x - tn.y * tn.y));
-      tn.xy *= m.emissive.w;  // normal scale
-      vec3 mapped = side * (t * tn.x + b * tn.y + n * tn.z);
-      n = dot(mapped, mapped) > 0.0 ? normalize(mapped) : side * n;
-    } else {
-      n *= side;
-    }
-  } else {
-    n *= side;
+    s.occlusion = 1.0 + m.params.z * (texel[TEXTURE_SLOT_OCCLUSION].r - 1.0);
+  s.emissive = m.emissive.rgb * texel[TEXTURE_SLOT_EMISSIVE].rgb;
+  s.normal = mappedNormal(si, n, side, m.textures[TEXTURE_SLOT_NORMAL], texel[TEXTURE_SLOT_NORMAL], m.emissive.w);
+  if ((VB_MATERIAL_FEATURES & MATERIAL_FEATURE_CLEARCOAT) != 0u && (m.flags & MATERIAL_FLAG_CLEARCOAT) != 0u) {
+    s.clearcoat = clamp(m.clearcoat * texel[TEXTURE_SLOT_CLEARCOAT].r, 0.0, 1.0);
+    s.clearcoatRoughness = clamp(m.clearcoatRoughness * texel[TEXTURE_SLOT_CLEARCOAT_ROUGHNESS].g, 0.0, 1.0);
+    TextureSlotData cn = m.textures[TEXTURE_SLOT_CLEARCOAT_NORMAL];
+    s.clearcoatNormal = mappedNormal(si, n, side, cn, texel[TEXTURE_SLOT_CLEARCOAT_NORMAL], cn.scale);
   }
-  return Surface(si.position, n, base.rgb, base.a, clamp(m.params.x * mr.b, 0.0, 1.0),
-                 clamp(m.params.y * mr.g, 0.0, 1.0), occlusion, emissive);
+  return s;
 }
 
 #endif

@@ -6,6 +6,10 @@ set(visbuf_slow_gpu_tests
     AssetBakeRender.EveryAssetBakesToAPackAndRendersLikeItsInMemoryBake
     Classification.ClassifiedShadingEqualsUbershader
     Lights.TiledEqualsAllLights
+    MaterialExtensionAssets.ClearCoatTestMatchesTheCpuReference
+    MaterialExtensionAssets.UnlitTestMatchesTheCpuReference
+    MaterialExtensionsGpu.EveryPathMatchesTheCpuReference
+    MaterialExtensionsGpu.SpecularGlossinessRendersLikeItsMetalRoughTwin
     Msaa.VisbufMatchesForwardResolveOnTexturedAsset
     Occlusion.IdImageUnchangedByOcclusionCullingCity
     Occlusion.IdImageUnchangedByOcclusionCullingMsaa

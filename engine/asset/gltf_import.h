@@ -254,6 +254,10 @@ struct ImportedImage {
                                // canonical (no links, no "..") and inside the allowed folders
   std::string mimeType;        // as declared (may be empty)
   std::vector<uint8_t> bytes;  // embedded image (bufferView or data: URI): the encoded file
+  // An image the texture bake derived (converted spec-gloss textures, texture_bake.h): width x height RGBA8 codes
+  // (rows top first; sRGB RGB for colour slots), no file. Empty for every image of a glTF file.
+  std::vector<uint8_t> rgba8;
+  uint32_t width = 0, height = 0;
 };
 
 struct ImportedScene {

@@ -5,8 +5,11 @@
 #include <cmath>
 #include <filesystem>
 
+#include <fmt/format.h>
+
 #include "visbuf/asset/gltf_detail.h"
 #include "visbuf/asset/gltf_import.h"
+#include "visbuf/scene/spec_gloss.h"
 
 namespace visbuf::gltf_detail {
 namespace {
@@ -14,6 +17,9 @@ namespace {
 constexpr const char* kTextureTransformExt = "KHR_texture_transform";
 constexpr const char* kBasisuExt = "KHR_texture_basisu";
 constexpr const char* kEmissiveStrengthExt = "KHR_materials_emissive_strength";
+constexpr const char* kUnlitExt = "KHR_materials_unlit";
+constexpr const char* kClearcoatExt = "KHR_materials_clearcoat";
+constexpr const char* kSpecGlossExt = "KHR_materials_pbrSpecularGlossiness";
 
 bool allFinite(const std::vector<double>& v) {
   return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
@@ -156,6 +162,95 @@ Result<TextureRef> textureRef(const tinygltf::Model& model, const Info& info, co
   return ref;
 }
 
+// Reads the extension factor(s) `key` of extension object `ext` (n numbers: one, or an array of n) into out[0..n)
+// when present. The schema check (gltf_validate.cpp) has refused wrong types and values outside [low, high]
+// already; this refuses them again for callers that skip it.
+Status extensionFactors(const tinygltf::Value& ext, const char* key, size_t n, double low, double high,
+                        const std::string& where, float* out) {
+  if (!ext.Has(key)) return {};
+  const tinygltf::Value& v = ext.Get(key);
+  for (size_t i = 0; i < n; ++i) {
+    const tinygltf::Value& x = n == 1 ? v : v.Get(static_cast<int>(i));
+    const double value = x.IsNumber() ? x.GetNumberAsDouble() : NAN;
+    if ((n > 1 && (!v.IsArray() || v.ArrayLen() != n)) || !(value >= low && value <= high))
+      return malformed(where + ": '" + key + "' must be " + (n > 1 ? str(uint64_t{n}) + " numbers" : "a number") +
+                       " in [" + fmt::format("{}, {}", low, high) + "]");
+    out[i] = static_cast<float>(value);
+  }
+  return {};
+}
+
+// An extension's textureInfo object `key` (absent: index -1) as tinygltf's struct, for textureRef. Fields of the
+// wrong type were refused by the schema check; here they are left at their defaults.
+tinygltf::NormalTextureInfo extensionTextureInfo(const tinygltf::Value& ext, const char* key) {
+  tinygltf::NormalTextureInfo info;
+  if (!ext.Has(key) || !ext.Get(key).IsObject()) return info;
+  const tinygltf::Value& v = ext.Get(key);
+  if (v.Get("index").IsInt()) info.index = v.Get("index").Get<int>();
+  if (v.Get("texCoord").IsInt()) info.texCoord = v.Get("texCoord").Get<int>();
+  if (v.Get("scale").IsNumber()) info.scale = v.Get("scale").GetNumberAsDouble();
+  const tinygltf::Value& extensions = v.Get("extensions");
+  if (extensions.IsObject())
+    for (const std::string& name : extensions.Keys()) info.extensions[name] = extensions.Get(name);
+  return info;
+}
+
+// KHR_materials_unlit, KHR_materials_clearcoat and KHR_materials_pbrSpecularGlossiness (scene.h Material).
+Status convertExtensions(const tinygltf::Model& model, const tinygltf::Material& gm, const std::string& where,
+                         const WarnFn& warn, Material* m) {
+  if (auto it = gm.extensions.find(kUnlitExt); it != gm.extensions.end()) {
+    if (!it->second.IsObject()) return malformed(where + ": " + kUnlitExt + " is not an object");
+    m->unlit = true;
+  }
+  if (auto it = gm.extensions.find(kSpecGlossExt); it != gm.extensions.end()) {
+    const tinygltf::Value& ext = it->second;
+    const std::string w = where + " " + kSpecGlossExt;
+    if (!ext.IsObject()) return malformed(w + ": not an object");
+    Material::SpecGlossSource sg;
+    if (Status s = extensionFactors(ext, "diffuseFactor", 4, 0.0, 1.0, w, &sg.diffuse[0]); !s) return s;
+    if (Status s = extensionFactors(ext, "specularFactor", 3, 0.0, 1.0, w, &sg.specular[0]); !s) return s;
+    if (Status s = extensionFactors(ext, "glossinessFactor", 1, 0.0, 1.0, w, &sg.glossiness); !s) return s;
+    // The extension replaces the metallic-roughness block (a file may carry both for readers without it).
+    auto diffuse = textureRef(model, extensionTextureInfo(ext, "diffuseTexture"), w + " diffuseTexture", warn);
+    if (!diffuse) return diffuse.error();
+    auto specular =
+        textureRef(model, extensionTextureInfo(ext, "specularGlossinessTexture"), w + " specularGlossinessTexture", warn);
+    if (!specular) return specular.error();
+    m->baseColorTexture = std::move(diffuse.value());
+    m->metallicRoughnessTexture = std::move(specular.value());
+    const MetalRough mr = specGlossToMetalRough(glm::dvec4(sg.diffuse), glm::dvec3(sg.specular), sg.glossiness);
+    m->baseColor = glm::vec4(mr.baseColor);
+    m->metallic = static_cast<float>(mr.metallic);
+    m->roughness = static_cast<float>(mr.roughness);
+    if (m->baseColorTexture.texture >= 0 || m->metallicRoughnessTexture.texture >= 0) m->specGloss = sg;
+  }
+  if (auto it = gm.extensions.find(kClearcoatExt); it != gm.extensions.end()) {
+    const tinygltf::Value& ext = it->second;
+    const std::string w = where + " " + kClearcoatExt;
+    if (!ext.IsObject()) return malformed(w + ": not an object");
+    if (Status s = extensionFactors(ext, "clearcoatFactor", 1, 0.0, 1.0, w, &m->clearcoat); !s) return s;
+    if (Status s = extensionFactors(ext, "clearcoatRoughnessFactor", 1, 0.0, 1.0, w, &m->clearcoatRoughness); !s)
+      return s;
+    struct CoatSlot {
+      const char* key;
+      TextureRef* out;
+    };
+    for (const CoatSlot& slot : {CoatSlot{"clearcoatTexture", &m->clearcoatTexture},
+                                 CoatSlot{"clearcoatRoughnessTexture", &m->clearcoatRoughnessTexture},
+                                 CoatSlot{"clearcoatNormalTexture", &m->clearcoatNormalTexture}}) {
+      const tinygltf::NormalTextureInfo info = extensionTextureInfo(ext, slot.key);
+      auto ref = textureRef(model, info, w + " " + slot.key, warn);
+      if (!ref) return ref.error();
+      *slot.out = std::move(ref.value());
+      if (slot.out == &m->clearcoatNormalTexture) {
+        if (!std::isfinite(info.scale)) return malformed(w + ": non-finite clearcoatNormalTexture.scale");
+        m->clearcoatNormalScale = static_cast<float>(info.scale);
+      }
+    }
+  }
+  return {};
+}
+
 // Fills the metallic-roughness factors, normal/occlusion/emissive parameters and every texture reference.
 Status convertPbr(const tinygltf::Model& model, const tinygltf::Material& gm, const std::string& where,
                   const WarnFn& warn, Material* m) {
@@ -174,13 +269,8 @@ Status convertPbr(const tinygltf::Model& model, const tinygltf::Material& gm, co
   if (!std::isfinite(gm.normalTexture.scale)) return malformed(where + ": non-finite normalTexture.scale");
   m->normalScale = static_cast<float>(gm.normalTexture.scale);
   if (auto it = gm.extensions.find(kEmissiveStrengthExt); it != gm.extensions.end()) {
-    const tinygltf::Value& v = it->second.Get("emissiveStrength");
-    if (v.IsNumber()) {
-      const double strength = v.GetNumberAsDouble();
-      if (!(strength >= 0.0) || !std::isfinite(strength))
-        return malformed(where + ": " + kEmissiveStrengthExt + " emissiveStrength must be finite and >= 0");
-      m->emissiveStrength = static_cast<float>(strength);
-    }
+    if (Status s = extensionFactors(it->second, "emissiveStrength", 1, 0.0, HUGE_VAL, where, &m->emissiveStrength); !s)
+      return s;
   }
   struct Slot {
     const char* name;
@@ -216,6 +306,7 @@ Status importMaterials(const tinygltf::Model& model, const std::string& path, co
     Material m;
     m.name = gm.name.empty() ? "material" + str(uint64_t{i}) : gm.name;
     if (Status s = convertPbr(model, gm, where, warn, &m); !s) return s;
+    if (Status s = convertExtensions(model, gm, where, warn, &m); !s) return s;
     if (gm.alphaMode == "MASK") {
       m.alphaMode = AlphaMode::Mask;
     } else if (gm.alphaMode == "BLEND") {

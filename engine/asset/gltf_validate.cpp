@@ -53,11 +53,18 @@ std::vector<Rule> buildRules() {
   };
   auto text = [&](std::string p) { add(std::move(p), Kind::Text); };
   auto boolean = [&](std::string p) { add(std::move(p), Kind::Boolean); };
-  auto number = [&](std::string p) { add(std::move(p), Kind::Number); };
-  auto numbers = [&](std::string p, int64_t minItems, int64_t maxItems) {
+  auto number = [&](std::string p, double low = -HUGE_VAL, double high = HUGE_VAL) {
+    Rule& rule = add(std::move(p), Kind::Number);
+    rule.low = low;
+    rule.high = high;
+  };
+  auto numbers = [&](std::string p, int64_t minItems, int64_t maxItems, double low = -HUGE_VAL,
+                     double high = HUGE_VAL) {
     Rule& rule = add(std::move(p), Kind::Numbers);
     rule.min = minItems;
     rule.max = maxItems;
+    rule.low = low;
+    rule.high = high;
   };
   // textureInfo (and normal / occlusion textureInfo), with KHR_texture_transform.
   auto textureInfo = [&](const std::string& p) {
@@ -173,35 +180,40 @@ std::vector<Rule> buildRules() {
   number("materials[].alphaCutoff");
   boolean("materials[].doubleSided");
   const std::string ext = "materials[].extensions.";
+  // The extensions visbuf shades (factors bounded as their schemas say: a value outside is an error, unlike the
+  // core factors, which are clamped with a warning for the exporters that write 1.0000001).
+  add(ext + "KHR_materials_unlit", Kind::Object);
+  number(ext + "KHR_materials_emissive_strength.emissiveStrength", 0.0);
+  const std::string coat = ext + "KHR_materials_clearcoat.";
+  number(coat + "clearcoatFactor", 0.0, 1.0);
+  number(coat + "clearcoatRoughnessFactor", 0.0, 1.0);
+  for (const char* t : {"clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"}) textureInfo(coat + t);
+  const std::string specGloss = ext + "KHR_materials_pbrSpecularGlossiness.";
+  numbers(specGloss + "diffuseFactor", 4, 4, 0.0, 1.0);
+  numbers(specGloss + "specularFactor", 3, 3, 0.0, 1.0);
+  number(specGloss + "glossinessFactor", 0.0, 1.0);
+  for (const char* t : {"diffuseTexture", "specularGlossinessTexture"}) textureInfo(specGloss + t);
+  // Extensions visbuf does not shade (the extension table warns): their values are still checked for shape.
   struct MaterialExt {
     const char* name;
-    std::vector<const char*> numbers, colors3, colors4, textures;
+    std::vector<const char*> numbers, colors3, textures;
   };
   const MaterialExt materialExts[] = {
-      {"KHR_materials_emissive_strength", {"emissiveStrength"}, {}, {}, {}},
-      {"KHR_materials_ior", {"ior"}, {}, {}, {}},
-      {"KHR_materials_dispersion", {"dispersion"}, {}, {}, {}},
-      {"KHR_materials_transmission", {"transmissionFactor"}, {}, {}, {"transmissionTexture"}},
-      {"KHR_materials_volume", {"thicknessFactor", "attenuationDistance"}, {"attenuationColor"}, {},
-       {"thicknessTexture"}},
-      {"KHR_materials_clearcoat", {"clearcoatFactor", "clearcoatRoughnessFactor"}, {}, {},
-       {"clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"}},
-      {"KHR_materials_sheen", {"sheenRoughnessFactor"}, {"sheenColorFactor"}, {},
-       {"sheenColorTexture", "sheenRoughnessTexture"}},
-      {"KHR_materials_specular", {"specularFactor"}, {"specularColorFactor"}, {},
-       {"specularTexture", "specularColorTexture"}},
-      {"KHR_materials_pbrSpecularGlossiness", {"glossinessFactor"}, {"specularFactor"}, {"diffuseFactor"},
-       {"diffuseTexture", "specularGlossinessTexture"}},
+      {"KHR_materials_ior", {"ior"}, {}, {}},
+      {"KHR_materials_dispersion", {"dispersion"}, {}, {}},
+      {"KHR_materials_transmission", {"transmissionFactor"}, {}, {"transmissionTexture"}},
+      {"KHR_materials_volume", {"thicknessFactor", "attenuationDistance"}, {"attenuationColor"}, {"thicknessTexture"}},
+      {"KHR_materials_sheen", {"sheenRoughnessFactor"}, {"sheenColorFactor"}, {"sheenColorTexture", "sheenRoughnessTexture"}},
+      {"KHR_materials_specular", {"specularFactor"}, {"specularColorFactor"}, {"specularTexture", "specularColorTexture"}},
       {"KHR_materials_iridescence",
-       {"iridescenceFactor", "iridescenceIor", "iridescenceThicknessMinimum", "iridescenceThicknessMaximum"}, {}, {},
+       {"iridescenceFactor", "iridescenceIor", "iridescenceThicknessMinimum", "iridescenceThicknessMaximum"}, {},
        {"iridescenceTexture", "iridescenceThicknessTexture"}},
-      {"KHR_materials_anisotropy", {"anisotropyStrength", "anisotropyRotation"}, {}, {}, {"anisotropyTexture"}},
+      {"KHR_materials_anisotropy", {"anisotropyStrength", "anisotropyRotation"}, {}, {"anisotropyTexture"}},
   };
   for (const MaterialExt& m : materialExts) {
     const std::string base = ext + m.name + ".";
     for (const char* f : m.numbers) number(base + f);
     for (const char* f : m.colors3) numbers(base + f, 3, 3);
-    for (const char* f : m.colors4) numbers(base + f, 4, 4);
     for (const char* f : m.textures) textureInfo(base + f);
   }
 
@@ -411,6 +423,9 @@ class Walker {
         return {};
       case Kind::Number:
         return checkNumber(v);
+      case Kind::Object:
+        if (!v.is_object()) return fail("expected an object, found " + std::string(typeName(v)));
+        return {};
       case Kind::Numbers: {
         if (!v.is_array()) return fail("expected an array of numbers, found " + std::string(typeName(v)));
         const auto n = static_cast<int64_t>(v.size());
@@ -435,7 +450,20 @@ class Walker {
   Status checkNumber(const json& v) const {
     if (!v.is_number()) return fail(shown(v) + " is not a number");
     if (v.is_number_float() && !std::isfinite(v.get<double>())) return fail(shown(v) + " is not a finite number");
+    const double x = v.get<double>();
+    if (x < rule_->low || x > rule_->high) {
+      const std::string range = rule_->high == HUGE_VAL ? " (must be >= " + fmtNumber(rule_->low) + ")"
+                                                         : " (must be in [" + fmtNumber(rule_->low) + ", " +
+                                                               fmtNumber(rule_->high) + "])";
+      return fail(shown(v) + " is out of range" + range);
+    }
     return {};
+  }
+  static std::string fmtNumber(double x) {
+    std::string s = std::to_string(x);
+    while (s.size() > 1 && s.back() == '0') s.pop_back();
+    if (!s.empty() && s.back() == '.') s.pop_back();
+    return s;
   }
 
   const json& doc_;

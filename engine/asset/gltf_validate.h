@@ -4,6 +4,7 @@
 // bufferView); this check refuses those inputs with an error naming the JSON path instead.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@ namespace visbuf::gltf_detail {
 //     keeps the value in an int); they are checked against the real buffer sizes later, by the importer;
 //   - byteStride: an integer multiple of 4 in [4, 252]; enums: one of the spec's values;
 //   - numbers: finite JSON numbers; number arrays: the spec's element count, every element a finite number;
+//     where the spec bounds a factor (the KHR_materials_* extensions' factors: [0,1], >= 0) the bound too;
+//   - objects the spec requires (KHR_materials_unlit's empty object) are JSON objects;
 //   - every object / array on the way to a checked property has that JSON type.
 // `extras` subtrees and properties the table does not name are not looked at. MalformedInput naming
 // "<file>: <json path>: <value> ..." on the first violation. `doc` must be a parsed JSON object.
@@ -36,8 +39,9 @@ struct GltfRule {
     TextEnum,  // a string, one of `names`
     Text,      // a string
     Boolean,   // true / false
-    Number,    // a finite number
-    Numbers,   // an array of [min, max] finite numbers
+    Number,    // a finite number in [low, high]
+    Numbers,   // an array of [min, max] finite numbers, each in [low, high]
+    Object,    // a JSON object
   };
   std::string pattern;  // "nodes[].children[]": "[]" every array element, "{}" every object value
   Kind kind;
@@ -46,6 +50,7 @@ struct GltfRule {
   std::vector<int64_t> values;
   std::vector<std::string> names;
   const char* what = "";  // Integer: "count", "byte offset", ...
+  double low = -HUGE_VAL, high = HUGE_VAL;  // Number / Numbers: the spec's bounds of the value(s)
 };
 const std::vector<GltfRule>& gltfValidationRules();
 

@@ -41,7 +41,8 @@ inline constexpr char kMagic[4] = {'V', 'B', 'P', 'K'};
 // animation ("rigidObjects", pack_animation_format.h): an unskinned object that node animation moves is a plain
 // object listed there (no longer a one-joint skin), which a version-5 reader would draw without its motion.
 // 7: section encodings (SectionEntry grew to 64 bytes: storedSize, encoding): a section may be stored as zstd
-// frames (ZstdSectionHeader below), which a version-6 reader would misread as raw records.
+// frames (ZstdSectionHeader below), which a version-6 reader would misread as raw records; and the material
+// extensions (MaterialRecord: unlit, clearcoat factors and three clearcoat texture slots).
 inline constexpr uint32_t kVersion = 7;
 inline constexpr uint64_t kAlignment = 16;    // every section offset and the file size are multiples of this
 inline constexpr uint32_t kMaxSections = 64;  // readers refuse longer section tables
@@ -214,6 +215,7 @@ inline gpu::Vertex dequantizeVertex(const QuantizationRecord& m, const QVertexRe
 }
 
 inline constexpr uint32_t kMaterialDoubleSided = 1u;  // MaterialRecord::flags
+inline constexpr uint32_t kMaterialUnlit = 2u;        // KHR_materials_unlit
 
 // One texture reference of a material (TextureRef).
 struct TextureSlotRecord {
@@ -245,12 +247,18 @@ struct MaterialRecord {
   float occlusionStrength;
   uint32_t alphaMode;          // AlphaMode: 0 opaque, 1 mask, 2 blend
   float alphaCutoff;
-  uint32_t flags;              // kMaterialDoubleSided
+  uint32_t flags;              // kMaterialDoubleSided | kMaterialUnlit
   uint32_t reserved;           // 0
-  TextureSlotRecord textures[5];  // base colour, metallic-roughness, normal, occlusion, emissive (textureSlots())
+  float clearcoat;             // [0,1] (KHR_materials_clearcoat; 0: no coat)
+  float clearcoatRoughness;    // [0,1]
+  float clearcoatNormalScale;  // finite
+  uint32_t reserved2;          // 0
+  // base colour, metallic-roughness, normal, occlusion, emissive, clearcoat, clearcoat roughness, clearcoat
+  // normal (textureSlots())
+  TextureSlotRecord textures[8];
 };
-static_assert(sizeof(MaterialRecord) == 352 && offsetof(MaterialRecord, alphaMode) == 56 &&
-              offsetof(MaterialRecord, textures) == 72);
+static_assert(sizeof(MaterialRecord) == 536 && offsetof(MaterialRecord, alphaMode) == 56 &&
+              offsetof(MaterialRecord, clearcoat) == 72 && offsetof(MaterialRecord, textures) == 88);
 
 // Section "textures" (optional, with "textureClasses" and "texels"): one record per baked image.
 struct TextureRecord {

@@ -323,12 +323,17 @@ Status Parser::readMaterials(Scene* scene) {
     auto name = string(r.name, where + " field 'name'");
     if (!name) return name.error();
     const float factors[] = {r.alphaCutoff, r.emissiveStrength, r.metallic, r.roughness, r.normalScale,
-                             r.occlusionStrength};
-    if (!allFinite(r.baseColor, 4) || !allFinite(r.emissive, 3) || !allFinite(factors, 6))
+                             r.occlusionStrength, r.clearcoatNormalScale};
+    if (!allFinite(r.baseColor, 4) || !allFinite(r.emissive, 3) || !allFinite(factors, 7))
       return fail(where + ": non-finite colour, factor or 'alphaCutoff'");
+    if (!(r.clearcoat >= 0.0f && r.clearcoat <= 1.0f) || !(r.clearcoatRoughness >= 0.0f && r.clearcoatRoughness <= 1.0f))
+      return fail(fmt::format("{}: field 'clearcoat' {} / 'clearcoatRoughness' {} outside [0, 1]", where, r.clearcoat,
+                              r.clearcoatRoughness));
+    if (r.reserved != 0 || r.reserved2 != 0)
+      return fail(fmt::format("{}: field 'reserved' / 'reserved2' is {} / {}, expected 0", where, r.reserved, r.reserved2));
     if (r.alphaMode > uint32_t(AlphaMode::Blend))
       return fail(fmt::format("{}: field 'alphaMode' is {} (0 opaque, 1 mask, 2 blend)", where, r.alphaMode));
-    if ((r.flags & ~pack::kMaterialDoubleSided) != 0)
+    if ((r.flags & ~(pack::kMaterialDoubleSided | pack::kMaterialUnlit)) != 0)
       return fail(fmt::format("{}: field 'flags' {:#x} has unknown bits", where, r.flags));
     Material m;
     m.name = *name;
@@ -342,6 +347,10 @@ Status Parser::readMaterials(Scene* scene) {
     m.alphaMode = AlphaMode(r.alphaMode);
     m.alphaCutoff = r.alphaCutoff;
     m.doubleSided = (r.flags & pack::kMaterialDoubleSided) != 0;
+    m.unlit = (r.flags & pack::kMaterialUnlit) != 0;
+    m.clearcoat = r.clearcoat;
+    m.clearcoatRoughness = r.clearcoatRoughness;
+    m.clearcoatNormalScale = r.clearcoatNormalScale;
     const auto slots = textureSlots(m);
     for (size_t t = 0; t < slots.size(); ++t) {
       auto ref = readTextureSlot(r.textures[t], t, *scene, fmt::format("{} texture slot {}", where, t));

@@ -112,8 +112,9 @@ Result<std::vector<uint8_t>> serializeMaterials(const Scene& scene, StringTable&
   for (size_t i = 0; i < scene.materials.size(); ++i) {
     const Material& m = scene.materials[i];
     const std::string where = fmt::format("material {} '{}'", i, m.name);
-    const float factors[] = {m.alphaCutoff, m.emissive.x, m.emissive.y, m.emissive.z, m.emissiveStrength,
-                             m.metallic,    m.roughness,  m.normalScale, m.occlusionStrength};
+    const float factors[] = {m.alphaCutoff, m.emissive.x,        m.emissive.y,          m.emissive.z,
+                             m.emissiveStrength, m.metallic, m.roughness,       m.normalScale,
+                             m.occlusionStrength, m.clearcoat, m.clearcoatRoughness, m.clearcoatNormalScale};
     const bool factorsFinite =
         std::all_of(std::begin(factors), std::end(factors), [](float x) { return std::isfinite(x); });
     if (!finite(m.baseColor) || !factorsFinite)
@@ -131,7 +132,12 @@ Result<std::vector<uint8_t>> serializeMaterials(const Scene& scene, StringTable&
     r.occlusionStrength = m.occlusionStrength;
     r.alphaMode = static_cast<uint32_t>(m.alphaMode);
     r.alphaCutoff = m.alphaCutoff;
-    r.flags = m.doubleSided ? pack::kMaterialDoubleSided : 0u;
+    r.flags = (m.doubleSided ? pack::kMaterialDoubleSided : 0u) | (m.unlit ? pack::kMaterialUnlit : 0u);
+    if (!(m.clearcoat >= 0.0f && m.clearcoat <= 1.0f && m.clearcoatRoughness >= 0.0f && m.clearcoatRoughness <= 1.0f))
+      return invalid(where + ": clearcoat factors outside [0,1]");
+    r.clearcoat = m.clearcoat;
+    r.clearcoatRoughness = m.clearcoatRoughness;
+    r.clearcoatNormalScale = m.clearcoatNormalScale;
     const auto slots = textureSlots(m);
     for (size_t t = 0; t < slots.size(); ++t) {
       auto slot = slotRecord(*slots[t], scene, t, strings, where + fmt::format(" texture slot {}", t));

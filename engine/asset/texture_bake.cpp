@@ -72,12 +72,14 @@ const char* textureQualityName(TextureQuality quality) {
 
 TextureFormat chooseTextureFormat(TextureEncoding encoding, TextureSlotMask slots, ColorSpace colorSpace, bool opaque) {
   if (encoding == TextureEncoding::Rgba8) return TextureFormat::Rgba8;
-  constexpr TextureSlotMask kBaseColor = 1u << 0, kNormal = kNormalSlotMask, kOcclusion = 1u << 3;
+  constexpr TextureSlotMask kBaseColor = 1u << TEXTURE_SLOT_BASE_COLOR;
+  constexpr TextureSlotMask kNormals = 1u << TEXTURE_SLOT_NORMAL | 1u << TEXTURE_SLOT_CLEARCOAT_NORMAL;
+  constexpr TextureSlotMask kRedOnly = 1u << TEXTURE_SLOT_OCCLUSION | 1u << TEXTURE_SLOT_CLEARCOAT;
   if (colorSpace == ColorSpace::Srgb) return (slots & kBaseColor) && !opaque ? TextureFormat::Bc3 : TextureFormat::Bc1;
-  // Only the normal slot reads xy (z is rebuilt), only the occlusion slot reads R alone; metallic-roughness (G,
-  // B) and images shared by several data slots keep three channels.
-  if (slots == kNormal) return TextureFormat::Bc5;
-  if (slots == kOcclusion) return TextureFormat::Bc4;
+  // The normal slots read xy (z is rebuilt), occlusion and clearcoat R alone; metallic-roughness (G, B), clearcoat
+  // roughness (G) and images shared across those groups keep three channels.
+  if ((slots & ~kNormals) == 0) return TextureFormat::Bc5;
+  if ((slots & ~kRedOnly) == 0) return TextureFormat::Bc4;
   return TextureFormat::Bc1;
 }
 
@@ -348,6 +350,12 @@ Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::strin
                              uint32_t maxTextureSize, uint64_t maxPixels) {
   Result<DecodedImage> decoded = decodeImageForBake(bytes, size, name, colorSpace, maxPixels);
   if (!decoded) return decoded.error();
+  return bakeDecodedImage(std::move(decoded.value()), name, colorSpace, maxTextureSize);
+}
+
+Result<BakedImage> bakeDecodedImage(DecodedImage decodedImage, const std::string& name, ColorSpace colorSpace,
+                                    uint32_t maxTextureSize) {
+  DecodedImage* decoded = &decodedImage;
   BakedImage baked;
   const uint32_t width = decoded->width, height = decoded->height;
   baked.originalWidth = width;

@@ -22,8 +22,8 @@
 //   5. Block compression (TextureEncoding::Bc, the default; libsquish), of every mip level's RGBA8 bytes, so sRGB
 //      colour is compressed as encoded (the GPU's *_SRGB_BLOCK formats decode after the block decode). The format
 //      follows the slots that use the image (chooseTextureFormat): base colour / emissive BC1, or BC3 when a base
-//      colour's alpha is not all 255; normal-only BC5 (x, y; the shader rebuilds z); occlusion-only BC4 (R);
-//      metallic-roughness and any other linear mix BC1. Levels below 4x4 are one whole block, the missing texels
+//      colour's alpha is not all 255; normal-only BC5 (x, y; the shader rebuilds z: the normal and clearcoat
+//      normal slots); R-only BC4 (occlusion, clearcoat); metallic-roughness and any other linear mix BC1. Levels below 4x4 are one whole block, the missing texels
 //      left out of the fit. Blocks are independent, so each level is compressed in parallel bands of block rows
 //      whose output ranges are fixed in advance: the bytes do not depend on the thread count.
 //
@@ -140,7 +140,7 @@ std::vector<LinearImage> buildMipChain(LinearImage level0);
 std::vector<uint8_t> encodeRgba8(const LinearImage& image, ColorSpace colorSpace);
 
 // Bit i set: the image is used by texture slot i (textureSlots() order: base colour, metallic-roughness, normal,
-// occlusion, emissive).
+// occlusion, emissive, clearcoat, clearcoat roughness, clearcoat normal).
 using TextureSlotMask = uint32_t;
 inline constexpr TextureSlotMask kNormalSlotMask = 1u << 2;  // an image used by normal slots only (BC5 or RGBA8)
 // The stored format of an image (step 5): `opaque` says every alpha of its RGBA8 mip 0 is 255.
@@ -191,5 +191,22 @@ Result<LinearImage> resizeImage(const LinearImage& image, uint32_t width, uint32
 // Steps 1-4 for one encoded image (RGBA8 levels; compressBakedImage is step 5).
 Result<BakedImage> bakeImage(const uint8_t* bytes, size_t size, const std::string& name, ColorSpace colorSpace,
                              uint32_t maxTextureSize, uint64_t maxPixels = kDefaultMaxImagePixels);
+// Steps 2-4 for a decoded image.
+Result<BakedImage> bakeDecodedImage(DecodedImage decoded, const std::string& name, ColorSpace colorSpace,
+                                    uint32_t maxTextureSize);
+
+// KHR_materials_pbrSpecularGlossiness textures (Material::specGloss), converted before the bake: each such
+// material's diffuse and specular-glossiness images are decoded (RGB through the sRGB curve, alpha linear) and
+// converted texel by texel with specGlossToMetalRough (scene/spec_gloss.h, the extension's factors applied) into a
+// base colour image (sRGB RGBA8) over the diffuse texture's texels and a metallic-roughness image (linear; G
+// roughness, B metallic) over the specular-glossiness texture's texels, the other texture sampled bilinearly at the
+// same uv (a material with one of the two textures: both images over its texels, the other input its factor). When
+// the two textures use different TEXCOORD sets or transforms each image converts against the other's factor (a
+// note says so). The images are appended to `derived` (ImportedImage::rgba8; image indices continue after
+// imported.images), the two slots point at them (each keeping its source texture's sampler, set and transform),
+// the material's baseColor / metallic / roughness become 1 and specGloss is cleared. Errors: those of decodeImage
+// and of reading an external image file.
+Status convertSpecGlossTextures(const ImportedScene& imported, const TextureBakeOptions& options, Scene* scene,
+                                std::vector<ImportedImage>* derived, std::vector<std::string>* notes);
 
 }  // namespace visbuf

@@ -27,27 +27,6 @@ namespace {
 constexpr uint32_t kMaxTextureSize = kMaxBakedTextureSize;
 constexpr uint32_t kMaxLayersPerClass = kMaxTextureClassLayers;
 
-// An external image: a regular file only, opened without blocking (core/file_read.h), within the size budget.
-Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image) {
-  const std::string shown = quoteForMessage(image.name);
-  uint64_t size = 0;
-  const FileKind kind = probeFile(image.path, &size, /*noFollow=*/true);
-  if (kind == FileKind::Missing) {
-    return makeError(ErrorCode::FileNotFound, fmt::format("image '{}': file '{}' not found", shown, image.path));
-  }
-  if (kind != FileKind::Regular) {
-    return makeError(ErrorCode::InvalidArgument, fmt::format("image '{}': '{}' is not a regular file ({}); only regular "
-                                                          "files are read",
-                                                          shown, image.path, fileKindName(kind)));
-  }
-  FileReadOptions options;
-  options.maxBytes = kMaxImageFileBytes;
-  options.noFollow = true;  // the importer's paths are link-free (uri_resolver.h): a link here was swapped in
-  Result<std::vector<uint8_t>> bytes = readRegularFile(image.path, options);
-  if (!bytes) return makeError(bytes.error().code, fmt::format("image '{}': {}", shown, bytes.error().message));
-  return bytes;
-}
-
 // A texture to bake: one (image, colour space) pair and the slots that use it.
 struct TextureKey {
   int32_t image = -1;
@@ -56,7 +35,7 @@ struct TextureKey {
 };
 
 // Numbers the (image, colour space) pairs in order of first use and points every reference at its number.
-Result<std::vector<TextureKey>> assignTextures(const ImportedScene& imported, Scene* scene) {
+Result<std::vector<TextureKey>> assignTextures(size_t imageCount, Scene* scene) {
   std::vector<TextureKey> keys;
   std::map<std::pair<int32_t, ColorSpace>, int32_t> index;
   for (Material& m : scene->materials) {
@@ -65,10 +44,10 @@ Result<std::vector<TextureKey>> assignTextures(const ImportedScene& imported, Sc
       TextureRef* ref = slots[slot];
       const ColorSpace colorSpace = textureSlotColorSpace(slot);
       if (ref->image < 0) continue;
-      if (size_t(ref->image) >= imported.images.size()) {
+      if (size_t(ref->image) >= imageCount) {
         return makeError(ErrorCode::MalformedInput,
                          fmt::format("material '{}': image {} does not exist ({} images)", m.name, ref->image,
-                                     imported.images.size()));
+                                     imageCount));
       }
       auto [it, added] = index.emplace(std::pair{ref->image, colorSpace}, int32_t(keys.size()));
       if (added) keys.push_back({ref->image, colorSpace, 0});
@@ -167,7 +146,14 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     return makeError(ErrorCode::InvalidArgument, "maxImagePixels must be >= 1, maxNormalMapSize 0 or a power of two");
   scene->textures.clear();
   scene->textureClasses.clear();
-  auto keys = assignTextures(imported, scene);
+  std::vector<ImportedImage> derived;  // converted spec-gloss textures: image imported.images.size() + i
+  std::vector<std::string> conversionNotes;
+  if (Status s = convertSpecGlossTextures(imported, options, scene, &derived, &conversionNotes); !s) return s;
+  if (report) report->notes.insert(report->notes.end(), conversionNotes.begin(), conversionNotes.end());
+  const auto imageAt = [&](int32_t i) -> const ImportedImage& {
+    return size_t(i) < imported.images.size() ? imported.images[size_t(i)] : derived[size_t(i) - imported.images.size()];
+  };
+  auto keys = assignTextures(imported.images.size() + derived.size(), scene);
   if (!keys) return keys.error();
   // Images in parallel (each one's levels in parallel too: oneTBB nests); messages, textures and classes are
   // assembled afterwards in key order, so the result is that of a serial bake. After a failure, images behind
@@ -182,10 +168,13 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   tbb::parallel_for(size_t{0}, count, [&](size_t t) {
     if (t > firstFailed.load()) return;
     const TextureKey& key = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(key.image)];
+    const ImportedImage& image = imageAt(key.image);
     const std::string name =
         fmt::format("{}: image {} '{}'", quoteForMessage(imported.name), key.image, quoteForMessage(image.name));
     Result<BakedImage> b = [&]() -> Result<BakedImage> {
+      if (!image.rgba8.empty())  // (a derived image: decoded already)
+        return bakeDecodedImage({image.width, image.height, image.rgba8, {}}, name, key.colorSpace,
+                                options.maxTextureSize);
       // Memory: the file's bytes are reserved while it is read, then with the estimate of its bake
       // (imageBakePeakBytes); released and reserved again, never held while waiting for more.
       uint64_t fileBytes = image.bytes.size();  // embedded: copied below
@@ -240,7 +229,7 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
     compressBakedImage(&results[t]->value(), classKeys[t].format, options.quality);
     if (progress) {
       std::lock_guard<std::mutex> lock(progressMutex);
-      progress(++done, kept, imported.images[size_t((*keys)[t].image)].name);
+      progress(++done, kept, imageAt((*keys)[t].image).name);
     }
   });
   std::vector<BakedImage> baked;
@@ -248,12 +237,13 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   for (size_t t = 0; t < kept; ++t) {
     Result<BakedImage>& b = *results[t];
     const TextureKey& key = (*keys)[t];
-    const ImportedImage& image = imported.images[size_t(key.image)];
+    const ImportedImage& image = imageAt(key.image);
     if (report && !b->resizeNote.empty()) {
       report->notes.push_back(fmt::format("{}: image {} '{}': {}", quoteForMessage(imported.name), key.image,
                                           quoteForMessage(image.name), b->resizeNote));
     }
-    scene->textures.push_back({image.name, key.image, key.colorSpace, 0, 0, b->originalWidth, b->originalHeight});
+    const int32_t source = size_t(key.image) < imported.images.size() ? key.image : -1;  // (derived: no glTF image)
+    scene->textures.push_back({image.name, source, key.colorSpace, 0, 0, b->originalWidth, b->originalHeight});
     baked.push_back(std::move(b.value()));
   }
   buildClasses(baked, scene);

@@ -1,8 +1,12 @@
-// Image headers, the memory estimate of one image's bake and the gate over it (contracts in texture_decode.h).
+// External image files, image headers, the memory estimate of one image's bake and the gate over it (contracts in texture_decode.h).
 #include <algorithm>
 #include <cstring>
 
+#include <fmt/format.h>
+
 #include "visbuf/asset/texture_decode.h"
+#include "visbuf/asset/uri_resolver.h"
+#include "visbuf/core/file_read.h"
 
 namespace visbuf {
 
@@ -18,6 +22,27 @@ Error malformed(const std::string& name, const std::string& why) {
 constexpr uint64_t kOiioReadBuffer = uint64_t{64} << 20;
 
 }  // namespace
+
+// An external image: a regular file only, opened without blocking (core/file_read.h), within the size budget.
+Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image) {
+  const std::string shown = quoteForMessage(image.name);
+  uint64_t size = 0;
+  const FileKind kind = probeFile(image.path, &size, /*noFollow=*/true);
+  if (kind == FileKind::Missing) {
+    return makeError(ErrorCode::FileNotFound, fmt::format("image '{}': file '{}' not found", shown, image.path));
+  }
+  if (kind != FileKind::Regular) {
+    return makeError(ErrorCode::InvalidArgument, fmt::format("image '{}': '{}' is not a regular file ({}); only regular "
+                                                          "files are read",
+                                                          shown, image.path, fileKindName(kind)));
+  }
+  FileReadOptions options;
+  options.maxBytes = kMaxImageFileBytes;
+  options.noFollow = true;  // the importer's paths are link-free (uri_resolver.h): a link here was swapped in
+  Result<std::vector<uint8_t>> bytes = readRegularFile(image.path, options);
+  if (!bytes) return makeError(bytes.error().code, fmt::format("image '{}': {}", shown, bytes.error().message));
+  return bytes;
+}
 
 Result<ImageHeader> readImageHeader(const uint8_t* bytes, size_t size, const std::string& name) {
   static const uint8_t kPng[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};

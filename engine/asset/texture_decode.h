@@ -33,6 +33,10 @@ struct ImageHeader {
   bool interlaced = false;   // PNG: Adam7
 };
 
+// An external image's file (ImportedImage::path): a regular file only, opened without blocking and without
+// following links (core/file_read.h), at most kMaxImageFileBytes.
+Result<std::vector<uint8_t>> readImageFile(const ImportedImage& image);
+
 // The header of a PNG (the IHDR that must be its first chunk) or a JPEG (the first frame header, SOFn, before
 // the first scan). MalformedInput (with `name`) when the bytes are neither or the header is missing or cut.
 Result<ImageHeader> readImageHeader(const uint8_t* bytes, size_t size, const std::string& name);

@@ -218,17 +218,19 @@ void Pipeline::reset() {
 }
 
 namespace {
-const VkSpecializationMapEntry kEntries[6] = {
+const VkSpecializationMapEntry kEntries[7] = {
     {0, 0, sizeof(uint32_t)},     {1, sizeof(uint32_t), sizeof(uint32_t)}, {2, 2 * sizeof(uint32_t), sizeof(uint32_t)},
-    {3, 3 * sizeof(uint32_t), 4}, {4, 4 * sizeof(uint32_t), 4},           {5, 5 * sizeof(uint32_t), 4}};
-VkSpecializationInfo specializationInfo(const uint32_t (&values)[6]) { return {6, kEntries, sizeof(values), values}; }
+    {3, 3 * sizeof(uint32_t), 4}, {4, 4 * sizeof(uint32_t), 4},           {5, 5 * sizeof(uint32_t), 4},
+    {6, 6 * sizeof(uint32_t), 4}};
+VkSpecializationInfo specializationInfo(const uint32_t (&values)[7]) { return {7, kEntries, sizeof(values), values}; }
 }  // namespace
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization specialization) {
   VkShaderModule module = createModule(device, shader, specialization.textureClasses > 0);
-  const uint32_t values[6] = {specialization.windowed, specialization.textureClasses, specialization.skinned,
-                              specialization.texels,   specialization.extras,         specialization.pointLights};
+  const uint32_t values[7] = {specialization.windowed, specialization.textureClasses, specialization.skinned,
+                              specialization.texels,   specialization.extras,         specialization.pointLights,
+                              specialization.materialFeatures};
   const VkSpecializationInfo spec = specializationInfo(values);
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -254,7 +256,8 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
-  const uint32_t values[6] = {desc.windowed, desc.textureClasses, desc.skinned, desc.texels, desc.extras, desc.pointLights};
+  const uint32_t values[7] = {desc.windowed, desc.textureClasses, desc.skinned,         desc.texels,
+                              desc.extras,   desc.pointLights,    desc.materialFeatures};
   const VkSpecializationInfo spec = specializationInfo(values);
   stages[0].pSpecializationInfo = stages[1].pSpecializationInfo = &spec;
 

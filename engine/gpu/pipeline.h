@@ -64,6 +64,7 @@ struct Specialization {
   uint32_t texels;
   uint32_t extras = 1;
   uint32_t pointLights = 1;
+  uint32_t materialFeatures = 3;  // MATERIAL_FEATURE_* bits (config.h) the pipeline may meet (constant 6)
 };
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization spec = {});
@@ -84,6 +85,7 @@ struct GraphicsPipelineDesc {
   uint32_t texels = 0;          // specialisation constant 3 of both stages (see Specialization)
   uint32_t extras = 1;          // specialisation constant 4 of both stages (see Specialization)
   uint32_t pointLights = 1;     // specialisation constant 5 of both stages (see Specialization)
+  uint32_t materialFeatures = 3;  // specialisation constant 6 of both stages (see Specialization)
 };
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc);
 

@@ -251,6 +251,7 @@ uint32_t formatBytes(VkFormat format) {
     case VK_FORMAT_R16G16B16A16_SFLOAT: return 8;
     case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
     case VK_FORMAT_D32_SFLOAT: return 4;
+    case VK_FORMAT_R8_UNORM: return 1;
     case VK_FORMAT_R8G8B8A8_UNORM: return 4;
     case VK_FORMAT_R8G8B8A8_SRGB: return 4;
     case VK_FORMAT_R16G16_SNORM: return 4;

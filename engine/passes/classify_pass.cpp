@@ -13,26 +13,26 @@ constexpr VkDeviceSize kHeaderBytes = CLASSIFY_HEADER * sizeof(uint32_t);
 }
 
 void ClassifyPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
-                          std::vector<bool> textured) {
+                          std::vector<Variant> variants) {
   std::vector<gpu::DescriptorBinding> bindings = shadeBindings();
   bindings.push_back({CLASSIFY_BINDING_MATERIAL_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
   bindings.push_back({CLASSIFY_BINDING_TILE_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
   layout_ = gpu::PassLayout(device, sceneLayout, std::move(bindings), VK_SHADER_STAGE_COMPUTE_BIT);
   const VkPipelineLayout layout = layout_.pipelineLayout();
-  textured_ = std::move(textured);
-  if (textured_.empty()) textured_.push_back(false);  // (a scene without materials: one unused record)
+  variants_ = std::move(variants);
+  if (variants_.empty()) variants_.push_back({});  // (a scene without materials: one unused record)
   count_ = gpu::createComputePipeline(device, layout, "classify_count.comp", spec.windowed);
   scan_ = gpu::createComputePipeline(device, layout, "classify_scan.comp", spec.windowed);
   scatter_ = gpu::createComputePipeline(device, layout, "classify_scatter.comp", spec.windowed);
-  const bool anyTextured = spec.textureClasses > 0 && std::find(textured_.begin(), textured_.end(), true) != textured_.end();
-  if (anyTextured) shadeTextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", spec);
-  if (!anyTextured || std::find(textured_.begin(), textured_.end(), false) != textured_.end()) {
-    gpu::Specialization untextured = spec;  // (skinned slots, texel views and the rest as the scene has them)
-    untextured.textureClasses = 0;
-    shadeUntextured_ = gpu::createComputePipeline(device, layout, "shade_classified.comp", untextured);
+  for (Variant& v : variants_) {
+    v.textured = v.textured && spec.textureClasses > 0;
+    if (shade_.count(v)) continue;
+    gpu::Specialization s = spec;  // (skinned slots, texel views and the rest as the scene has them)
+    if (!v.textured) s.textureClasses = 0;
+    s.materialFeatures = v.features;
+    shade_.emplace(v, gpu::createComputePipeline(device, layout, "shade_classified.comp", s));
   }
-  if (!anyTextured) textured_.assign(textured_.size(), false);
-  const VkDeviceSize bytes = kHeaderBytes + textured_.size() * sizeof(gpu::MaterialTiles);
+  const VkDeviceSize bytes = kHeaderBytes + variants_.size() * sizeof(gpu::MaterialTiles);
   materialTiles_ = gpu::Buffer(device, bytes,
                                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                    VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
@@ -43,7 +43,7 @@ void ClassifyPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout
 void ClassifyPass::resize(gpu::Device& device, uint32_t width, uint32_t height) {
   tilesX_ = (width + SHADE_TILE_X - 1) / SHADE_TILE_X;
   tilesY_ = (height + SHADE_TILE_Y - 1) / SHADE_TILE_Y;
-  const VkDeviceSize perTile = std::min<VkDeviceSize>(textured_.size(), SHADE_TILE_X * SHADE_TILE_Y);
+  const VkDeviceSize perTile = std::min<VkDeviceSize>(variants_.size(), SHADE_TILE_X * SHADE_TILE_Y);
   tileList_ = gpu::Buffer(device, VkDeviceSize(tilesX_) * tilesY_ * perTile * sizeof(uint32_t),
                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::DeviceLocal);
 }
@@ -66,7 +66,7 @@ void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkDescriptorSet scene) co
   vkCmdDispatch(cmd, tilesX_, tilesY_, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, kReadWrite);
-  layout_.push(cmd, {0, 0, uint32_t(textured_.size()), 0});
+  layout_.push(cmd, {0, 0, uint32_t(variants_.size()), 0});
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scan_.handle());
   vkCmdDispatch(cmd, 1, 1, 1);
   gpu::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
@@ -84,12 +84,10 @@ void ClassifyPass::recordClassify(VkCommandBuffer cmd, VkDescriptorSet scene) co
 
 void ClassifyPass::recordShade(VkCommandBuffer cmd, VkDescriptorSet scene) const {
   layout_.bind(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, scene);
-  for (bool textured : {true, false}) {
-    const gpu::Pipeline& p = textured ? shadeTextured_ : shadeUntextured_;
-    if (!p.handle()) continue;
+  for (const auto& [variant, p] : shade_) {
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
-    for (uint32_t m = 0; m < textured_.size(); ++m) {
-      if (textured_[m] != textured) continue;
+    for (uint32_t m = 0; m < variants_.size(); ++m) {
+      if (variants_[m] != variant) continue;
       layout_.push(cmd, {0, 0, m, 0});
       vkCmdDispatchIndirect(cmd, materialTiles_.handle(), kHeaderBytes + VkDeviceSize(m) * sizeof(gpu::MaterialTiles));
     }
@@ -102,7 +100,7 @@ ClassifyStats ClassifyPass::stats() const {
   ClassifyStats s;
   s.pairs = h[CLASSIFY_STAT_PAIRS];
   s.materialsPresent = h[CLASSIFY_STAT_MATERIALS];
-  for (size_t m = 0; m < textured_.size(); ++m) {
+  for (size_t m = 0; m < variants_.size(); ++m) {
     s.tiles.push_back(records[m].tiles);
     s.pixels.push_back(records[m].pixels);
   }

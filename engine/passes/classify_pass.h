@@ -6,14 +6,17 @@
 //                          its VkDispatchIndirectCommand (its tiles in rows of CLASSIFY_DISPATCH_WIDTH);
 //   classify_scatter.comp  each tile appended to the list of every material present in it (the tile list);
 //   shade_classified.comp  one vkCmdDispatchIndirect per material (push constant: the material), one workgroup
-//                          per listed tile; lanes showing another material leave. Materials without a texture
-//                          use the untextured variant (no sampling code); a material with no pixels gets 0
-//                          workgroups.
+//                          per listed tile; lanes showing another material leave. Each material uses the
+//                          pipeline of its Variant: untextured (no sampling code) without a texture, and only the
+//                          shading features it has (unlit, clearcoat: VB_MATERIAL_FEATURES), so a material pays for
+//                          no other's code; a material with no pixels gets 0 workgroups.
 // Reads: frame, IDs (SHADER_READ_ONLY_OPTIMAL), draws, objects; shading as shade_pass. Writes: the colour image
 // (GENERAL, cleared to the background before), the classification buffers.
 #pragma once
 
+#include <compare>
 #include <cstdint>
+#include <map>
 #include <vector>
 
 #include "visbuf/gpu/descriptors.h"
@@ -32,11 +35,16 @@ struct ClassifyStats {
 
 class ClassifyPass {
  public:
-  // textured[m]: material m samples a texture (its dispatch uses the textured shading pipeline; with spec
-  // .textureClasses == 0 every material uses the untextured one).
+  // What a material's dispatch needs of the shading pipeline.
+  struct Variant {
+    bool textured = false;     // samples a texture (with spec.textureClasses == 0 none does)
+    uint32_t features = 0;     // MATERIAL_FEATURE_* bits (scene.h materialFeatures)
+    auto operator<=>(const Variant&) const = default;
+  };
+  // variants[m]: material m's; one shading pipeline is created per distinct variant.
   void create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, gpu::Specialization spec,
-              std::vector<bool> textured);
-  bool created() const { return !textured_.empty(); }
+              std::vector<Variant> variants);
+  bool created() const { return !variants_.empty(); }
   // (Re)allocates the tile list for a width x height frame: tiles x min(materials, 64) entries.
   void resize(gpu::Device& device, uint32_t width, uint32_t height);
   // Its set: the shading set (the same inputs as the shading pass) and its own buffers (after resize).
@@ -51,8 +59,8 @@ class ClassifyPass {
  private:
   gpu::PassLayout layout_;
   gpu::Pipeline count_, scan_, scatter_;
-  gpu::Pipeline shadeTextured_, shadeUntextured_;
-  std::vector<bool> textured_;   // per material
+  std::map<Variant, gpu::Pipeline> shade_;  // one per distinct variant
+  std::vector<Variant> variants_;          // per material
   gpu::Buffer materialTiles_;    // CLASSIFY_HEADER uints + MaterialTiles[materials]
   gpu::Buffer readback_;         // its copy
   gpu::Buffer tileList_;         // uint[tiles x min(materials, 64)]

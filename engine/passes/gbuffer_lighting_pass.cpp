@@ -7,7 +7,7 @@
 namespace visbuf::passes {
 
 GBufferLightingPass GBufferLightingPass::create(gpu::Device& device, VkDescriptorSetLayout sceneLayout,
-                                                uint32_t windowed) {
+                                                uint32_t windowed, uint32_t materialFeatures) {
   constexpr VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   constexpr VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
   GBufferLightingPass p;
@@ -19,9 +19,11 @@ GBufferLightingPass GBufferLightingPass::create(gpu::Device& device, VkDescripto
                               {GBUFFER_LIGHTING_BINDING_COLOR, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                               {GBUFFER_LIGHTING_BINDING_ATTRIBUTES, storage}},
                              VK_SHADER_STAGE_COMPUTE_BIT);
-  p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "gbuffer_lighting.comp", windowed);
+  gpu::Specialization spec(windowed);
+  spec.materialFeatures = materialFeatures;
+  p.pipeline = gpu::createComputePipeline(device, p.layout.pipelineLayout(), "gbuffer_lighting.comp", spec);
   p.attributesPipeline =
-      gpu::createComputePipeline(device, p.layout.pipelineLayout(), "gbuffer_lighting_attributes.comp", windowed);
+      gpu::createComputePipeline(device, p.layout.pipelineLayout(), "gbuffer_lighting_attributes.comp", spec);
   return p;
 }
 

@@ -28,7 +28,9 @@ struct GBufferLightingPass {
   gpu::PassLayout layout;
   gpu::Pipeline pipeline;
   gpu::Pipeline attributesPipeline;  // same lighting, plus the position record (tests)
-  static GBufferLightingPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, uint32_t windowed);
+  // materialFeatures: MATERIAL_FEATURE_* bits of the scene's materials (gpu::Specialization).
+  static GBufferLightingPass create(gpu::Device& device, VkDescriptorSetLayout sceneLayout, uint32_t windowed,
+                                    uint32_t materialFeatures);
   bool created() const { return bool(layout); }
   void bind(const GBufferLightingInputs& in) const;
   void record(VkCommandBuffer cmd, VkDescriptorSet scene, uint32_t width, uint32_t height, bool writeAttributes) const;

@@ -16,13 +16,15 @@ bool canRenderTo(gpu::Device& device, VkFormat format) {
 
 }  // namespace
 
-GBufferFormats GBufferFormats::choose(gpu::Device& device) {
+GBufferFormats GBufferFormats::choose(gpu::Device& device, bool clearcoat) {
   GBufferFormats f;
   f.color[0] = VK_FORMAT_R8G8B8A8_SRGB;  // base colour (sRGB-encoded), alpha
   f.color[1] = canRenderTo(device, VK_FORMAT_R16G16_SNORM) ? VK_FORMAT_R16G16_SNORM : VK_FORMAT_R16G16_SFLOAT;
-  f.color[2] = VK_FORMAT_R8G8B8A8_UNORM;  // metallic, roughness, occlusion
+  f.color[2] = VK_FORMAT_R8G8B8A8_UNORM;  // metallic, roughness, occlusion, unlit
   f.color[3] = canRenderTo(device, VK_FORMAT_B10G11R11_UFLOAT_PACK32) ? VK_FORMAT_B10G11R11_UFLOAT_PACK32
                                                                       : VK_FORMAT_R16G16B16A16_SFLOAT;
+  // The coat (octahedral normal, roughness, weight); a byte per pixel that nothing reads without coated materials.
+  f.color[4] = clearcoat ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R8_UNORM;
   return f;
 }
 
@@ -38,7 +40,7 @@ GBufferPass GBufferPass::create(gpu::Device& device, VkDescriptorSetLayout scene
   p.layout = gpu::PassLayout(device, sceneLayout, {{GBUFFER_BINDING_OVERDRAW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
                              VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
   const VkPipelineLayout layout = p.layout.pipelineLayout();
-  p.formats = GBufferFormats::choose(device);
+  p.formats = GBufferFormats::choose(device, (spec.materialFeatures & MATERIAL_FEATURE_CLEARCOAT) != 0u);
   for (uint32_t list = 0; list < DRAW_LISTS; ++list) {
     if (!(listMask >> list & 1u)) continue;
     const std::string prefix = drawListMasked(list) ? "gbuffer_masked" : "gbuffer";

@@ -16,11 +16,11 @@ namespace visbuf::passes {
 
 // The formats of the attribute targets, chosen once per device: the compact usual ones where the device can
 // render to them (snorm16 normal and b10g11r11 emissive are optional colour-attachment formats in Vulkan), else
-// the mandatory rg16f / rgba16f.
+// the mandatory rg16f / rgba16f. The coat target is rgba16f only for scenes with clearcoat materials.
 struct GBufferFormats {
   std::array<VkFormat, GBUFFER_TARGETS> color{};
   uint32_t bytesPerPixel() const;  // sum over the targets (depth not included)
-  static GBufferFormats choose(gpu::Device& device);
+  static GBufferFormats choose(gpu::Device& device, bool clearcoat);
 };
 
 struct GBufferInputs {

@@ -27,6 +27,7 @@ gpu::GraphicsPipelineDesc drawListPipelineDesc(const gpu::Specialization& spec, 
   d.texels = spec.texels;
   d.extras = spec.extras;
   d.pointLights = spec.pointLights;
+  d.materialFeatures = spec.materialFeatures;
   d.cullMode = drawListCullMode(list);
   return d;
 }

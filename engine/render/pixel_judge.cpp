@@ -160,29 +160,38 @@ glm::dvec3 exactColor(const Scene& scene, const Camera& camera, const FrameMath&
   const bool facing = glm::dot(glm::cross(c.v[1] - c.v[0], c.v[2] - c.v[0]), c.v[0] - ray.origin) < 0.0;
   const bool frontFacing = facing != (glm::determinant(linear) < 0.0);
   const double side = m.doubleSided && !frontFacing ? -1.0 : 1.0;
-  glm::dvec3 t, b;
-  const TextureRef& normalMap = m.normalTexture;
-  if (normalMap.baked >= 0 && size_t(normalMap.baked) < scene.textures.size() &&
-      tangentFrame(in, n, normalMap.texCoord == 1 ? 1 : 0, t, b)) {
-    glm::dvec3 tn = glm::dvec3(texel[2]) * 2.0 - 1.0;
-    const Texture& tex = scene.textures[size_t(normalMap.baked)];
+  // material.glsl's mappedNormal: a normal-mapped slot's unit normal (side * n without its texture).
+  auto mapped = [&](const TextureRef& map, const glm::dvec4& sample, double scale) {
+    glm::dvec3 t, b;
+    if (map.baked < 0 || size_t(map.baked) >= scene.textures.size() || !tangentFrame(in, n, map.texCoord == 1 ? 1 : 0, t, b))
+      return side * n;
+    glm::dvec3 tn = glm::dvec3(sample) * 2.0 - 1.0;
+    const Texture& tex = scene.textures[size_t(map.baked)];
     if (scene.textureClasses[tex.sizeClass].format == TextureFormat::Bc5)  // x, y of a unit vector: z rebuilt
       tn.z = std::sqrt(std::max(0.0, 1.0 - tn.x * tn.x - tn.y * tn.y));
-    tn.x *= double(m.normalScale);
-    tn.y *= double(m.normalScale);
-    const glm::dvec3 mapped = side * (t * tn.x + b * tn.y + n * tn.z);
-    n = glm::dot(mapped, mapped) > 0.0 ? glm::normalize(mapped) : side * n;
-  } else {
-    n *= side;
+    tn.x *= scale;
+    tn.y *= scale;
+    const glm::dvec3 v = side * (t * tn.x + b * tn.y + n * tn.z);
+    return glm::dot(v, v) > 0.0 ? glm::normalize(v) : side * n;
+  };
+  s.baseColor = glm::dvec3(glm::dvec4(m.baseColor) * in.color * texel[TEXTURE_SLOT_BASE_COLOR]);
+  s.normal = side * n;
+  if (m.unlit) {
+    s.unlit = true;
+    return shadeReference(s, scene, camera.position);
   }
-  s.normal = n;
-  s.baseColor = glm::dvec3(glm::dvec4(m.baseColor) * in.color * texel[0]);
-  s.metallic = std::clamp(double(m.metallic) * texel[1].b, 0.0, 1.0);
-  s.roughness = std::clamp(double(m.roughness) * texel[1].g, 0.0, 1.0);
+  s.normal = mapped(m.normalTexture, texel[TEXTURE_SLOT_NORMAL], double(m.normalScale));
+  s.metallic = std::clamp(double(m.metallic) * texel[TEXTURE_SLOT_METALLIC_ROUGHNESS].b, 0.0, 1.0);
+  s.roughness = std::clamp(double(m.roughness) * texel[TEXTURE_SLOT_METALLIC_ROUGHNESS].g, 0.0, 1.0);
   const TextureRef& occlusion = m.occlusionTexture;
   if (occlusion.baked >= 0 && size_t(occlusion.baked) < scene.textures.size())
-    s.occlusion = 1.0 + double(m.occlusionStrength) * (texel[3].r - 1.0);
-  s.emissive = glm::dvec3(m.emissive) * double(m.emissiveStrength) * glm::dvec3(texel[4]);
+    s.occlusion = 1.0 + double(m.occlusionStrength) * (texel[TEXTURE_SLOT_OCCLUSION].r - 1.0);
+  s.emissive = glm::dvec3(m.emissive) * double(m.emissiveStrength) * glm::dvec3(texel[TEXTURE_SLOT_EMISSIVE]);
+  if (m.clearcoat > 0.0f) {
+    s.clearcoat = std::clamp(double(m.clearcoat) * texel[TEXTURE_SLOT_CLEARCOAT].r, 0.0, 1.0);
+    s.clearcoatRoughness = std::clamp(double(m.clearcoatRoughness) * texel[TEXTURE_SLOT_CLEARCOAT_ROUGHNESS].g, 0.0, 1.0);
+    s.clearcoatNormal = mapped(m.clearcoatNormalTexture, texel[TEXTURE_SLOT_CLEARCOAT_NORMAL], double(m.clearcoatNormalScale));
+  }
   return shadeReference(s, scene, camera.position);
 }
 

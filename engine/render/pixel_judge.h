@@ -5,7 +5,8 @@
 // one is closer and by how much. Independent of the GPU code: it shares no arithmetic with the shaders.
 //
 // What it judges: opaque and masked materials with their textures (texture_reference.h: the shader's filtering and
-// mip selection, from the exact uv derivatives), normal maps and vertex colours; static and node-animated objects;
+// mip selection, from the exact uv derivatives), normal maps and vertex colours, the material extensions (unlit,
+// clearcoat with its textures and normal, emissive strength); static and node-animated objects;
 // single-sampled frames. Block-compressed texels are the spec's unrounded palette; devices decode BC at their own
 // precision (lavapipe nearer 8 bits), which both paths share: on BC-textured smooth surfaces both are off by the
 // same texel error, and the verdict of which is closer still holds. Pixels it cannot judge are counted by reason,

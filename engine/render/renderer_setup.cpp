@@ -133,7 +133,8 @@ void Renderer::Impl::bindPasses() {
 void Renderer::Impl::ensureGBufferTargets() {
   if (!gbuffer.created()) {
     gbuffer = passes::GBufferPass::create(device, sceneSets.layout(), textured, listMask);
-    gbufferLighting = passes::GBufferLightingPass::create(device, sceneSets.layout(), textured.windowed);
+    gbufferLighting = passes::GBufferLightingPass::create(device, sceneSets.layout(), textured.windowed,
+                                                          textured.materialFeatures);
   }
   if (gbufferTargets[0]) return;
   for (uint32_t i = 0; i < GBUFFER_TARGETS; ++i)
@@ -209,9 +210,10 @@ void Renderer::Impl::prepareMsaa(const FrameOptions& options) {
 // The classification pipelines and buffers (only renderers that shade classified frames pay for them).
 void Renderer::Impl::ensureClassify() {
   if (classify.created()) return;
-  std::vector<bool> sampling;  // per material: samples a texture
-  for (const Material& m : scene.materials) sampling.push_back(packMaterial(m, scene).slotCount > 0);
-  classify.create(device, sceneSets.layout(), textured, std::move(sampling));
+  std::vector<passes::ClassifyPass::Variant> variants;  // per material: samples a texture, its shading features
+  for (const Material& m : scene.materials)
+    variants.push_back({packMaterial(m, scene).slotCount > 0, materialFeatures(m)});
+  classify.create(device, sceneSets.layout(), textured, std::move(variants));
   classify.resize(device, config.width, config.height);
   writeDescriptors();
 }
@@ -324,6 +326,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Sc
   textured.extras = std::any_of(meshTable.begin(), meshTable.end(),
                                 [](const gpu::MeshData& m) { return m.extraOffset != EXTRA_NONE; }) ? 1u : 0u;
   textured.pointLights = impl->hasPointLights() ? 1u : 0u;
+  textured.materialFeatures = 0u;
+  for (const Material& m : scene.materials) textured.materialFeatures |= materialFeatures(m);
   impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
   impl->objectUpload.create(device);
   impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);

@@ -98,7 +98,9 @@ class StagingUploader {
 
 uint32_t materialFlagsOf(const Material& m) {
   return (m.alphaMode == AlphaMode::Mask ? MATERIAL_FLAG_MASK : 0u) |
-         (m.alphaMode == AlphaMode::Blend ? MATERIAL_FLAG_BLEND : 0u) | (m.doubleSided ? MATERIAL_FLAG_DOUBLE_SIDED : 0u);
+         (m.alphaMode == AlphaMode::Blend ? MATERIAL_FLAG_BLEND : 0u) | (m.doubleSided ? MATERIAL_FLAG_DOUBLE_SIDED : 0u) |
+         ((materialFeatures(m) & MATERIAL_FEATURE_UNLIT) != 0u ? MATERIAL_FLAG_UNLIT : 0u) |
+         ((materialFeatures(m) & MATERIAL_FEATURE_CLEARCOAT) != 0u ? MATERIAL_FLAG_CLEARCOAT : 0u);
 }
 }  // namespace
 
@@ -127,11 +129,14 @@ gpu::MaterialData packMaterial(const Material& m, const Scene& scene) {
   d.emissive = glm::vec4(m.emissive * m.emissiveStrength, m.normalScale);
   d.params = glm::vec4(m.metallic, m.roughness, m.occlusionStrength, m.alphaCutoff);
   d.flags = materialFlagsOf(m);
+  d.clearcoat = m.clearcoat;
+  d.clearcoatRoughness = m.clearcoatRoughness;
   const auto slots = textureSlots(m);
   for (size_t i = 0; i < kTextureSlotCount; ++i) {
     const TextureRef& t = *slots[i];
     gpu::TextureSlotData& x = d.textures[i];
     x.image = TEXTURE_NONE;
+    x.scale = i == TEXTURE_SLOT_NORMAL ? m.normalScale : i == TEXTURE_SLOT_CLEARCOAT_NORMAL ? m.clearcoatNormalScale : 0.0f;
     x.transform01 = glm::vec4(t.transform[0], t.transform[1]);
     x.transform2 = glm::vec4(t.transform[2], 0.0f, 0.0f);
     x.samplerBits = uint32_t(t.sampler.wrapS) << TEXTURE_SAMPLER_WRAP_S_SHIFT |

@@ -127,15 +127,23 @@ Status validateScene(const Scene& scene) {
 }
 
 std::array<const TextureRef*, kTextureSlotCount> textureSlots(const Material& m) {
-  return {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture, &m.occlusionTexture, &m.emissiveTexture};
+  return {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture,           &m.occlusionTexture,
+          &m.emissiveTexture,  &m.clearcoatTexture,         &m.clearcoatRoughnessTexture, &m.clearcoatNormalTexture};
 }
 
 std::array<TextureRef*, kTextureSlotCount> textureSlots(Material& m) {
-  return {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture, &m.occlusionTexture, &m.emissiveTexture};
+  return {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture,           &m.occlusionTexture,
+          &m.emissiveTexture,  &m.clearcoatTexture,         &m.clearcoatRoughnessTexture, &m.clearcoatNormalTexture};
 }
 
 ColorSpace textureSlotColorSpace(size_t slot) {
-  return slot == 0 || slot == 4 ? ColorSpace::Srgb : ColorSpace::Linear;
+  return slot == TEXTURE_SLOT_BASE_COLOR || slot == TEXTURE_SLOT_EMISSIVE ? ColorSpace::Srgb : ColorSpace::Linear;
+}
+
+uint32_t materialFeatures(const Material& m) {
+  // (an unlit material shows no coat: the shading returns before it)
+  if (m.unlit) return MATERIAL_FEATURE_UNLIT;
+  return m.clearcoat > 0.0f ? MATERIAL_FEATURE_CLEARCOAT : 0u;
 }
 
 }  // namespace visbuf

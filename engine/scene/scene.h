@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -92,15 +93,39 @@ struct Material {
   glm::vec3 emissive{0.0f};           // linear RGB factor, each in [0,1]
   float emissiveStrength = 1.0f;      // KHR_materials_emissive_strength, >= 0; multiplies emissive
   TextureRef emissiveTexture;         // sRGB; multiplies emissive * emissiveStrength
+  // KHR_materials_unlit: the pixel's colour is the base colour (factor x texture x vertex colour) as is; every
+  // other property (lights, occlusion, emissive, normals, clearcoat) is ignored. Alpha modes still apply.
+  bool unlit = false;
+  // KHR_materials_clearcoat: a dielectric (ior 1.5, f0 0.04) GGX layer over the base with its own roughness and
+  // normal. clearcoat 0 (the default): no layer. The extension's defaults; factors in [0,1].
+  float clearcoat = 0.0f;                // layer weight; times clearcoatTexture R
+  float clearcoatRoughness = 0.0f;       // perceptual; times clearcoatRoughnessTexture G
+  TextureRef clearcoatTexture;           // linear; R: weight
+  TextureRef clearcoatRoughnessTexture;  // linear; G: roughness
+  TextureRef clearcoatNormalTexture;     // linear, tangent space; none: the coat uses the geometric normal
+  float clearcoatNormalScale = 1.0f;     // xy scale of clearcoatNormalTexture
+  // KHR_materials_pbrSpecularGlossiness with a texture, until bakeTextures converts its texels (spec_gloss.h): the
+  // diffuse texture is in baseColorTexture (sRGB), the specular-glossiness one in metallicRoughnessTexture (RGB
+  // sRGB, A linear), and these are the extension's factors; baseColor / metallic / roughness meanwhile hold the
+  // factors' own conversion (what a render without baked textures shows). Not stored in packs (baked away).
+  struct SpecGlossSource {
+    glm::vec4 diffuse{1.0f};
+    glm::vec3 specular{1.0f};
+    float glossiness = 1.0f;
+  };
+  std::optional<SpecGlossSource> specGloss;
 };
 
-// A material's five texture slots in a fixed order (packs store them in this order): base colour,
-// metallic-roughness, normal, occlusion, emissive.
-inline constexpr size_t kTextureSlotCount = 5;
+// A material's eight texture slots in a fixed order (packs store them in this order): base colour,
+// metallic-roughness, normal, occlusion, emissive, clearcoat, clearcoat roughness, clearcoat normal
+// (config.h TEXTURE_SLOT_*).
+inline constexpr size_t kTextureSlotCount = 8;
 std::array<const TextureRef*, kTextureSlotCount> textureSlots(const Material& m);
 std::array<TextureRef*, kTextureSlotCount> textureSlots(Material& m);
 // Colour space of a slot's texels: Srgb for base colour and emissive, Linear for the data textures.
 ColorSpace textureSlotColorSpace(size_t slot);
+// MATERIAL_FEATURE_* bits (config.h) a material's shading needs: unlit, a clearcoat layer (clearcoat > 0).
+uint32_t materialFeatures(const Material& m);
 
 struct Object {
   glm::dmat4 transform{1.0};  // object -> world (affine)

@@ -227,12 +227,23 @@
 #define MATERIAL_FLAG_MASK 1u          // alphaMode MASK: alpha < params.w is cut out
 #define MATERIAL_FLAG_BLEND 2u         // alphaMode BLEND: drawn by the transparency pass
 #define MATERIAL_FLAG_DOUBLE_SIDED 4u  // no back-face culling; back faces shade with the flipped normal
-#define TEXTURE_SLOTS 5                // base colour, metallic-roughness, normal, occlusion, emissive
+#define MATERIAL_FLAG_UNLIT 8u         // KHR_materials_unlit: the base colour is the pixel's colour
+#define MATERIAL_FLAG_CLEARCOAT 16u    // KHR_materials_clearcoat with a weight > 0
+// Shading features beyond the metallic-roughness core (scene.h materialFeatures): specialisation constant 6
+// (common.glsl VB_MATERIAL_FEATURES) holds those a pipeline may meet, so code for the others is removed: the
+// scene's union for the single-dispatch paths, one material's for each classified dispatch.
+#define MATERIAL_FEATURE_UNLIT 1u
+#define MATERIAL_FEATURE_CLEARCOAT 2u
+#define MATERIAL_FEATURES_ALL 3u
+#define TEXTURE_SLOTS 8  // base colour, metallic-roughness, normal, occlusion, emissive, clearcoat (3)
 #define TEXTURE_SLOT_BASE_COLOR 0
 #define TEXTURE_SLOT_METALLIC_ROUGHNESS 1
 #define TEXTURE_SLOT_NORMAL 2
 #define TEXTURE_SLOT_OCCLUSION 3
 #define TEXTURE_SLOT_EMISSIVE 4
+#define TEXTURE_SLOT_CLEARCOAT 5            // R: coat weight
+#define TEXTURE_SLOT_CLEARCOAT_ROUGHNESS 6  // G: coat roughness
+#define TEXTURE_SLOT_CLEARCOAT_NORMAL 7     // the coat's tangent-space normal
 #define TEXTURE_NONE 0xffffffffu
 // TextureSlotData.samplerBits: wrap S (2 bits) and T (2 bits) as scene/texture.h WrapMode, magnification
 // linear, minification linear, mip filter (2 bits, MipFilter), TEXCOORD set (8 bits), two-channel image.
@@ -262,7 +273,7 @@
 #define SW_RASTER_MAX_TRIANGLES 2048u
 // G-buffer baseline (gbuffer_pass, gbuffer_lighting_pass): the raster's attribute targets, read back by the
 // lighting pass with texelFetch (constant indices only: lavapipe has no dynamic sampled-image indexing).
-#define GBUFFER_TARGETS 4       // base colour + alpha, octahedral normal, metallic/roughness/occlusion, emissive
+#define GBUFFER_TARGETS 5       // base colour + alpha, octahedral normal, metallic/roughness/occlusion/unlit, emissive, coat
 // Lights: shaders/shared/bindings_lighting.h, light_cull.comp.glsl.
 // PointLightData.type (engine/scene/light.h LightType): KHR_lights_punctual point, spot, directional.
 #define LIGHT_POINT 0u

@@ -121,21 +121,22 @@ uint objectDrawList(uint objectFlags) {
 struct TextureSlotData {
   uint image;
   uint samplerBits;
-  uint pad0;
+  float scale;  // the two normal slots: xy scale of the tangent-space normal; 0 elsewhere
   uint pad1;
   vec4 transform01;
   vec4 transform2;
 };
 
-// Material (304 bytes): glTF metallic-roughness factors and its five texture slots (TEXTURE_SLOT_*).
+// Material (448 bytes): glTF metallic-roughness factors, KHR_materials_clearcoat's and its eight texture slots
+// (TEXTURE_SLOT_*).
 struct MaterialData {
   vec4 baseColor;  // linear RGBA factor
   vec4 emissive;   // rgb: emissive factor x emissive strength; w: normal texture scale
   vec4 params;     // x: metallic, y: roughness, z: occlusion strength, w: alpha cutoff (MASK)
   uint flags;      // MATERIAL_FLAG_*
   uint slotCount;  // 1 + the last texture slot holding a texture (0: untextured); bounds the shaders' slot loop
-  uint pad1;
-  uint pad2;
+  float clearcoat;           // coat weight factor [0,1] (0: no coat)
+  float clearcoatRoughness;  // coat roughness factor [0,1]
   TextureSlotData textures[TEXTURE_SLOTS];
 };
 

@@ -116,6 +116,14 @@ inline Scene makeTexturedTestScene() {
   m.metallic = 0.25f;
   m.roughness = 0.75f;
   m.occlusionStrength = 0.5f;
+  // The material extensions: a textured clearcoat on material 1, unlit material 0.
+  m.clearcoat = 0.75f;
+  m.clearcoatRoughness = 0.125f;
+  m.clearcoatNormalScale = -0.5f;
+  m.clearcoatTexture = {-1, 2, 1, "coat.png", glm::mat3x2(1.0f), {}, 2};
+  m.clearcoatRoughnessTexture.texCoord = 1;
+  m.clearcoatNormalTexture.baked = 2;
+  scene.materials[0].unlit = true;
   return scene;
 }
 
@@ -163,6 +171,10 @@ inline void expectScenesEqual(const Scene& a, const Scene& b) {
     EXPECT_EQ(x.occlusionStrength, y.occlusionStrength);
     EXPECT_EQ(x.emissive, y.emissive);
     EXPECT_EQ(x.emissiveStrength, y.emissiveStrength);
+    EXPECT_EQ(x.unlit, y.unlit);
+    EXPECT_EQ(x.clearcoat, y.clearcoat);
+    EXPECT_EQ(x.clearcoatRoughness, y.clearcoatRoughness);
+    EXPECT_EQ(x.clearcoatNormalScale, y.clearcoatNormalScale);
     for (size_t t = 0; t < kTextureSlotCount; ++t)
       EXPECT_EQ(*textureSlots(x)[t], *textureSlots(y)[t]) << "material " << i << " slot " << t;
   }

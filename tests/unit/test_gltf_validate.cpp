@@ -79,8 +79,9 @@ json goodValue(const GltfRule& rule) {
     case GltfRule::Kind::TextEnum: return rule.names.back();
     case GltfRule::Kind::Text: return "text";
     case GltfRule::Kind::Boolean: return false;
-    case GltfRule::Kind::Number: return -2.5;
+    case GltfRule::Kind::Number: return rule.low == -HUGE_VAL ? -2.5 : rule.low + 0.25;
     case GltfRule::Kind::Numbers: return json(std::vector<double>(static_cast<size_t>(rule.min), 0.25));
+    case GltfRule::Kind::Object: return json::object();
   }
   return nullptr;
 }
@@ -103,7 +104,13 @@ std::vector<json> badValues(const GltfRule& rule) {
     case GltfRule::Kind::TextEnum: return {"no such value", 3, json::array({rule.names[0]})};
     case GltfRule::Kind::Text: return {3, json::object(), json::array()};
     case GltfRule::Kind::Boolean: return {"true", 1};
-    case GltfRule::Kind::Number: return {"NaN", "0", nullptr, json::array({1}), json::object(), true};
+    case GltfRule::Kind::Number: {
+      std::vector<json> out = {"NaN", "0", nullptr, json::array({1}), json::object(), true};
+      if (rule.low != -HUGE_VAL) out.push_back(rule.low - 0.5);  // a negative factor
+      if (rule.high != HUGE_VAL) out.push_back(rule.high + 0.5);
+      return out;
+    }
+    case GltfRule::Kind::Object: return {1, "{}", json::array(), nullptr};
     case GltfRule::Kind::Numbers: {
       std::vector<json> out;
       json strings(std::vector<double>(static_cast<size_t>(rule.min), 1.0));
@@ -116,6 +123,12 @@ std::vector<json> badValues(const GltfRule& rule) {
       out.push_back(1.0);
       out.push_back(json(std::vector<double>(static_cast<size_t>(rule.min - 1), 1.0)));
       if (rule.max < (int64_t{1} << 53)) out.push_back(json(std::vector<double>(static_cast<size_t>(rule.max + 1), 1.0)));
+      for (double outside : {rule.low - 0.5, rule.high + 0.5}) {  // an element beyond a bounded factor's range
+        if (!std::isfinite(outside)) continue;
+        json ranged(std::vector<double>(static_cast<size_t>(rule.min), 0.5));
+        ranged.back() = outside;
+        out.push_back(ranged);
+      }
       return out;
     }
   }

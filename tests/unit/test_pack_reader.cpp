@@ -83,7 +83,8 @@ TEST(PackReader, WrongMagicAndVersion) {
   reseal(v);
   EXPECT_TRUE(failsWith(parse(v), "pack format version " + std::to_string(pack::kVersion + 1) + " is not supported",
                         ErrorCode::Unsupported));
-  // Version 6 packs (48-byte section entries, no encodings) and older are refused too: the user re-bakes.
+  // Version 6 packs (48-byte section entries, no encodings; the material record without the extensions' fields)
+  // and older are refused too: the user re-bakes.
   EXPECT_EQ(pack::kVersion, 7u);
   for (uint32_t old : {4u, 5u, 6u}) {
     v = *bytes;
@@ -230,6 +231,19 @@ TEST(PackReader, BadTexturesAndStreams) {
   EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 17, uint8_t{3}), "texture slot 0: 'texCoord' 1 / wrap 1 3"));
   EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 28, float{NAN}), "texture slot 0: field 'transform'"));
   EXPECT_TRUE(failsWith(edit("materials", 0, 40, float{INFINITY}), "record 0: non-finite colour, factor"));
+  // The extensions' fields: unknown flag bits, a coat weight outside [0,1], a non-finite coat normal scale, the
+  // reserved words, and a coat texture in the wrong colour space.
+  EXPECT_TRUE(failsWith(edit("materials", 0, offsetof(pack::MaterialRecord, flags), uint32_t{4}), "field 'flags' 0x4"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, offsetof(pack::MaterialRecord, clearcoat), float{-0.5f}),
+                        "field 'clearcoat' -0.5 / 'clearcoatRoughness' 0.125 outside [0, 1]"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, offsetof(pack::MaterialRecord, clearcoatRoughness), float{1.5f}),
+                        "'clearcoatRoughness' 1.5 outside"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, offsetof(pack::MaterialRecord, clearcoatNormalScale), float{NAN}),
+                        "record 1: non-finite colour, factor"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, offsetof(pack::MaterialRecord, reserved2), uint32_t{1}),
+                        "field 'reserved' / 'reserved2' is 0 / 1"));
+  EXPECT_TRUE(failsWith(edit("materials", 1, slot0 + 7 * sizeof(pack::TextureSlotRecord), int32_t{0}),
+                        "texture slot 7: texture 0 has the wrong colour space"));
   EXPECT_TRUE(failsWith(edit("meshStreams", 1, 0, ~uint64_t{0} - 1),
                         "tangents: encoded bytes ["));
   EXPECT_TRUE(failsWith(edit("meshStreams", 0, 8, uint64_t{1}), "section 'meshStreams' record 0"));
