@@ -14,37 +14,33 @@ namespace visbuf::pack {
 namespace {
 constexpr uint32_t kDefaultCameraFlag = 1;
 
+// The fields a CameraRecord and a Camera share, copied either way (the vectors element by element).
+template <typename From, typename To>
+void copyCameraFields(const From& from, To& to) {
+  for (int i = 0; i < 3; ++i) {
+    to.position[i] = from.position[i];
+    to.target[i] = from.target[i];
+    to.up[i] = from.up[i];
+  }
+  to.fovY = from.fovY;
+  to.nearPlane = from.nearPlane;
+  to.farPlane = from.farPlane;
+  to.aspectRatio = from.aspectRatio;
+  to.xmag = from.xmag;
+  to.ymag = from.ymag;
+}
+
 CameraRecord recordOf(const Camera& c) {
   CameraRecord r{};
   r.projection = uint32_t(c.projection);
-  for (int i = 0; i < 3; ++i) {
-    r.position[i] = c.position[i];
-    r.target[i] = c.target[i];
-    r.up[i] = c.up[i];
-  }
-  r.fovY = c.fovY;
-  r.nearPlane = c.nearPlane;
-  r.farPlane = c.farPlane;
-  r.aspectRatio = c.aspectRatio;
-  r.xmag = c.xmag;
-  r.ymag = c.ymag;
+  copyCameraFields(c, r);
   return r;
 }
 
 Camera cameraOf(const CameraRecord& r) {
   Camera c;
   c.projection = Projection(r.projection);
-  for (int i = 0; i < 3; ++i) {
-    c.position[i] = r.position[i];
-    c.target[i] = r.target[i];
-    c.up[i] = r.up[i];
-  }
-  c.fovY = r.fovY;
-  c.nearPlane = r.nearPlane;
-  c.farPlane = r.farPlane;
-  c.aspectRatio = r.aspectRatio;
-  c.xmag = r.xmag;
-  c.ymag = r.ymag;
+  copyCameraFields(r, c);
   return c;
 }
 
