@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Command (b): set up, build, and run the whole test suite:
 #  1. the clang build (build-clang/: clang 14, -Werror, AddressSanitizer + UndefinedBehaviorSanitizer, libFuzzer
-#     instrumentation) of the engine, the CPU unit tests and the fuzz targets (the tool is built by gcc only); the unit tests run
-#     under ASan + UBSan + LeakSanitizer, then each fuzz target for 20 s (scripts/fuzz.sh); any report fails;
+#     instrumentation) of the engine, the CPU unit tests and the fuzz targets (the tool is built by gcc only); the
+#     unit tests run under ASan + UBSan + LeakSanitizer, then each fuzz target for 20 s (scripts/fuzz.sh); any
+#     report fails;
 #  2. every test through ctest: unit, GPU on lavapipe with validation layers (any message fails), CLI,
 #     the installed CMake package.
 # Exits non-zero on any failure; ctest's summary is the last thing printed.

@@ -151,7 +151,8 @@ Status bakeTextures(const ImportedScene& imported, const TextureBakeOptions& opt
   if (Status s = convertSpecGlossTextures(imported, options, scene, &derived, &conversionNotes); !s) return s;
   if (report) report->notes.insert(report->notes.end(), conversionNotes.begin(), conversionNotes.end());
   const auto imageAt = [&](int32_t i) -> const ImportedImage& {
-    return size_t(i) < imported.images.size() ? imported.images[size_t(i)] : derived[size_t(i) - imported.images.size()];
+    const size_t n = imported.images.size();
+    return size_t(i) < n ? imported.images[size_t(i)] : derived[size_t(i) - n];
   };
   auto keys = assignTextures(imported.images.size() + derived.size(), scene);
   if (!keys) return keys.error();
