@@ -7,9 +7,11 @@
                    to the same output removes it (its PID is dead), and keeps a temporary file of a live PID.
 
 The input is generated: a glTF quad with two 4096x4096 PNG textures (tiny files, one colour each), baked at
---max-texture-size 4096 into a pack of about 180 MB, so that the temporary file exists for a while (the test
-waits for it to appear, then signals). The old pack is baked at --max-texture-size 1024, so it differs from
-what the interrupted bake would write. Should a bake finish before the signal lands, the attempt is repeated.
+--max-texture-size 4096 and --compression-level 0 into a pack of about 180 MB (one-colour textures compress to
+almost nothing), so that the temporary file exists for a while (the test waits for it to appear, then signals).
+The old pack is baked at --max-texture-size 1024, so it differs from what the interrupted bake would write.
+Should a bake finish before the signal lands (the process ends 0, or the signal lands after the rename: the pack
+is then the complete new pack, byte-identical to a reference bake), the attempt is repeated.
 
 usage: cli_interrupt.py VISBUF OUT_FOLDER
 """
@@ -76,15 +78,26 @@ def main():
         return subprocess.run([visbuf, "bake", gltf, "-o", pack, "--max-texture-size", str(size), *extra],
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
 
+    big_args = ["--max-texture-size", "4096", "--compression-level", "0"]
+    reference = os.path.join(out, "reference.vbp")
+    r = subprocess.run([visbuf, "bake", gltf, "-o", reference, *big_args],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        sys.exit(f"the reference bake failed ({r.returncode}): {r.stderr}")
+    new = sha256(reference)
+    os.remove(reference)
+
     r = bake(1024)
     if r.returncode != 0:
         sys.exit(f"the first bake failed ({r.returncode}): {r.stderr}")
     old = sha256(pack)
+    if old == new:
+        sys.exit("the old pack and the interrupted bake's pack are the same: the test cannot tell them apart")
 
     def interrupt(sig):
         """Bakes at 4096 and sends `sig` once the temporary file exists; returns the temporary files seen."""
         for attempt in range(ATTEMPTS):
-            p = subprocess.Popen([visbuf, "bake", gltf, "-o", pack, "--max-texture-size", "4096"],
+            p = subprocess.Popen([visbuf, "bake", gltf, "-o", pack, *big_args],
                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                                  preexec_fn=default_signals)
             seen = []
@@ -96,10 +109,13 @@ def main():
                     break
                 time.sleep(0.002)
             _, err = p.communicate(timeout=300)
-            if seen and p.returncode == -sig:
+            renamed = sha256(pack) == new
+            if seen and p.returncode == -sig and not renamed:
                 return seen
-            if p.returncode == 0:  # finished before the signal landed: the new pack is in place; start over
-                print(f"  attempt {attempt + 1}: the bake finished before {sig.name} landed; again")
+            if p.returncode == 0 or (p.returncode == -sig and renamed):
+                # The write finished (and the complete new pack was renamed into place) before the signal
+                # landed: that is the atomic write's other allowed outcome, not the one this test is after.
+                print(f"  attempt {attempt + 1}: the pack was in place before {sig.name} landed; again")
                 r = bake(1024)
                 if r.returncode != 0 or sha256(pack) != old:
                     sys.exit(f"re-baking the old pack failed ({r.returncode}): {r.stderr}")
