@@ -197,33 +197,38 @@ vec3 objectToCamera(ObjectData o, vec3 p) {
   return w;
 }
 
-// The projection (FrameData.projection): orthographic or perspective.
+// The projection (FrameData.projection): orthographic or perspective. The functions below choose between the two
+// with selects (mix with a boolean), never a branch: lavapipe in Mesa 22 recompiles a shader with a branch on
+// uniform values alone at every bind (uniform_branch.glsl), and the micro-raster calls eyeInObjectSpace in its
+// draw loop (a branch there made every micro-raster dispatch a 3.5 ms recompile).
 bool orthographic() { return frame.projection.z != 0.0; }
 
 // Reverse-Z depth at view distance d (= -z_view), and its inverse: perspective depth = B / d - A, orthographic
 // B - A d (A = proj[2][2], B = proj[3][2]; an infinite perspective has A = 0, B = near).
 float depthOfDistance(float d) {
-  return orthographic() ? frame.projection.y - frame.projection.x * d : frame.projection.y / d - frame.projection.x;
+  float A = frame.projection.x, B = frame.projection.y;
+  return mix(B / d - A, B - A * d, orthographic());
 }
 float distanceOfDepth(float depth) {
-  return orthographic() ? (frame.projection.y - depth) / frame.projection.x
-                        : frame.projection.y / (depth + frame.projection.x);
+  float A = frame.projection.x, B = frame.projection.y;
+  return mix(B / (depth + A), (B - depth) / A, orthographic());
 }
 
 // The camera-relative world position seen at `ndc` with reverse-Z `depth` (the inverse of the projection; the
 // view is rotation only, so its inverse is its transpose).
 vec3 cameraRelativeAt(vec2 ndc, float depth) {
   float d = distanceOfDepth(depth);
-  float s = orthographic() ? 1.0 : d;  // orthographic: x and y do not shrink with distance
+  float s = mix(d, 1.0, orthographic());  // orthographic: x and y do not shrink with distance
   vec3 viewPos = vec3(ndc.x * s / frame.projX, ndc.y * s / frame.projY, -d);
   return transpose(mat3(frame.view)) * viewPos;
 }
 
+// The view direction's opposite in world space (towards the eye): the third row of the rotation-only view.
+vec3 backwardsOfView() { return vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]); }
+
 // Unit vector from the camera-relative point p towards the eye: perspective -normalize(p); orthographic the
 // constant opposite of the view direction (every view ray is parallel to it).
-vec3 towardsEye(vec3 p) {
-  return orthographic() ? vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]) : -normalize(p);
-}
+vec3 towardsEye(vec3 p) { return mix(-normalize(p), backwardsOfView(), bvec3(orthographic())); }
 
 // The eye in the object's space, homogeneous (the micro-raster's back-face pre-pass and the clusters' cone test):
 // perspective (position, 1), the inverse of objectToCamera at the camera-relative origin; orthographic (direction,
@@ -231,9 +236,9 @@ vec3 towardsEye(vec3 p) {
 // plane (n, w) faces the eye where dot(n, eye.xyz) + w * eye.w > 0.
 vec4 eyeInObjectSpace(ObjectData o) {
   mat3 m = transpose(mat3(o.row0.xyz, o.row1.xyz, o.row2.xyz));  // columns: objectToCamera's linear part
-  if (orthographic()) return vec4(inverse(m) * vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]), 0.0);
   vec3 t = vec3(o.row0.w, o.row1.w, o.row2.w) + frame.cameraOffset.xyz;
-  return vec4(inverse(m) * -t, 1.0);
+  bool ortho = orthographic();
+  return vec4(inverse(m) * mix(-t, backwardsOfView(), bvec3(ortho)), mix(1.0, 0.0, ortho));
 }
 
 // The clip position, computed identically by the visibility vertex shader, the shading pass and the

@@ -18,6 +18,7 @@
 
 #include "common.glsl"
 #include "shared/bindings_lighting.h"
+#include "uniform_branch.glsl"
 
 // Point lights; none bound are read when FrameData.pointLightCount is 0 (a scene with no point lights binds
 // a placeholder: renderer.cpp).
@@ -146,14 +147,17 @@ vec3 shadeSurface(Surface s, uvec2 pixel) {
     emissive *= 1.0 - fc;
   }
   color += surfaceCosine(s, v, frame.lightDir.xyz) * frame.lightDir.w;
-  if (VB_POINT_LIGHTS != 0u && frame.pointLightCount > 0u) {
-    if (frame.lightTilesX > 0u) {
-      uint tile = (pixel.y / LIGHT_TILE_SIZE) * frame.lightTilesX + pixel.x / LIGHT_TILE_SIZE;
+  // (the light count and the tile grid's width through uniformBranch: a branch or a loop bound on them alone made
+  // lavapipe recompile the shading pass at every bind)
+  const uint lightCount = uniformBranch(frame.pointLightCount), tilesX = uniformBranch(frame.lightTilesX);
+  if (VB_POINT_LIGHTS != 0u && lightCount > 0u) {
+    if (tilesX > 0u) {
+      uint tile = (pixel.y / LIGHT_TILE_SIZE) * tilesX + pixel.x / LIGHT_TILE_SIZE;
       uint base = LIGHT_TILE_HEADER + tile * LIGHT_TILE_STRIDE;
       uint n = lightTiles[base];
       for (uint i = 0u; i < n; ++i) color += pointLightRadiance(s, v, pointLights[lightTiles[base + 1u + i]]);
     } else {
-      for (uint i = 0u; i < frame.pointLightCount; ++i) color += pointLightRadiance(s, v, pointLights[i]);
+      for (uint i = 0u; i < lightCount; ++i) color += pointLightRadiance(s, v, pointLights[i]);
     }
   }
   return color + emissive;
