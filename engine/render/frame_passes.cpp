@@ -165,10 +165,11 @@ void Renderer::Impl::declareSetup(Graph& g, const FrameResources& r, const Frame
                                   const FramePlan& plan, FrameSlot& slot) {
   std::vector<Graph::Use> uses;
   if (!plan.frozen) uses.push_back(Graph::writes(r.stats, access::transferWrite));
-  if (historyDirty) uses.push_back(Graph::overwrites(r.history, access::transferWrite));
+  // (a late-only frame: nothing was drawn early, so no object may count as drawn early; FramePlan::lateOnly)
+  const bool clearHistory = historyDirty || plan.lateOnly;
+  if (clearHistory) uses.push_back(Graph::overwrites(r.history, access::transferWrite));
   if (options.countOverdraw)
     uses.push_back(Graph::overwrites(r.overdraw, access::inLayout(access::transferWrite, VK_IMAGE_LAYOUT_GENERAL)));
-  const bool clearHistory = historyDirty;
   historyDirty = false;
   Graph::Pass& p = g.pass("setup").sideEffect();
   p.step(std::move(uses), [this, frozen = plan.frozen, clearHistory, overdrawCount = options.countOverdraw](VkCommandBuffer cmd) {
@@ -316,7 +317,7 @@ void Renderer::Impl::declareRaster(Graph& g, const FrameResources& r, const Fram
 // then (merge) merged into the IDs and depth the raster left as attachments. Without the merge the pyramid and the
 // shading read the buffer themselves (FramePlan::swResolved).
 void Renderer::Impl::declareMicroRaster(Graph& g, const FrameResources& r, uint32_t phase, bool clear, bool merge) {
-  const bool late = phase == CULL_PHASE_LATE;
+  const bool late = !clear;  // (names: a late-only frame's one phase is the frame's first)
   Graph::Pass& raster = g.pass(late ? "micro-raster late" : "micro-raster", late ? "sw raster late" : "sw raster");
   if (clear)
     raster.prepare({Graph::overwrites(r.sw, access::transferWrite)},

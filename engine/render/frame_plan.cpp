@@ -36,6 +36,7 @@ FramePlan planFrame(const FrameOptions& options, const SceneFacts& facts, const 
   p.swOn = p.frozen ? history.lastSwOn : microRasterAllowed(options, facts) && history.swSkipFrames == 0;
   p.usePyramid = p.occlusionFrame &&
                  (options.readPyramid || !(options.skipUselessPyramid && history.pyramidSkipFrames > 0));
+  p.lateOnly = p.occlusionFrame && !p.usePyramid;
   p.lightsCulled = lightsCulled(options, facts);
   p.readAttributes = options.readAttributes && p.gpuCulled;  // G-buffer: position and depth only
   p.msaa = options.msaa > 1;

@@ -16,6 +16,10 @@ struct FramePlan {
   CullMode cull = CullMode::None;  // in effect (a frozen frame: the frozen frame's)
   bool occlusionFrame = false;  // occlusion culling runs this frame (not frozen)
   bool usePyramid = false;      // build the depth pyramid (and run the late occlusion test against it)
+  // An occlusion frame without a pyramid (skipped: it hid nothing lately) runs its late phase alone, over every
+  // object with the history cleared: exact without a pyramid, and it keeps the visible list for the next probe,
+  // while the early phase's passes (cull, raster, micro-raster) and their fixed costs go.
+  bool lateOnly = false;
   bool swOn = false;            // route small objects to the micro-raster
   bool lightsCulled = false;    // tile light lists
   bool readAttributes = false;  // the shading pass writes the attribute record

@@ -230,6 +230,9 @@ uint32_t Renderer::Impl::recordFrame(const Camera& camera, const FrameOptions& o
     } else if (!occlusion) {
       declareCull(g, r, plan, CULL_PHASE_EARLY, "cull");
       rasterPhase(CULL_PHASE_EARLY, true, rasterOnly);
+    } else if (plan.lateOnly) {  // no pyramid this frame: the late phase over every object, alone
+      declareCull(g, r, plan, CULL_PHASE_LATE, "cull");
+      rasterPhase(CULL_PHASE_LATE, true, rasterOnly);
     } else {
       declareCull(g, r, plan, CULL_PHASE_EARLY, "cull early");
       rasterPhase(CULL_PHASE_EARLY, true, rasterEarly);

@@ -179,6 +179,32 @@ TEST(FramePlan, HistorySkipsAPyramidThatCostsMoreThanItSaves) {
   EXPECT_EQ(h.pyramidSkipFrames, 0u);
 }
 
+// A skipped pyramid leaves the late phase alone (over every object, history cleared); a built one, or another
+// culling mode, keeps the phases as they are.
+TEST(FramePlan, SkippedPyramidRunsTheLatePhaseAlone) {
+  FrameOptions fo;
+  fo.cull = CullMode::Occlusion;
+  FrameHistory h;
+  const FramePlan built = planFrame(fo, gpuFacts(), h);
+  EXPECT_TRUE(built.usePyramid);
+  EXPECT_FALSE(built.lateOnly);
+  h.finished(built, fo, true, 0, 1500, 0, {});  // hid nothing: skipped for a while
+  ASSERT_EQ(h.pyramidSkipFrames, kPyramidProbeInterval);
+  const FramePlan skipped = planFrame(fo, gpuFacts(), h);
+  EXPECT_FALSE(skipped.usePyramid);
+  EXPECT_TRUE(skipped.lateOnly);
+  EXPECT_FALSE(skipped.earlyClusterOcclusion);
+  FrameOptions frustum = fo;
+  frustum.cull = CullMode::Frustum;
+  EXPECT_FALSE(planFrame(frustum, gpuFacts(), h).lateOnly);
+  FrameOptions forward = fo;
+  forward.path = RenderPath::Forward;
+  EXPECT_FALSE(planFrame(forward, gpuFacts(), h).lateOnly);
+  // The probe after the interval builds the pyramid again, with both phases.
+  for (uint32_t i = 0; i < kPyramidProbeInterval; ++i) h.finished(skipped, fo, true, 0, 0, 0, {});
+  EXPECT_FALSE(planFrame(fo, gpuFacts(), h).lateOnly);
+}
+
 // The early phase guesses with the pyramid the previous frame built: only after a frame that built one, never after
 // a cut or a new size (its pyramid shows another view), and only with clusters and occlusion culling.
 TEST(FramePlan, EarlyClusterOcclusionNeedsLastFramesPyramid) {
