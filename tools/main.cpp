@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "visbuf/gpu/check.h"
 #include "cli_checks.h"
 #include "commands.h"
 #include "invocation.h"
@@ -114,6 +115,10 @@ int main(int argc, char** argv) {
 #ifdef VISBUF_HAVE_VIEW
     if (app.got_subcommand("view")) return visbuf::tools::runView(view);
 #endif
+  } catch (const visbuf::gpu::VulkanFailure& f) {  // a Vulkan call of the tool's own (the library returns errors)
+    const visbuf::Error e = visbuf::gpu::errorOf(f);
+    std::fprintf(stderr, "visbuf: error (%s): %s\n", visbuf::errorCodeName(e.code), e.message.c_str());
+    return 1;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr,
                  "visbuf: error (out of memory): an allocation failed: the input needs more memory than this process "

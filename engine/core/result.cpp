@@ -12,6 +12,8 @@ const char* errorCodeName(ErrorCode code) {
     case ErrorCode::VulkanError: return "Vulkan error";
     case ErrorCode::CapacityExceeded: return "capacity exceeded";
     case ErrorCode::IoError: return "I/O error";
+    case ErrorCode::OutOfMemory: return "out of memory";
+    case ErrorCode::DeviceLost: return "device lost";
   }
   return "unknown error";
 }

@@ -14,9 +14,11 @@ enum class ErrorCode {
   MalformedInput,   // a file that parses but whose contents are invalid (NaN, bad counts, ...)
   Unsupported,      // valid input we do not handle (yet)
   NoDevice,         // no Vulkan device satisfies our requirements
-  VulkanError,
+  VulkanError,      // a Vulkan call failed (other than the two below)
   CapacityExceeded,
   IoError,
+  OutOfMemory,      // host or device memory ran out (VK_ERROR_OUT_OF_HOST/DEVICE_MEMORY, a failed allocation)
+  DeviceLost,       // VK_ERROR_DEVICE_LOST: the device (and every renderer on it) must be re-created
 };
 
 const char* errorCodeName(ErrorCode code);

@@ -1,7 +1,8 @@
 #include "visbuf/gpu/check.h"
 
-#include <cstdio>
-#include <cstdlib>
+#include <fmt/format.h>
+
+#include <atomic>
 
 namespace visbuf::gpu {
 
@@ -31,11 +32,41 @@ const char* resultName(VkResult result) {
   }
 }
 
-void vkCheckFailed(const char* call, VkResult result, const char* file, int line) {
-  std::fprintf(stderr, "visbuf: fatal: %s returned %s (%d) at %s:%d\n", call, resultName(result),
-               static_cast<int>(result), file, line);
-  std::fflush(stderr);
-  std::abort();
+Error errorOf(const VulkanFailure& f) {
+  const ErrorCode code = f.result == VK_ERROR_OUT_OF_HOST_MEMORY || f.result == VK_ERROR_OUT_OF_DEVICE_MEMORY ||
+                                 f.result == VK_ERROR_OUT_OF_POOL_MEMORY
+                             ? ErrorCode::OutOfMemory
+                         : f.result == VK_ERROR_DEVICE_LOST ? ErrorCode::DeviceLost
+                                                            : ErrorCode::VulkanError;
+  return makeError(code, fmt::format("{} returned {} ({}) at {}:{}", f.call, resultName(f.result),
+                                     static_cast<int>(f.result), f.file, f.line));
 }
+
+void vkCheckFailed(const char* call, VkResult result, const char* file, int line) {
+  throw VulkanFailure{call, result, file, line};
+}
+
+namespace {
+// Checks left before the injected failure (-1: none armed), and the result it reports.
+std::atomic<int64_t> checksBeforeFailure{-1};
+std::atomic<VkResult> injectedResult{VK_SUCCESS};
+}  // namespace
+
+namespace testing {
+void failCheck(uint32_t after, VkResult result) {
+  injectedResult.store(result);
+  checksBeforeFailure.store(after);
+}
+void disarm() { checksBeforeFailure.store(-1); }
+}  // namespace testing
+
+namespace detail {
+bool injectedFailure(VkResult& result) {
+  if (checksBeforeFailure.load(std::memory_order_relaxed) < 0) return false;
+  if (checksBeforeFailure.fetch_sub(1) != 0) return false;
+  result = injectedResult.load();
+  return true;
+}
+}  // namespace detail
 
 }  // namespace visbuf::gpu

@@ -5,6 +5,7 @@
 #include <map>
 #include <utility>
 
+#include "visbuf/core/log.h"
 #include "visbuf/gpu/check.h"
 #include "visbuf/gpu/pipeline.h"
 
@@ -23,6 +24,15 @@ DescriptorLayout::DescriptorLayout(Device& device, std::vector<DescriptorBinding
   lci.bindingCount = uint32_t(b.size());
   lci.pBindings = b.data();
   VK_CHECK(vkCreateDescriptorSetLayout(device_, &lci, nullptr, &layout_));
+  try {  // (a failure below releases the layout: no destructor runs for an object whose constructor threw)
+    createPool(sets, perType);
+  } catch (...) {
+    reset();
+    throw;
+  }
+}
+
+void DescriptorLayout::createPool(uint32_t sets, const std::map<VkDescriptorType, uint32_t>& perType) {
   std::vector<VkDescriptorPoolSize> sizes;
   for (auto [type, count] : perType) sizes.push_back({type, count});
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -65,7 +75,7 @@ void DescriptorLayout::reset() {
 VkDescriptorType DescriptorLayout::type(uint32_t binding) const {
   for (const DescriptorBinding& b : bindings_)
     if (b.binding == binding) return b.type;
-  std::fprintf(stderr, "visbuf: descriptor binding %u is not in the set layout\n", binding);
+  logMessage(LogLevel::Error, "descriptor binding " + std::to_string(binding) + " is not in the set layout");
   std::abort();
 }
 

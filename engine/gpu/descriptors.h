@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <vector>
 
 #include <vulkan/vulkan.h>
@@ -42,6 +43,9 @@ class DescriptorLayout {
   VkDescriptorType type(uint32_t binding) const;
 
  private:
+  // The pool (every binding's count per set, `perType`) and its `sets` sets of the layout.
+  void createPool(uint32_t sets, const std::map<VkDescriptorType, uint32_t>& perType);
+
   VkDevice device_ = VK_NULL_HANDLE;
   VkDescriptorSetLayout layout_ = VK_NULL_HANDLE;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;

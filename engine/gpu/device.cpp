@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "visbuf/core/log.h"
 #include "visbuf/gpu/check.h"
 
 namespace visbuf::gpu {
@@ -129,165 +130,170 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Device::debugCallback(VkDebugUtilsMessageSeverity
   if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
     auto* self = static_cast<Device*>(user);
     self->validationMessages_.fetch_add(1);
-    std::fprintf(stderr, "visbuf: validation: %s\n", data->pMessage ? data->pMessage : "(null)");
+    logMessage(severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT ? LogLevel::Error : LogLevel::Warning,
+               std::string("validation: ") + (data->pMessage ? data->pMessage : "(null)"));
   }
   return VK_FALSE;
 }
 
 Result<std::unique_ptr<Device>> Device::create(const DeviceOptions& options) {
-  std::unique_ptr<Device> dev(new Device());
+  return gpu::catchVulkan([&]() -> Result<std::unique_ptr<Device>> {
+    std::unique_ptr<Device> dev(new Device());
 
-  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-  app.pApplicationName = "visbuf";
-  app.pEngineName = "visbuf";
-  app.apiVersion = VK_API_VERSION_1_3;
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "visbuf";
+    app.pEngineName = "visbuf";
+    app.apiVersion = VK_API_VERSION_1_3;
 
-  std::vector<const char*> layers;
-  std::vector<const char*> extensions;
-  const bool validation = options.validation;
-  if (validation) {
-    if (!hasLayer("VK_LAYER_KHRONOS_validation"))
+    std::vector<const char*> layers;
+    std::vector<const char*> extensions;
+    const bool validation = options.validation;
+    if (validation) {
+      if (!hasLayer("VK_LAYER_KHRONOS_validation"))
+        return makeError(ErrorCode::NoDevice,
+                         "validation requested but VK_LAYER_KHRONOS_validation is not installed "
+                         "(apt-get install vulkan-validationlayers)");
+      layers.push_back("VK_LAYER_KHRONOS_validation");
+      extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+    VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    ici.pApplicationInfo = &app;
+    ici.enabledLayerCount = static_cast<uint32_t>(layers.size());
+    ici.ppEnabledLayerNames = layers.data();
+    ici.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
+    ici.ppEnabledExtensionNames = extensions.data();
+    VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    mci.pfnUserCallback = &Device::debugCallback;
+    mci.pUserData = dev.get();
+    if (validation) ici.pNext = &mci;  // also catches messages during instance creation
+    VkResult r = vkCreateInstance(&ici, nullptr, &dev->instance_);
+    if (r != VK_SUCCESS)
       return makeError(ErrorCode::NoDevice,
-                       "validation requested but VK_LAYER_KHRONOS_validation is not installed "
-                       "(apt-get install vulkan-validationlayers)");
-    layers.push_back("VK_LAYER_KHRONOS_validation");
-    extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
-  }
-  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-  ici.pApplicationInfo = &app;
-  ici.enabledLayerCount = static_cast<uint32_t>(layers.size());
-  ici.ppEnabledLayerNames = layers.data();
-  ici.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
-  ici.ppEnabledExtensionNames = extensions.data();
-  VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-  mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-  mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                    VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
-  mci.pfnUserCallback = &Device::debugCallback;
-  mci.pUserData = dev.get();
-  if (validation) ici.pNext = &mci;  // also catches messages during instance creation
-  VkResult r = vkCreateInstance(&ici, nullptr, &dev->instance_);
-  if (r != VK_SUCCESS)
-    return makeError(ErrorCode::NoDevice,
-                     fmt::format("vkCreateInstance failed ({}): is a Vulkan 1.3 driver installed "
-                                 "(apt-get install mesa-vulkan-drivers libvulkan1)?",
-                                 resultName(r)));
-  if (validation) {
-    auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
-        vkGetInstanceProcAddr(dev->instance_, "vkCreateDebugUtilsMessengerEXT"));
-    VK_CHECK(create(dev->instance_, &mci, nullptr, &dev->messenger_));
-  }
-
-  uint32_t count = 0;
-  VK_CHECK(vkEnumeratePhysicalDevices(dev->instance_, &count, nullptr));
-  std::vector<VkPhysicalDevice> devices(count);
-  VK_CHECK(vkEnumeratePhysicalDevices(dev->instance_, &count, devices.data()));
-
-  std::string report;
-  int chosen = -1;
-  int chosenScore = -1;
-  uint32_t chosenFamily = 0;
-  for (uint32_t i = 0; i < count; ++i) {
-    VkPhysicalDeviceProperties props;
-    vkGetPhysicalDeviceProperties(devices[i], &props);
-    uint32_t family = 0;
-    std::vector<std::string> why = missingRequirements(devices[i], &family);
-    const bool isCpu = props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-    switch (options.preference) {
-      case DevicePreference::Cpu:
-        if (!isCpu) why.push_back("not a CPU device (--device cpu)");
-        break;
-      case DevicePreference::Gpu:
-        if (isCpu) why.push_back("a CPU device (--device gpu)");
-        break;
-      case DevicePreference::Index:
-        if (i != options.index) why.push_back(fmt::format("not device {} (--device {})", options.index, options.index));
-        break;
-      case DevicePreference::Auto: break;
+                       fmt::format("vkCreateInstance failed ({}): is a Vulkan 1.3 driver installed "
+                                   "(apt-get install mesa-vulkan-drivers libvulkan1)?",
+                                   resultName(r)));
+    if (validation) {
+      auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+          vkGetInstanceProcAddr(dev->instance_, "vkCreateDebugUtilsMessengerEXT"));
+      VK_CHECK(create(dev->instance_, &mci, nullptr, &dev->messenger_));
     }
-    int score = props.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU     ? 3
-                : props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU ? 2
-                : isCpu                                                      ? 0
-                                                                             : 1;
-    std::string line = fmt::format("  [{}] {} ({})", i, props.deviceName, typeName(props.deviceType));
-    if (why.empty()) {
-      line += ": suitable";
-      if (score > chosenScore) {
-        chosen = static_cast<int>(i);
-        chosenScore = score;
-        chosenFamily = family;
+
+    uint32_t count = 0;
+    VK_CHECK(vkEnumeratePhysicalDevices(dev->instance_, &count, nullptr));
+    std::vector<VkPhysicalDevice> devices(count);
+    VK_CHECK(vkEnumeratePhysicalDevices(dev->instance_, &count, devices.data()));
+
+    std::string report;
+    int chosen = -1;
+    int chosenScore = -1;
+    uint32_t chosenFamily = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+      VkPhysicalDeviceProperties props;
+      vkGetPhysicalDeviceProperties(devices[i], &props);
+      uint32_t family = 0;
+      std::vector<std::string> why = missingRequirements(devices[i], &family);
+      const bool isCpu = props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+      switch (options.preference) {
+        case DevicePreference::Cpu:
+          if (!isCpu) why.push_back("not a CPU device (--device cpu)");
+          break;
+        case DevicePreference::Gpu:
+          if (isCpu) why.push_back("a CPU device (--device gpu)");
+          break;
+        case DevicePreference::Index:
+          if (i != options.index) why.push_back(fmt::format("not device {} (--device {})", options.index, options.index));
+          break;
+        case DevicePreference::Auto: break;
       }
-    } else {
-      line += ": rejected: ";
-      for (size_t k = 0; k < why.size(); ++k) line += (k ? "; " : "") + why[k];
+      int score = props.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU     ? 3
+                  : props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU ? 2
+                  : isCpu                                                      ? 0
+                                                                               : 1;
+      std::string line = fmt::format("  [{}] {} ({})", i, props.deviceName, typeName(props.deviceType));
+      if (why.empty()) {
+        line += ": suitable";
+        if (score > chosenScore) {
+          chosen = static_cast<int>(i);
+          chosenScore = score;
+          chosenFamily = family;
+        }
+      } else {
+        line += ": rejected: ";
+        for (size_t k = 0; k < why.size(); ++k) line += (k ? "; " : "") + why[k];
+      }
+      report += line + "\n";
     }
-    report += line + "\n";
-  }
-  if (chosen < 0)
-    return makeError(ErrorCode::NoDevice, "no Vulkan device is suitable:\n" + report +
-                                              "visbuf needs " + requiredFeaturesText());
+    if (chosen < 0)
+      return makeError(ErrorCode::NoDevice, "no Vulkan device is suitable:\n" + report +
+                                                "visbuf needs " + requiredFeaturesText());
 
-  dev->physical_ = devices[static_cast<size_t>(chosen)];
-  dev->queueFamily_ = chosenFamily;
-  vkGetPhysicalDeviceProperties(dev->physical_, &dev->properties_);
-  report = fmt::format("device: [{}] {} (auto prefers a GPU over a CPU device)\n", chosen,
-                       dev->properties_.deviceName) +
-           report;
-  dev->selectionReport_ = report;
-  if (options.verbose) std::fprintf(stderr, "%s", report.c_str());
+    dev->physical_ = devices[static_cast<size_t>(chosen)];
+    dev->queueFamily_ = chosenFamily;
+    vkGetPhysicalDeviceProperties(dev->physical_, &dev->properties_);
+    report = fmt::format("device: [{}] {} (auto prefers a GPU over a CPU device)\n", chosen,
+                         dev->properties_.deviceName) +
+             report;
+    dev->selectionReport_ = report;
+    if (options.verbose) logMessage(LogLevel::Info, report.substr(0, report.find_last_not_of('\n') + 1));
 
-  RequiredFeatures fc;  // enable exactly what we require
-  fc.requireAll();
-  // Optional: block-compressed textures are sampled as such where the device has BC formats; elsewhere the
-  // texture upload decompresses them to RGBA8 (scene/gpu_textures.cpp).
-  {
-    VkPhysicalDeviceFeatures have{};
-    vkGetPhysicalDeviceFeatures(dev->physical_, &have);
-    fc.f2.features.textureCompressionBC = have.textureCompressionBC;
-    dev->textureCompressionBC_ = have.textureCompressionBC == VK_TRUE;
-  }
-  float priority = 1.0f;
-  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-  qci.queueFamilyIndex = dev->queueFamily_;
-  qci.queueCount = 1;
-  qci.pQueuePriorities = &priority;
-  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-  dci.pNext = &fc.f2;
-  dci.queueCreateInfoCount = 1;
-  dci.pQueueCreateInfos = &qci;
-  r = vkCreateDevice(dev->physical_, &dci, nullptr, &dev->device_);
-  if (r != VK_SUCCESS)
-    return makeError(ErrorCode::NoDevice, fmt::format("vkCreateDevice failed on {}: {}",
-                                                      dev->properties_.deviceName, resultName(r)));
-  vkGetDeviceQueue(dev->device_, dev->queueFamily_, 0, &dev->queue_);
-  Status s = dev->finishInit();
-  if (!s) return s.error();
-  return dev;
+    RequiredFeatures fc;  // enable exactly what we require
+    fc.requireAll();
+    // Optional: block-compressed textures are sampled as such where the device has BC formats; elsewhere the
+    // texture upload decompresses them to RGBA8 (scene/gpu_textures.cpp).
+    {
+      VkPhysicalDeviceFeatures have{};
+      vkGetPhysicalDeviceFeatures(dev->physical_, &have);
+      fc.f2.features.textureCompressionBC = have.textureCompressionBC;
+      dev->textureCompressionBC_ = have.textureCompressionBC == VK_TRUE;
+    }
+    float priority = 1.0f;
+    VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    qci.queueFamilyIndex = dev->queueFamily_;
+    qci.queueCount = 1;
+    qci.pQueuePriorities = &priority;
+    VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    dci.pNext = &fc.f2;
+    dci.queueCreateInfoCount = 1;
+    dci.pQueueCreateInfos = &qci;
+    r = vkCreateDevice(dev->physical_, &dci, nullptr, &dev->device_);
+    if (r != VK_SUCCESS)
+      return makeError(ErrorCode::NoDevice, fmt::format("vkCreateDevice failed on {}: {}",
+                                                        dev->properties_.deviceName, resultName(r)));
+    vkGetDeviceQueue(dev->device_, dev->queueFamily_, 0, &dev->queue_);
+    Status s = dev->finishInit();
+    if (!s) return s.error();
+    return dev;
+  });
 }
 
 Result<std::unique_ptr<Device>> Device::adopt(const ExternalDevice& external) {
-  if (!external.instance || !external.physicalDevice || !external.device || !external.queue)
-    return makeError(ErrorCode::InvalidArgument, "ExternalDevice: instance, physicalDevice, device and queue are required");
-  std::unique_ptr<Device> dev(new Device());
-  dev->owned_ = false;
-  dev->instance_ = external.instance;
-  dev->physical_ = external.physicalDevice;
-  dev->device_ = external.device;
-  dev->queue_ = external.queue;
-  dev->queueFamily_ = external.queueFamily;
-  dev->textureCompressionBC_ = external.textureCompressionBC;
-  uint32_t family = 0;
-  std::vector<std::string> why = missingRequirements(external.physicalDevice, &family);
-  if (!why.empty()) {
-    std::string msg = "the host's device lacks:";
-    for (auto& w : why) msg += " " + w + ";";
-    return makeError(ErrorCode::NoDevice, msg + " (features must also be enabled at device creation)");
-  }
-  vkGetPhysicalDeviceProperties(dev->physical_, &dev->properties_);
-  dev->selectionReport_ = fmt::format("device: {} (provided by host)\n", dev->properties_.deviceName);
-  Status s = dev->finishInit();
-  if (!s) return s.error();
-  return dev;
+  return gpu::catchVulkan([&]() -> Result<std::unique_ptr<Device>> {
+    if (!external.instance || !external.physicalDevice || !external.device || !external.queue)
+      return makeError(ErrorCode::InvalidArgument, "ExternalDevice: instance, physicalDevice, device and queue are required");
+    std::unique_ptr<Device> dev(new Device());
+    dev->owned_ = false;
+    dev->instance_ = external.instance;
+    dev->physical_ = external.physicalDevice;
+    dev->device_ = external.device;
+    dev->queue_ = external.queue;
+    dev->queueFamily_ = external.queueFamily;
+    dev->textureCompressionBC_ = external.textureCompressionBC;
+    uint32_t family = 0;
+    std::vector<std::string> why = missingRequirements(external.physicalDevice, &family);
+    if (!why.empty()) {
+      std::string msg = "the host's device lacks:";
+      for (auto& w : why) msg += " " + w + ";";
+      return makeError(ErrorCode::NoDevice, msg + " (features must also be enabled at device creation)");
+    }
+    vkGetPhysicalDeviceProperties(dev->physical_, &dev->properties_);
+    dev->selectionReport_ = fmt::format("device: {} (provided by host)\n", dev->properties_.deviceName);
+    Status s = dev->finishInit();
+    if (!s) return s.error();
+    return dev;
+  });
 }
 
 Status Device::finishInit() {
@@ -338,7 +344,7 @@ void Device::submitOneShot(VkCommandBuffer cmd) {
   si.commandBufferCount = 1;
   si.pCommandBuffers = &cmd;
   VK_CHECK(vkQueueSubmit(queue_, 1, &si, VK_NULL_HANDLE));
-  VK_CHECK(vkQueueWaitIdle(queue_));
+  VK_CHECK_WAIT(vkQueueWaitIdle(queue_), queue_);
   vkFreeCommandBuffers(device_, pool_, 1, &cmd);
 }
 

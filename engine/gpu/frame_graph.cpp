@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "visbuf/core/log.h"
 #include "visbuf/gpu/check.h"
 #include "visbuf/gpu/pipeline.h"
 
@@ -107,7 +108,7 @@ std::vector<FrameGraph::Use> mergeUses(const std::vector<FrameGraph::Use>& uses,
   std::vector<FrameGraph::Use> out;
   for (const FrameGraph::Use& u : uses) {
     if (u.resource >= graph.resources()) {
-      std::fprintf(stderr, "frame graph: a step uses a resource the frame did not declare\n");
+      logMessage(LogLevel::Error, "frame graph: a step uses a resource the frame did not declare");
       std::abort();
     }
     auto it = std::find_if(out.begin(), out.end(), [&](const FrameGraph::Use& o) { return o.resource == u.resource; });
@@ -116,7 +117,7 @@ std::vector<FrameGraph::Use> mergeUses(const std::vector<FrameGraph::Use>& uses,
       continue;
     }
     if (it->access.layout != u.access.layout) {
-      std::fprintf(stderr, "frame graph: %s used in two layouts by one step\n", graph.name(u.resource).c_str());
+      logMessage(LogLevel::Error, "frame graph: " + graph.name(u.resource) + " used in two layouts by one step");
       std::abort();
     }
     it->access.stages |= u.access.stages;
@@ -200,8 +201,8 @@ FrameGraph::Report FrameGraph::record(std::span<const VkCommandBuffer> cmds,
     if (!keep[i]) continue;
     const Pass& p = passes_[i];
     if (used == cmds.size()) {
-      std::fprintf(stderr, "frame graph: more passes than the %zu command buffers (at %s)\n", cmds.size(),
-                   p.name_.c_str());
+      logMessage(LogLevel::Error, "frame graph: more passes than the " + std::to_string(cmds.size()) +
+                                      " command buffers (at " + p.name_ + ")");
       std::abort();
     }
     VkCommandBuffer cmd = cmds[used++];

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <utility>
 
+#include "visbuf/core/log.h"
 #include "visbuf/gpu/check.h"
 
 // Generated at build time by glslangValidator --vn (see shaders/CMakeLists.txt).
@@ -182,7 +183,7 @@ std::span<const uint32_t> findShader(const std::string& name) {
 std::span<const uint32_t> shaderCode(const std::string& name) {
   std::span<const uint32_t> code = findShader(name);
   if (code.empty()) {
-    std::fprintf(stderr, "visbuf: fatal: no embedded shader named '%s'\n", name.c_str());
+    logMessage(LogLevel::Error, "fatal: no embedded shader named '" + name + "'");  // a build error
     std::abort();
   }
   return code;
@@ -201,6 +202,17 @@ VkShaderModule createModule(Device& device, const std::string& name, bool textur
   VK_CHECK(vkCreateShaderModule(device.device(), &ci, nullptr, &module));
   return module;
 }
+
+// A shader module destroyed when it goes out of scope: also when the pipeline's creation fails.
+struct ModuleOwner {
+  VkDevice device;
+  VkShaderModule module;
+  ModuleOwner(Device& d, const std::string& name, bool textured)
+      : device(d.device()), module(createModule(d, name, textured)) {}
+  ~ModuleOwner() { vkDestroyShaderModule(device, module, nullptr); }
+  ModuleOwner(const ModuleOwner&) = delete;
+  ModuleOwner& operator=(const ModuleOwner&) = delete;
+};
 }  // namespace
 
 Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
@@ -227,7 +239,7 @@ VkSpecializationInfo specializationInfo(const uint32_t (&values)[7]) { return {7
 
 Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const std::string& shader,
                                Specialization specialization) {
-  VkShaderModule module = createModule(device, shader, specialization.textureClasses > 0);
+  const ModuleOwner module(device, shader, specialization.textureClasses > 0);
   const uint32_t values[7] = {specialization.windowed, specialization.textureClasses, specialization.skinned,
                               specialization.texels,   specialization.extras,         specialization.pointLights,
                               specialization.materialFeatures};
@@ -235,26 +247,25 @@ Pipeline createComputePipeline(Device& device, VkPipelineLayout layout, const st
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
   ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  ci.stage.module = module;
+  ci.stage.module = module.module;
   ci.stage.pName = "main";
   ci.stage.pSpecializationInfo = &spec;
   ci.layout = layout;
   VkPipeline pipeline;
   VK_CHECK(vkCreateComputePipelines(device.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
-  vkDestroyShaderModule(device.device(), module, nullptr);
   return Pipeline(device.device(), pipeline);
 }
 
 Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const GraphicsPipelineDesc& desc) {
-  VkShaderModule vs = createModule(device, desc.vertexShader, desc.textureClasses > 0);
-  VkShaderModule fs = createModule(device, desc.fragmentShader, desc.textureClasses > 0);
+  const ModuleOwner vs(device, desc.vertexShader, desc.textureClasses > 0);
+  const ModuleOwner fs(device, desc.fragmentShader, desc.textureClasses > 0);
   VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
                                                {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
   stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
-  stages[0].module = vs;
+  stages[0].module = vs.module;
   stages[0].pName = "main";
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
-  stages[1].module = fs;
+  stages[1].module = fs.module;
   stages[1].pName = "main";
   const uint32_t values[7] = {desc.windowed, desc.textureClasses, desc.skinned,         desc.texels,
                               desc.extras,   desc.pointLights,    desc.materialFeatures};
@@ -315,8 +326,6 @@ Pipeline createGraphicsPipeline(Device& device, VkPipelineLayout layout, const G
   ci.layout = layout;
   VkPipeline pipeline;
   VK_CHECK(vkCreateGraphicsPipelines(device.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
-  vkDestroyShaderModule(device.device(), vs, nullptr);
-  vkDestroyShaderModule(device.device(), fs, nullptr);
   return Pipeline(device.device(), pipeline);
 }
 

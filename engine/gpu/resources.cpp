@@ -37,17 +37,22 @@ Buffer::Buffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, Memo
   bci.usage = usage;
   bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   VK_CHECK(vkCreateBuffer(device_, &bci, nullptr, &buffer_));
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(device_, buffer_, &req);
-  const bool deviceAddress = (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) != 0;
-  memory_ = allocate(device, req, use, deviceAddress);
-  VK_CHECK(vkBindBufferMemory(device_, buffer_, memory_, 0));
-  if (deviceAddress) {
-    VkBufferDeviceAddressInfo info{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
-    info.buffer = buffer_;
-    address_ = vkGetBufferDeviceAddress(device_, &info);
+  try {  // (a failure below releases what was made: no destructor runs for an object whose constructor threw)
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(device_, buffer_, &req);
+    const bool deviceAddress = (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) != 0;
+    memory_ = allocate(device, req, use, deviceAddress);
+    VK_CHECK(vkBindBufferMemory(device_, buffer_, memory_, 0));
+    if (deviceAddress) {
+      VkBufferDeviceAddressInfo info{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
+      info.buffer = buffer_;
+      address_ = vkGetBufferDeviceAddress(device_, &info);
+    }
+    if (use == MemoryUse::HostVisible) VK_CHECK(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  } catch (...) {
+    reset();
+    throw;
   }
-  if (use == MemoryUse::HostVisible) VK_CHECK(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
 }
 
 Buffer& Buffer::operator=(Buffer&& o) noexcept {
@@ -119,16 +124,21 @@ Image::Image(Device& device, VkFormat format, uint32_t width, uint32_t height, V
   ici.usage = usage;
   ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
   VK_CHECK(vkCreateImage(device_, &ici, nullptr, &image_));
-  VkMemoryRequirements req;
-  vkGetImageMemoryRequirements(device_, image_, &req);
-  memory_ = allocate(device, req, MemoryUse::DeviceLocal, false);
-  VK_CHECK(vkBindImageMemory(device_, image_, memory_, 0));
-  VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  vci.image = image_;
-  vci.viewType = arrayLayers > 0 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
-  vci.format = format;
-  vci.subresourceRange = {aspect, 0, mipLevels, 0, layers_};
-  VK_CHECK(vkCreateImageView(device_, &vci, nullptr, &view_));
+  try {  // (as Buffer's)
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(device_, image_, &req);
+    memory_ = allocate(device, req, MemoryUse::DeviceLocal, false);
+    VK_CHECK(vkBindImageMemory(device_, image_, memory_, 0));
+    VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    vci.image = image_;
+    vci.viewType = arrayLayers > 0 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
+    vci.format = format;
+    vci.subresourceRange = {aspect, 0, mipLevels, 0, layers_};
+    VK_CHECK(vkCreateImageView(device_, &vci, nullptr, &view_));
+  } catch (...) {
+    reset();
+    throw;
+  }
 }
 
 VkImageView Image::createLevelView(uint32_t level) const {

@@ -298,7 +298,7 @@ Result<FrameResult> Renderer::Impl::render(const Camera& camera, const FrameOpti
   si.pCommandBuffers = cmds;
   VK_CHECK(vkResetFences(device.device(), 1, &fence));
   VK_CHECK(vkQueueSubmit(device.queue(), 1, &si, fence));
-  VK_CHECK(vkWaitForFences(device.device(), 1, &fence, VK_TRUE, UINT64_MAX));
+  VK_CHECK_WAIT(vkWaitForFences(device.device(), 1, &fence, VK_TRUE, UINT64_MAX), device.queue());
 
   collectStats(slot, true);
   completed = slot.stats;
@@ -350,38 +350,44 @@ void Renderer::Impl::describeOutputs(const FramePlan& plan, const FrameInputs& i
 }
 
 Result<FrameResult> Renderer::renderFrame(const Camera& camera, const FrameOptions& options) {
-  return impl_->render(camera, options);
+  return impl_->guarded([&] { return impl_->render(camera, options); });
 }
 
-Result<RecordedFrame> Renderer::record(const FrameInputs& inputs) { return impl_->record(inputs); }
+Result<RecordedFrame> Renderer::record(const FrameInputs& inputs) {
+  return impl_->guarded([&] { return impl_->record(inputs); });
+}
+
+bool Renderer::lost() const { return impl_->failure.has_value(); }
 
 const std::optional<FrameStats>& Renderer::completedStats() const { return impl_->completed; }
 
 const IdEncoding& Renderer::idEncoding() const { return impl_->encoding; }
 
 Result<SkinnedInstanceReadback> Renderer::readSkinnedInstance(uint32_t instance) const {
-  const GpuScene& g = impl_->gpuScene;
-  if (instance >= g.skinned.size())
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("skinned instance {}: the scene has {}", instance, g.skinned.size()));
-  const GpuScene::SkinnedRegion& r = g.skinned[instance];
-  SkinnedInstanceReadback out;
-  out.object = r.object;
-  gpu::Device& dev = impl_->device;
-  std::vector<uint8_t> bytes =
-      gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.vertexBytes, uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex));
-  out.vertices.resize(r.vertexCount);
-  std::memcpy(out.vertices.data(), bytes.data(), bytes.size());
-  if (r.tangentBytes) {
-    bytes = gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.tangentBytes, uint64_t(r.vertexCount) * sizeof(uint32_t));
-    out.tangents.resize(r.vertexCount);
-    std::memcpy(out.tangents.data(), bytes.data(), bytes.size());
-  }
-  bytes = gpu::downloadBuffer(dev, g.meshes, uint64_t(r.meshSlot) * sizeof(gpu::MeshData), sizeof(gpu::MeshData));
-  gpu::MeshData md;
-  std::memcpy(&md, bytes.data(), sizeof(md));
-  out.bounds = md.boundsSphere;
-  return out;
+  return impl_->guarded([&]() -> Result<SkinnedInstanceReadback> {
+    const GpuScene& g = impl_->gpuScene;
+    if (instance >= g.skinned.size())
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("skinned instance {}: the scene has {}", instance, g.skinned.size()));
+    const GpuScene::SkinnedRegion& r = g.skinned[instance];
+    SkinnedInstanceReadback out;
+    out.object = r.object;
+    gpu::Device& dev = impl_->device;
+    std::vector<uint8_t> bytes =
+        gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.vertexBytes, uint64_t(r.vertexCount) * sizeof(gpu::SkinnedVertex));
+    out.vertices.resize(r.vertexCount);
+    std::memcpy(out.vertices.data(), bytes.data(), bytes.size());
+    if (r.tangentBytes) {
+      bytes = gpu::downloadBuffer(dev, g.skinnedVertices[r.block], r.tangentBytes, uint64_t(r.vertexCount) * sizeof(uint32_t));
+      out.tangents.resize(r.vertexCount);
+      std::memcpy(out.tangents.data(), bytes.data(), bytes.size());
+    }
+    bytes = gpu::downloadBuffer(dev, g.meshes, uint64_t(r.meshSlot) * sizeof(gpu::MeshData), sizeof(gpu::MeshData));
+    gpu::MeshData md;
+    std::memcpy(&md, bytes.data(), sizeof(md));
+    out.bounds = md.boundsSphere;
+    return out;
+  });
 }
 
 void Renderer::clearHistory() {

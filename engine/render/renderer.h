@@ -366,6 +366,17 @@ struct FrameInputs {
   VkImageLayout colorLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
 };
 
+// Errors: no method aborts or throws. A Vulkan call that fails inside one (out of memory, device lost, a driver
+// error) comes back as its Error (ErrorCode::OutOfMemory, DeviceLost or VulkanError, naming the call, file and
+// line) and leaves the renderer lost(): from then on every method that would touch the GPU returns an error, and the
+// host destroys it (the destructor is safe) and creates another -- on a new gpu::Device after DeviceLost. create()
+// failing leaves nothing behind. Logging goes through setLogSink (visbuf/core/log.h).
+//
+// Threads: a Renderer is used by one thread at a time (no method is safe to call concurrently with another on the
+// same renderer, const ones included); the host serialises them. Renderers on one gpu::Device may be used from
+// different threads only if the host also serialises their queue submissions (Vulkan's rule for one VkQueue):
+// renderFrame and readSkinnedInstance submit to the device's queue, record() does not. The log sink may be
+// called from any of those threads.
 class Renderer {
  public:
   static Result<std::unique_ptr<Renderer>> create(gpu::Device& device, const Scene& scene,
@@ -373,6 +384,9 @@ class Renderer {
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
+
+  // True after a Vulkan failure inside one of its methods (see above): destroy it and create another.
+  bool lost() const;
 
   // Recreates the screen targets (the ID encoding may change with the capacity, not the size).
   Status resize(uint32_t width, uint32_t height);

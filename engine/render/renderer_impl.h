@@ -17,6 +17,7 @@
 #include <fmt/ranges.h>
 #include <glm/gtc/packing.hpp>
 
+#include "visbuf/core/log.h"
 #include "visbuf/gpu/check.h"
 #include "visbuf/gpu/frame_graph.h"
 #include "visbuf/gpu/pipeline.h"
@@ -183,6 +184,26 @@ struct Renderer::Impl {
   gpu::Buffer history;      // uint per object: visible at the end of the last occlusion-culled frame
   gpu::Buffer visibleList;  // the same set listed (config.h VISIBLE_LIST_HEADER): the early cull's threads
   bool historyDirty = true; // cleared before the next frame (creation, clearHistory)
+  // The first Vulkan failure of a public call (a VulkanFailure thrown by VK_CHECK): from then on the renderer is
+  // lost and every call that would touch the GPU returns lostError().
+  std::optional<Error> failure;
+  Error lostError() const {
+    return makeError(failure->code, "the renderer is unusable after an earlier failure (" + failure->message +
+                                        "): destroy it and create another");
+  }
+  // A public method's body: refused once the renderer is lost; a VulkanFailure inside marks it lost, is logged and
+  // comes back as its error (out of memory, device lost, or another Vulkan error).
+  template <class F>
+  auto guarded(F&& f) -> decltype(f()) {
+    if (failure) return lostError();
+    try {
+      return f();
+    } catch (const gpu::VulkanFailure& e) {
+      failure = gpu::errorOf(e);
+      logMessage(LogLevel::Error, "renderer: " + failure->message + "; the renderer is lost");
+      return *failure;
+    }
+  }
   gpu::Buffer pyramidReadback;
   gpu::Buffer overdrawReadback;
   gpu::Buffer attributes;           // float[ATTRIBUTE_FLOATS] per pixel; a 64-byte placeholder until asked for

@@ -223,183 +223,187 @@ Renderer::~Renderer() = default;
 
 Result<std::unique_ptr<Renderer>> Renderer::create(gpu::Device& device, const Scene& scene,
                                                    const RendererConfig& config) {
-  if (config.width == 0 || config.height == 0 || config.width > 16384 || config.height > 16384)
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("image size {}x{} outside 1..16384", config.width, config.height));
-  if (config.framesInFlight < 1 || config.framesInFlight > 4)
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("framesInFlight {} outside 1..4", config.framesInFlight));
-  if (uint64_t(scene.objects.size()) + config.spareObjects > (1ull << 31))
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("{} objects + {} spare slots: more than 2^31 object IDs", scene.objects.size(),
-                                 config.spareObjects));
-  auto impl = std::make_unique<Impl>(device, scene);
-  impl->config = config;
-  impl->slots.resize(config.framesInFlight);
-  Result<GpuScene> g = uploadScene(device, scene, config.spareObjects);
-  if (!g) return g.error();
-  impl->gpuScene = std::move(g.value());
-  // Default capacity: one draw per object, as far as one descriptor range holds both phases' draw lists
-  // (beyond that, overflow is counted and reported like any capacity overflow).
-  const uint64_t maxRange = device.properties().limits.maxStorageBufferRange;
-  impl->objectSplit = objectWindowSplit(maxRange, impl->gpuScene.objectCount);
-  impl->vertexShift = vertexWindowShift(maxRange);
-  // Draw lists: each list's capacity is its object count (a list can never hold more), capped by
-  // config.drawCapacity (per list) or, by default, shared out so that both phases fit one descriptor range.
-  std::array<uint64_t, DRAW_LISTS> listObjects{};
-  uint64_t listed = 0;
-  const uint32_t sceneObjects = uint32_t(scene.objects.size());
-  for (uint32_t i = 0; i < sceneObjects; ++i) {
-    const uint32_t l = impl->gpuScene.objectList[i];
-    if (l == DRAW_LIST_NONE)
-      impl->blendObjects.push_back(i);
-    else
-      ++listObjects[l], ++listed, ++impl->listLive[l];
-  }
-  // Spare slots: every list has room for all of them (an added object may land in any list).
-  if (config.spareObjects)
-    for (uint32_t l = 0; l < DRAW_LISTS; ++l) listObjects[l] += config.spareObjects, listed += config.spareObjects;
-  impl->objects = scene.objects;
-  impl->objects.resize(sceneObjects + config.spareObjects);
-  impl->slotState.assign(sceneObjects + config.spareObjects, Impl::SlotFree);
-  std::fill_n(impl->slotState.begin(), sceneObjects, Impl::SlotLive);
-  for (uint32_t i = sceneObjects + config.spareObjects; i-- > sceneObjects;) impl->freeSlots.push_back(i);
-  impl->dirtyIndex.assign(impl->slotState.size(), 0);
-  impl->skinnedObject.assign(impl->slotState.size(), 0);
-  impl->rigidObject.assign(impl->slotState.size(), 0);
-  for (const RigidObject& ro : impl->scene.rigidObjects) impl->rigidObject[ro.object] = 1;
-  for (const SkinnedObject& so : scene.skinnedObjects) impl->skinnedObject[so.object] = 1;
-  const uint64_t rangeSlots = maxRange / (2 * sizeof(gpu::DrawCommand));
-  // Cluster draws (config.h CULL_CLUSTERS) get a reserve beyond one draw per object, shared out among the lists by
-  // their objects: as many as fit without costing the ID encoding anything -- the narrow 32-bit IDs where the objects'
-  // slots allow them, else the micro-raster's full triangle cap (2^21 slots), else the power of two the objects'
-  // slots need --, at least 4,096, at most 2^18 and at most every object's largest level in clusters. Only lists
-  // whose region holds every object get one; an object whose clusters do not fit is drawn whole.
-  constexpr uint64_t kMinClusterReserve = 4096, kMaxClusterReserve = uint64_t{1} << 18;
-  const uint32_t triangleBits = chooseIdEncoding(1, impl->gpuScene.maxTrianglesPerDraw, false).triangleBits;
-  const uint64_t objectSlots = 2 * listed;
-  const uint64_t narrowSlots = (uint64_t{1} << (32 - std::min(triangleBits, 31u))) - 1;
-  const uint64_t swSlots = uint64_t{1} << (32 - std::bit_width(SW_RASTER_MAX_TRIANGLES - 1));
-  const uint64_t slotLimit = objectSlots <= narrowSlots ? narrowSlots
-                             : objectSlots <= swSlots   ? swSlots
-                                                        : std::bit_ceil(objectSlots);
-  const uint64_t reserveTotal =
-      config.drawCapacity || listed > rangeSlots || impl->gpuScene.clusterCount == 0
-          ? 0
-          : std::min<uint64_t>({std::max(slotLimit / 2 - listed, kMinClusterReserve), kMaxClusterReserve,
-                                listed * impl->gpuScene.maxClustersPerLod, rangeSlots - listed});
-  for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
-    uint64_t c = listObjects[l];
-    if (config.drawCapacity)
-      c = std::min<uint64_t>(c, config.drawCapacity);
-    else if (listed > rangeSlots)
-      c = std::max<uint64_t>(c ? 1 : 0, c * rangeSlots / listed);
-    const uint64_t reserve = c == listObjects[l] && listed ? reserveTotal * c / listed : 0;
-    impl->listFirst[l] = impl->capacity;
-    impl->listCapacity[l] = uint32_t(c + reserve);
-    impl->listClusterReserve[l] = uint32_t(reserve);
-    impl->capacity += uint32_t(c + reserve);
-    if (c) impl->listMask |= 1u << l;
-    // The micro-raster fills a list's region from its end, so only where the region holds every object of the list.
-    if (c && c == listObjects[l] && !passes::drawListMasked(l)) impl->swListMask |= 1u << l;
-  }
-  impl->capacity = std::max(impl->capacity, 1u);  // (a scene of only BLEND objects: no list, one unused slot)
-  // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
-  const uint64_t drawBytes = 2 * uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
-  if (drawBytes > device.properties().limits.maxStorageBufferRange)
-    return makeError(ErrorCode::CapacityExceeded,
-                     fmt::format("draw capacity {} needs {:.1f} MiB, over maxStorageBufferRange", impl->capacity,
-                                 drawBytes / 1048576.0));
-  impl->encoding = chooseIdEncoding(2 * impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
-  impl->msaaCounts = supportedMsaaSamples(device);
-  impl->createLayouts();
-  // Descriptor windows only when needed: a scene whose objects and vertices fit one range reads them directly.
-  const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||
-                        impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
-  const uint32_t w = windowed ? 1u : 0u;
-  // Texel views: the scene's records and the draws (five words each) within maxTexelBufferElements.
-  const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
-  const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
-  gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
-                               impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
-  const auto& meshTable = impl->gpuScene.meshTable;
-  textured.extras = std::any_of(meshTable.begin(), meshTable.end(),
-                                [](const gpu::MeshData& m) { return m.extraOffset != EXTRA_NONE; }) ? 1u : 0u;
-  textured.pointLights = impl->hasPointLights() ? 1u : 0u;
-  textured.materialFeatures = 0u;
-  for (const Material& m : scene.materials) textured.materialFeatures |= materialFeatures(m);
-  impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
-  impl->objectUpload.create(device);
-  impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
-  impl->shade = passes::ShadePass::create(device, impl->sceneSets.layout(), textured);
-  if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->sceneSets.layout(), textured);
-  impl->forward = passes::ForwardPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
-  if (!impl->blendObjects.empty())
-    impl->transparent = passes::TransparentPass::create(device, impl->sceneSets.layout(), textured);
-  std::array<glm::uvec4, 2 * DRAW_LISTS> lists{};
-  for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
-    lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
-                impl->swListMask >> l & 1u};
-    lists[DRAW_LISTS + l] = {impl->listClusterReserve[l], 0, 0, 0};
-  }
-  impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
-  std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
-  impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
-  impl->draws = gpu::Buffer(device, drawBytes,
-                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
-                            gpu::MemoryUse::DeviceLocal);
-  impl->drawTexels = gpu::BufferView(device, impl->draws, VK_FORMAT_R32_UINT, 0,
-                                     std::min<VkDeviceSize>(drawBytes / 4, maxTexels) * 4);
-  impl->stats = gpu::Buffer(device, STAT_BUFFER_UINTS * sizeof(uint32_t),
-                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                            gpu::MemoryUse::DeviceLocal);
-  impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
-                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                              gpu::MemoryUse::DeviceLocal);
-  // The visible list, the refinement list, the cluster lists' (object, LOD) entries (config.h CLUSTER_ARGS), the
-  // late list (LATE_LIST_WORD), the retest list's entries (RETEST_LIST_WORD), then the late draw list
-  // (LATE_DRAW_LIST_WORD).
-  impl->visibleList = gpu::Buffer(device, (impl->lateDrawListOffset() / 4 + VISIBLE_LIST_HEADER +
-                                           uint64_t(impl->gpuScene.objectCount)) * 4,
-                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
-                                      VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
-                                  gpu::MemoryUse::DeviceLocal);
-  impl->pyramid.create(device);
-  if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
-    std::vector<gpu::PointLightData> lights;
-    for (const PointLight& l : scene.pointLights) {
-      const glm::vec2 cone(spotAngleScaleOffset(l));
-      lights.push_back({glm::vec4(glm::vec3(l.position - scene.anchor), l.range), glm::vec4(l.color, l.intensity),
-                        glm::vec4(l.direction, 0.0f), cone.x, cone.y, uint32_t(l.type), 0u});
+  return gpu::catchVulkan([&]() -> Result<std::unique_ptr<Renderer>> {
+    if (config.width == 0 || config.height == 0 || config.width > 16384 || config.height > 16384)
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("image size {}x{} outside 1..16384", config.width, config.height));
+    if (config.framesInFlight < 1 || config.framesInFlight > 4)
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("framesInFlight {} outside 1..4", config.framesInFlight));
+    if (uint64_t(scene.objects.size()) + config.spareObjects > (1ull << 31))
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("{} objects + {} spare slots: more than 2^31 object IDs", scene.objects.size(),
+                                   config.spareObjects));
+    auto impl = std::make_unique<Impl>(device, scene);
+    impl->config = config;
+    impl->slots.resize(config.framesInFlight);
+    Result<GpuScene> g = uploadScene(device, scene, config.spareObjects);
+    if (!g) return g.error();
+    impl->gpuScene = std::move(g.value());
+    // Default capacity: one draw per object, as far as one descriptor range holds both phases' draw lists
+    // (beyond that, overflow is counted and reported like any capacity overflow).
+    const uint64_t maxRange = device.properties().limits.maxStorageBufferRange;
+    impl->objectSplit = objectWindowSplit(maxRange, impl->gpuScene.objectCount);
+    impl->vertexShift = vertexWindowShift(maxRange);
+    // Draw lists: each list's capacity is its object count (a list can never hold more), capped by
+    // config.drawCapacity (per list) or, by default, shared out so that both phases fit one descriptor range.
+    std::array<uint64_t, DRAW_LISTS> listObjects{};
+    uint64_t listed = 0;
+    const uint32_t sceneObjects = uint32_t(scene.objects.size());
+    for (uint32_t i = 0; i < sceneObjects; ++i) {
+      const uint32_t l = impl->gpuScene.objectList[i];
+      if (l == DRAW_LIST_NONE)
+        impl->blendObjects.push_back(i);
+      else
+        ++listObjects[l], ++listed, ++impl->listLive[l];
     }
-    impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
-    impl->lightCull.create(device, impl->sceneSets.layout(), w);
-  }
-  impl->createTargets(config.width, config.height);
-  const bool gpuBounds = config.skinBounds == SkinBounds::Gpu;
-  auto animation = AnimationState::create(device, scene, impl->gpuScene, gpuBounds);
-  if (!animation) return animation.error();
-  impl->animation = std::move(animation.value());
-  if (impl->animation)
-    impl->skin.create(device,
-                      {vertexWindows(impl->gpuScene.vertices, impl->vertexShift), impl->gpuScene.meshes.handle(),
-                       impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
-                       impl->animation->instances().handle(), impl->gpuScene.vertexExtras.handle(),
-                       impl->animation->bounds().handle(),
-                       impl->gpuScene.morphDeltas ? impl->gpuScene.morphDeltas.handle() : impl->animation->joints().handle(),
-                       gpuBounds},
-                      impl->vertexShift);
-  return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+    // Spare slots: every list has room for all of them (an added object may land in any list).
+    if (config.spareObjects)
+      for (uint32_t l = 0; l < DRAW_LISTS; ++l) listObjects[l] += config.spareObjects, listed += config.spareObjects;
+    impl->objects = scene.objects;
+    impl->objects.resize(sceneObjects + config.spareObjects);
+    impl->slotState.assign(sceneObjects + config.spareObjects, Impl::SlotFree);
+    std::fill_n(impl->slotState.begin(), sceneObjects, Impl::SlotLive);
+    for (uint32_t i = sceneObjects + config.spareObjects; i-- > sceneObjects;) impl->freeSlots.push_back(i);
+    impl->dirtyIndex.assign(impl->slotState.size(), 0);
+    impl->skinnedObject.assign(impl->slotState.size(), 0);
+    impl->rigidObject.assign(impl->slotState.size(), 0);
+    for (const RigidObject& ro : impl->scene.rigidObjects) impl->rigidObject[ro.object] = 1;
+    for (const SkinnedObject& so : scene.skinnedObjects) impl->skinnedObject[so.object] = 1;
+    const uint64_t rangeSlots = maxRange / (2 * sizeof(gpu::DrawCommand));
+    // Cluster draws (config.h CULL_CLUSTERS) get a reserve beyond one draw per object, shared out among the lists by
+    // their objects: as many as fit without costing the ID encoding anything -- the narrow 32-bit IDs where the objects'
+    // slots allow them, else the micro-raster's full triangle cap (2^21 slots), else the power of two the objects'
+    // slots need --, at least 4,096, at most 2^18 and at most every object's largest level in clusters. Only lists
+    // whose region holds every object get one; an object whose clusters do not fit is drawn whole.
+    constexpr uint64_t kMinClusterReserve = 4096, kMaxClusterReserve = uint64_t{1} << 18;
+    const uint32_t triangleBits = chooseIdEncoding(1, impl->gpuScene.maxTrianglesPerDraw, false).triangleBits;
+    const uint64_t objectSlots = 2 * listed;
+    const uint64_t narrowSlots = (uint64_t{1} << (32 - std::min(triangleBits, 31u))) - 1;
+    const uint64_t swSlots = uint64_t{1} << (32 - std::bit_width(SW_RASTER_MAX_TRIANGLES - 1));
+    const uint64_t slotLimit = objectSlots <= narrowSlots ? narrowSlots
+                               : objectSlots <= swSlots   ? swSlots
+                                                          : std::bit_ceil(objectSlots);
+    const uint64_t reserveTotal =
+        config.drawCapacity || listed > rangeSlots || impl->gpuScene.clusterCount == 0
+            ? 0
+            : std::min<uint64_t>({std::max(slotLimit / 2 - listed, kMinClusterReserve), kMaxClusterReserve,
+                                  listed * impl->gpuScene.maxClustersPerLod, rangeSlots - listed});
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+      uint64_t c = listObjects[l];
+      if (config.drawCapacity)
+        c = std::min<uint64_t>(c, config.drawCapacity);
+      else if (listed > rangeSlots)
+        c = std::max<uint64_t>(c ? 1 : 0, c * rangeSlots / listed);
+      const uint64_t reserve = c == listObjects[l] && listed ? reserveTotal * c / listed : 0;
+      impl->listFirst[l] = impl->capacity;
+      impl->listCapacity[l] = uint32_t(c + reserve);
+      impl->listClusterReserve[l] = uint32_t(reserve);
+      impl->capacity += uint32_t(c + reserve);
+      if (c) impl->listMask |= 1u << l;
+      // The micro-raster fills a list's region from its end, so only where the region holds every object of the list.
+      if (c && c == listObjects[l] && !passes::drawListMasked(l)) impl->swListMask |= 1u << l;
+    }
+    impl->capacity = std::max(impl->capacity, 1u);  // (a scene of only BLEND objects: no list, one unused slot)
+    // Two regions of `capacity` commands: the early (or only) phase, then the late phase.
+    const uint64_t drawBytes = 2 * uint64_t(impl->capacity) * sizeof(gpu::DrawCommand);
+    if (drawBytes > device.properties().limits.maxStorageBufferRange)
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("draw capacity {} needs {:.1f} MiB, over maxStorageBufferRange", impl->capacity,
+                                   drawBytes / 1048576.0));
+    impl->encoding = chooseIdEncoding(2 * impl->capacity, impl->gpuScene.maxTrianglesPerDraw, config.forceWideIds);
+    impl->msaaCounts = supportedMsaaSamples(device);
+    impl->createLayouts();
+    // Descriptor windows only when needed: a scene whose objects and vertices fit one range reads them directly.
+    const bool windowed = impl->objectSplit < impl->gpuScene.objectCount ||
+                          impl->gpuScene.vertices.size() > (VkDeviceSize(sizeof(gpu::Vertex)) << impl->vertexShift);
+    const uint32_t w = windowed ? 1u : 0u;
+    // Texel views: the scene's records and the draws (five words each) within maxTexelBufferElements.
+    const VkDeviceSize maxTexels = device.properties().limits.maxTexelBufferElements;
+    const bool texels = impl->gpuScene.texels && !windowed && drawBytes / 4 <= maxTexels;
+    gpu::Specialization textured(w, uint32_t(impl->gpuScene.textureClasses.size()),
+                                 impl->gpuScene.skinned.empty() ? 0u : 1u, texels ? 1u : 0u);
+    const auto& meshTable = impl->gpuScene.meshTable;
+    textured.extras = std::any_of(meshTable.begin(), meshTable.end(),
+                                  [](const gpu::MeshData& m) { return m.extraOffset != EXTRA_NONE; }) ? 1u : 0u;
+    textured.pointLights = impl->hasPointLights() ? 1u : 0u;
+    textured.materialFeatures = 0u;
+    for (const Material& m : scene.materials) textured.materialFeatures |= materialFeatures(m);
+    impl->cull = passes::CullPass::create(device, impl->sceneSets.layout(), textured);
+    impl->objectUpload.create(device);
+    impl->visibility = passes::VisibilityPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
+    impl->shade = passes::ShadePass::create(device, impl->sceneSets.layout(), textured);
+    if (impl->swListMask) impl->swRaster = passes::SwRasterPass::create(device, impl->sceneSets.layout(), textured);
+    impl->forward = passes::ForwardPass::create(device, impl->sceneSets.layout(), textured, impl->listMask);
+    if (!impl->blendObjects.empty())
+      impl->transparent = passes::TransparentPass::create(device, impl->sceneSets.layout(), textured);
+    std::array<glm::uvec4, 2 * DRAW_LISTS> lists{};
+    for (uint32_t l = 0; l < DRAW_LISTS; ++l) {
+      lists[l] = {impl->listFirst[l], impl->capacity + impl->listFirst[l], impl->listCapacity[l],
+                  impl->swListMask >> l & 1u};
+      lists[DRAW_LISTS + l] = {impl->listClusterReserve[l], 0, 0, 0};
+    }
+    impl->drawLists = gpu::Buffer(device, sizeof(lists), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUse::HostVisible);
+    std::memcpy(impl->drawLists.mapped(), lists.data(), sizeof(lists));
+    impl->textured = textured;  // the G-buffer pipelines are created by the first G-buffer frame
+    impl->draws = gpu::Buffer(device, drawBytes,
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                  VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
+                              gpu::MemoryUse::DeviceLocal);
+    impl->drawTexels = gpu::BufferView(device, impl->draws, VK_FORMAT_R32_UINT, 0,
+                                       std::min<VkDeviceSize>(drawBytes / 4, maxTexels) * 4);
+    impl->stats = gpu::Buffer(device, STAT_BUFFER_UINTS * sizeof(uint32_t),
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                  VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                              gpu::MemoryUse::DeviceLocal);
+    impl->history = gpu::Buffer(device, std::max<uint64_t>(16, uint64_t(impl->gpuScene.objectCount) * 4),
+                                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                gpu::MemoryUse::DeviceLocal);
+    // The visible list, the refinement list, the cluster lists' (object, LOD) entries (config.h CLUSTER_ARGS), the
+    // late list (LATE_LIST_WORD), the retest list's entries (RETEST_LIST_WORD), then the late draw list
+    // (LATE_DRAW_LIST_WORD).
+    impl->visibleList = gpu::Buffer(device, (impl->lateDrawListOffset() / 4 + VISIBLE_LIST_HEADER +
+                                             uint64_t(impl->gpuScene.objectCount)) * 4,
+                                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                        VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                                    gpu::MemoryUse::DeviceLocal);
+    impl->pyramid.create(device);
+    if (impl->hasPointLights()) {  // scenes without point lights allocate no light buffers at all
+      std::vector<gpu::PointLightData> lights;
+      for (const PointLight& l : scene.pointLights) {
+        const glm::vec2 cone(spotAngleScaleOffset(l));
+        lights.push_back({glm::vec4(glm::vec3(l.position - scene.anchor), l.range), glm::vec4(l.color, l.intensity),
+                          glm::vec4(l.direction, 0.0f), cone.x, cone.y, uint32_t(l.type), 0u});
+      }
+      impl->pointLights = gpu::uploadVector(device, lights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+      impl->lightCull.create(device, impl->sceneSets.layout(), w);
+    }
+    impl->createTargets(config.width, config.height);
+    const bool gpuBounds = config.skinBounds == SkinBounds::Gpu;
+    auto animation = AnimationState::create(device, scene, impl->gpuScene, gpuBounds);
+    if (!animation) return animation.error();
+    impl->animation = std::move(animation.value());
+    if (impl->animation)
+      impl->skin.create(device,
+                        {vertexWindows(impl->gpuScene.vertices, impl->vertexShift), impl->gpuScene.meshes.handle(),
+                         impl->gpuScene.skinVertices.handle(), impl->animation->joints().handle(),
+                         impl->animation->instances().handle(), impl->gpuScene.vertexExtras.handle(),
+                         impl->animation->bounds().handle(),
+                         impl->gpuScene.morphDeltas ? impl->gpuScene.morphDeltas.handle() : impl->animation->joints().handle(),
+                         gpuBounds},
+                        impl->vertexShift);
+    return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+  });
 }
 
 Status Renderer::resize(uint32_t width, uint32_t height) {
-  if (width == 0 || height == 0 || width > 16384 || height > 16384)
-    return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
-  impl_->createTargets(width, height);
-  impl_->frameHistory.cut();  // a new size: probe the pyramid again
-  return {};  // the draw lists stay valid (they do not depend on the size): freezeCulling still works
+  return impl_->guarded([&]() -> Status {
+    if (width == 0 || height == 0 || width > 16384 || height > 16384)
+      return makeError(ErrorCode::InvalidArgument, fmt::format("image size {}x{} outside 1..16384", width, height));
+    impl_->createTargets(width, height);
+    impl_->frameHistory.cut();  // a new size: probe the pyramid again
+    return {};  // the draw lists stay valid (they do not depend on the size): freezeCulling still works
+  });
 }
 
 }  // namespace visbuf

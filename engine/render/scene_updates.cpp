@@ -71,109 +71,117 @@ Status Renderer::Impl::checkTransform(uint32_t id, const glm::dmat4& m, const ch
 }
 
 Status Renderer::setTransforms(std::span<const ObjectTransform> moves) {
-  Impl& r = *impl_;
-  // All or nothing: every move is checked (draw-list room included) before any is applied.
-  std::array<uint32_t, DRAW_LISTS> live = r.listLive;
-  std::vector<gpu::ObjectData> records(moves.size());  // packed now, while the objects are in cache
-  for (size_t i = 0; i < moves.size(); ++i) {
-    const ObjectTransform& m = moves[i];
-    if (Status s = r.checkTransform(m.object, m.transform, "setTransforms"); !s.ok()) return s;
-    Object moved = r.objects[m.object];
-    moved.transform = m.transform;
-    records[i] = packObject(moved, r.scene);
-    if (r.slotState[m.object] == Impl::SlotHidden) records[i].flags |= OBJECT_FLAG_HIDDEN;
-    const uint32_t list = gpu::objectDrawList(records[i].flags);
-    const uint32_t from = r.gpuScene.objectList[m.object];
-    if (list == from) continue;
-    // The winding flipped: the object changes draw list; a list the micro-raster fills from its end must have room.
-    if (list != DRAW_LIST_NONE && (r.swListMask >> list & 1u) && live[list] >= r.listObjectCapacity(list))
-      return makeError(ErrorCode::CapacityExceeded,
-                       fmt::format("setTransforms: object {} flips its winding into draw list {}, which is full "
-                                   "(capacity {}); reserve RendererConfig::spareObjects",
-                                   m.object, list, r.listObjectCapacity(list)));
-    if (from != DRAW_LIST_NONE) --live[from];
-    if (list != DRAW_LIST_NONE) ++live[list];
-  }
-  for (size_t i = 0; i < moves.size(); ++i) {
-    r.objects[moves[i].object].transform = moves[i].transform;
-    r.gpuScene.objectList[moves[i].object] = gpu::objectDrawList(records[i].flags);
-    r.markDirty(moves[i].object, records[i]);
-  }
-  r.listLive = live;
-  return {};
+  return impl_->guarded([&]() -> Status {
+    Impl& r = *impl_;
+    // All or nothing: every move is checked (draw-list room included) before any is applied.
+    std::array<uint32_t, DRAW_LISTS> live = r.listLive;
+    std::vector<gpu::ObjectData> records(moves.size());  // packed now, while the objects are in cache
+    for (size_t i = 0; i < moves.size(); ++i) {
+      const ObjectTransform& m = moves[i];
+      if (Status s = r.checkTransform(m.object, m.transform, "setTransforms"); !s.ok()) return s;
+      Object moved = r.objects[m.object];
+      moved.transform = m.transform;
+      records[i] = packObject(moved, r.scene);
+      if (r.slotState[m.object] == Impl::SlotHidden) records[i].flags |= OBJECT_FLAG_HIDDEN;
+      const uint32_t list = gpu::objectDrawList(records[i].flags);
+      const uint32_t from = r.gpuScene.objectList[m.object];
+      if (list == from) continue;
+      // The winding flipped: the object changes draw list; a list the micro-raster fills from its end must have room.
+      if (list != DRAW_LIST_NONE && (r.swListMask >> list & 1u) && live[list] >= r.listObjectCapacity(list))
+        return makeError(ErrorCode::CapacityExceeded,
+                         fmt::format("setTransforms: object {} flips its winding into draw list {}, which is full "
+                                     "(capacity {}); reserve RendererConfig::spareObjects",
+                                     m.object, list, r.listObjectCapacity(list)));
+      if (from != DRAW_LIST_NONE) --live[from];
+      if (list != DRAW_LIST_NONE) ++live[list];
+    }
+    for (size_t i = 0; i < moves.size(); ++i) {
+      r.objects[moves[i].object].transform = moves[i].transform;
+      r.gpuScene.objectList[moves[i].object] = gpu::objectDrawList(records[i].flags);
+      r.markDirty(moves[i].object, records[i]);
+    }
+    r.listLive = live;
+    return {};
+  });
 }
 
 Status Renderer::setVisible(uint32_t object, bool visible) {
-  Impl& r = *impl_;
-  if (!r.isLive(object))
-    return makeError(ErrorCode::InvalidArgument, fmt::format("setVisible: object {} is not a live object", object));
-  const uint8_t state = visible ? Impl::SlotLive : Impl::SlotHidden;
-  if (r.slotState[object] == state) return {};
-  r.slotState[object] = state;
-  r.markDirty(object);
-  return {};
+  return impl_->guarded([&]() -> Status {
+    Impl& r = *impl_;
+    if (!r.isLive(object))
+      return makeError(ErrorCode::InvalidArgument, fmt::format("setVisible: object {} is not a live object", object));
+    const uint8_t state = visible ? Impl::SlotLive : Impl::SlotHidden;
+    if (r.slotState[object] == state) return {};
+    r.slotState[object] = state;
+    r.markDirty(object);
+    return {};
+  });
 }
 
 Result<uint32_t> Renderer::addObject(const Object& object) {
-  Impl& r = *impl_;
-  if (object.mesh >= r.scene.meshes.size())
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("addObject: mesh {} (the scene has {})", object.mesh, r.scene.meshes.size()));
-  if (object.material >= r.scene.materials.size())
-    return makeError(ErrorCode::InvalidArgument, fmt::format("addObject: material {} (the scene has {})",
-                                                             object.material, r.scene.materials.size()));
-  if (r.freeSlots.empty())
-    return makeError(ErrorCode::CapacityExceeded,
-                     fmt::format("addObject: no free object slot ({} in use); create the renderer with more "
-                                 "RendererConfig::spareObjects",
-                                 r.slotState.size()));
-  const uint32_t id = r.freeSlots.back();
-  r.slotState[id] = Impl::SlotLive;  // (for checkTransform; undone below on refusal)
-  Status s = r.checkTransform(id, object.transform, "addObject");
-  const uint32_t list = gpu::objectDrawList(packObject(object, r.scene).flags);
-  if (s.ok() && list != DRAW_LIST_NONE && r.listLive[list] >= r.listObjectCapacity(list))
-    s = makeError(ErrorCode::CapacityExceeded, fmt::format("addObject: draw list {} is full (capacity {})", list,
-                                                            r.listObjectCapacity(list)));
-  if (!s.ok()) {
-    r.slotState[id] = Impl::SlotFree;
-    return s.error();
-  }
-  r.freeSlots.pop_back();
-  r.objects[id] = object;
-  r.gpuScene.objectMesh[id] = object.mesh;
-  r.gpuScene.objectList[id] = list;
-  if (list != DRAW_LIST_NONE) {
-    ++r.listLive[list];
-  } else {
-    if (!r.transparent.created()) {
-      r.transparent = passes::TransparentPass::create(r.device, r.sceneSets.layout(), r.textured);
-      r.transparent.bind(r.boundLights(), r.boundLightTiles());
+  return impl_->guarded([&]() -> Result<uint32_t> {
+    Impl& r = *impl_;
+    if (object.mesh >= r.scene.meshes.size())
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("addObject: mesh {} (the scene has {})", object.mesh, r.scene.meshes.size()));
+    if (object.material >= r.scene.materials.size())
+      return makeError(ErrorCode::InvalidArgument, fmt::format("addObject: material {} (the scene has {})",
+                                                               object.material, r.scene.materials.size()));
+    if (r.freeSlots.empty())
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("addObject: no free object slot ({} in use); create the renderer with more "
+                                   "RendererConfig::spareObjects",
+                                   r.slotState.size()));
+    const uint32_t id = r.freeSlots.back();
+    r.slotState[id] = Impl::SlotLive;  // (for checkTransform; undone below on refusal)
+    Status s = r.checkTransform(id, object.transform, "addObject");
+    const uint32_t list = gpu::objectDrawList(packObject(object, r.scene).flags);
+    if (s.ok() && list != DRAW_LIST_NONE && r.listLive[list] >= r.listObjectCapacity(list))
+      s = makeError(ErrorCode::CapacityExceeded, fmt::format("addObject: draw list {} is full (capacity {})", list,
+                                                              r.listObjectCapacity(list)));
+    if (!s.ok()) {
+      r.slotState[id] = Impl::SlotFree;
+      return s.error();
     }
-    r.blendObjects.push_back(id);
-  }
-  r.markDirty(id);
-  return id;
+    r.freeSlots.pop_back();
+    r.objects[id] = object;
+    r.gpuScene.objectMesh[id] = object.mesh;
+    r.gpuScene.objectList[id] = list;
+    if (list != DRAW_LIST_NONE) {
+      ++r.listLive[list];
+    } else {
+      if (!r.transparent.created()) {
+        r.transparent = passes::TransparentPass::create(r.device, r.sceneSets.layout(), r.textured);
+        r.transparent.bind(r.boundLights(), r.boundLightTiles());
+      }
+      r.blendObjects.push_back(id);
+    }
+    r.markDirty(id);
+    return id;
+  });
 }
 
 Status Renderer::removeObject(uint32_t object) {
-  Impl& r = *impl_;
-  if (!r.isLive(object))
-    return makeError(ErrorCode::InvalidArgument, fmt::format("removeObject: object {} is not a live object", object));
-  if (r.skinnedObject[object])
-    return makeError(ErrorCode::InvalidArgument,
-                     fmt::format("removeObject: object {} is skinned (hide it with setVisible)", object));
-  const uint32_t list = r.gpuScene.objectList[object];
-  if (list != DRAW_LIST_NONE)
-    --r.listLive[list];
-  else
-    r.blendObjects.erase(std::remove(r.blendObjects.begin(), r.blendObjects.end(), object), r.blendObjects.end());
-  r.slotState[object] = Impl::SlotFree;
-  r.rigidObject[object] = 0;  // a new object in this slot is the host's to place
-  r.gpuScene.objectList[object] = DRAW_LIST_NONE;
-  r.freeSlots.push_back(object);
-  std::sort(r.freeSlots.rbegin(), r.freeSlots.rend());  // the lowest free ID is reused first
-  r.markDirty(object);
-  return {};
+  return impl_->guarded([&]() -> Status {
+    Impl& r = *impl_;
+    if (!r.isLive(object))
+      return makeError(ErrorCode::InvalidArgument, fmt::format("removeObject: object {} is not a live object", object));
+    if (r.skinnedObject[object])
+      return makeError(ErrorCode::InvalidArgument,
+                       fmt::format("removeObject: object {} is skinned (hide it with setVisible)", object));
+    const uint32_t list = r.gpuScene.objectList[object];
+    if (list != DRAW_LIST_NONE)
+      --r.listLive[list];
+    else
+      r.blendObjects.erase(std::remove(r.blendObjects.begin(), r.blendObjects.end(), object), r.blendObjects.end());
+    r.slotState[object] = Impl::SlotFree;
+    r.rigidObject[object] = 0;  // a new object in this slot is the host's to place
+    r.gpuScene.objectList[object] = DRAW_LIST_NONE;
+    r.freeSlots.push_back(object);
+    std::sort(r.freeSlots.rbegin(), r.freeSlots.rend());  // the lowest free ID is reused first
+    r.markDirty(object);
+    return {};
+  });
 }
 
 void Renderer::Impl::poseRigidObjects(double time) {

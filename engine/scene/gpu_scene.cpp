@@ -20,7 +20,9 @@ class StagingUploader {
       : device_(device),
         staging_(device, std::max<VkDeviceSize>(capacity, 16), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                  gpu::MemoryUse::HostVisible) {}
-  ~StagingUploader() { flush(); }
+  // Pending copies are dropped, not submitted: the upload that keeps its buffers calls release(); one abandoned on
+  // an error (returned, or a Vulkan failure unwinding) may already have destroyed the buffers they target.
+  ~StagingUploader() = default;
   StagingUploader(const StagingUploader&) = delete;
   StagingUploader& operator=(const StagingUploader&) = delete;
 

@@ -56,7 +56,7 @@ class GpuFixture : public Base {
   }
   void TearDown() override {
     EXPECT_EQ(dev.validationMessages(), messagesBefore_)
-        << "Vulkan validation reported messages (printed above as 'visbuf: validation: ...')";
+        << "Vulkan validation reported messages (logged above as 'visbuf: warning/error: validation: ...')";
     Base::TearDown();
   }
   gpu::Device& dev = testDevice();
