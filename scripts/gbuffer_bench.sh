@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The "Visibility buffer vs G-buffer" benchmarks of docs/benchmarks.md, then their table (scripts/gbuffer_table.py).
+# The "Visibility buffer vs G-buffer vs forward" benchmarks of docs/benchmarks.md, then their table
+# (scripts/gbuffer_table.py).
 #   untextured (default): visbuf, gbuffer and forward on city (10,000 objects, bench's avenue walk) and DamagedHelmet
 #     (orbit), at 1920x1080 and 3840x2160, frustum and occlusion culling, LOD 1 px.
 #   --textured: the same paths with textures, visbuf with both shading modes (ubershader, material classification),

@@ -42,13 +42,12 @@ ShadingMode parseShadingMode(const std::string& name) {
          : name == "covered"    ? ShadingMode::Covered
                                 : ShadingMode::Auto;
 }
-// The benchmark's verdict per device type (docs/benchmarks.md, "Shading only covered pixels" and "Textured
-// visibility buffer vs G-buffer vs forward, and material classification"). Classification loses on both
-// (lavapipe: two passes over the IDs cost more than the shading saves; H100: many small per-material dispatches
-// shade slower than one divergent dispatch). Covered pixels win on lavapipe, where every lane of a SIMD batch runs
-// the whole shader, background or not (an empty 1024x768 frame shaded in 30.4 ms, listed 1.2 ms); covered tiles lost
-// a little on the H200, where a background pixel's early exit is free and the listing adds ~15 us (0.127 -> 0.144
-// ms at 10k kittens).
+// The benchmark's verdict per device type (docs/benchmarks.md, "Shading only covered pixels" and "Material
+// classification"). Classification loses on both (lavapipe: two passes over the IDs cost more than the shading saves;
+// H100: many small per-material dispatches shade slower than one divergent dispatch). Covered pixels win on lavapipe,
+// where every lane of a SIMD batch runs the whole shader, background or not (an empty 1024x768 frame shaded in 30.4 ms,
+// listed 1.2 ms); covered tiles lost a little on the H200, where a background pixel's early exit is free and the
+// listing adds ~15 us (0.127 -> 0.144 ms at 10k kittens).
 ShadingMode defaultShadingFor(bool cpuDevice) { return cpuDevice ? ShadingMode::Covered : ShadingMode::Uber; }
 float defaultSwRasterPixels(bool cpuDevice) { return cpuDevice ? float(SW_RASTER_MAX_EXTENT - 2) : 64.0f; }
 static_assert(kMaxSwRasterArea == float(SW_RASTER_MAX_EXTENT * SW_RASTER_MAX_EXTENT));

@@ -126,8 +126,8 @@ GPU_TEST(Lights, BrdfMatchesCpuReference) {
 // light per fragment, hardware interpolation) must also stay above 80 dB PSNR, test_shading.cpp's bound (its
 // max-error bound does not carry over: colours here reach ~4, where one rgba16f step is 3.9e-3). Not on a GPU:
 // the H100 driver's forward and visibility pipelines already differ at edge pixels before any lighting change
-// (test_shading.cpp fails there on the base commit too, PSNR ~71 dB; docs/benchmarks.md), and tiled-vs-all is
-// what this test is about.
+// (test_shading.cpp fails there on the base commit too, PSNR ~71 dB; docs/benchmarks.md, "Accuracy against the
+// exact colour"), and tiled-vs-all is what this test is about.
 GPU_TEST(Lights, TiledEqualsAllLights) {
   FieldParams p;
   p.objects = 600;
