@@ -91,30 +91,59 @@ Result<MeshSource> importMesh(const std::string& path, const SceneOptions& o) {
   return m;
 }
 
-// A generated layout, as built (materials, lights and order are applied by loadScene below).
+ObjectOrder objectOrder(const SceneOptions& o) {
+  return o.objectOrder == "spatial" ? ObjectOrder::Spatial : ObjectOrder::AsBuilt;
+}
+
+// A generated layout with --materials, in --object-order.
 Result<Scene> makeLayout(const SceneOptions& o) {
-  if (o.scene == "field") {
-    FieldParams p;
+  Result<Scene> scene = [&]() -> Result<Scene> {
+    if (o.scene == "field") {
+      FieldParams p;
+      if (o.objects) p.objects = o.objects;
+      p.seed = o.seed;
+      if (!o.mesh.empty()) {
+        Result<MeshSource> m = importMesh(o.mesh, o);
+        if (!m) return m.error();
+        p.mesh = std::move(m.value());
+      }
+      return makeFieldScene(p);
+    }
+    if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+    if (o.scene == "foliage" || o.scene == "foliage-opaque") {  // alpha-masked cards; the same cards opaque
+      FoliageParams p;
+      if (o.objects) p.cards = o.objects;
+      p.seed = o.seed;
+      p.masked = o.scene == "foliage";
+      return makeFoliageScene(p);
+    }
+    CityParams p;
     if (o.objects) p.objects = o.objects;
     p.seed = o.seed;
-    if (!o.mesh.empty()) {
-      Result<MeshSource> m = importMesh(o.mesh, o);
-      if (!m) return m.error();
-      p.mesh = std::move(m.value());
-    }
-    return makeFieldScene(p);
-  }
-  if (o.scene == "foliage" || o.scene == "foliage-opaque") {  // alpha-masked cards; the same cards opaque
-    FoliageParams p;
-    if (o.objects) p.cards = o.objects;
-    p.seed = o.seed;
-    p.masked = o.scene == "foliage";
-    return makeFoliageScene(p);
-  }
-  CityParams p;
-  if (o.objects) p.objects = o.objects;
-  p.seed = o.seed;
-  return makeCityScene(p);
+    return makeCityScene(p);
+  }();
+  if (!scene) return scene;
+  if (o.materials > 0)
+    if (Status s = applyGeneratedMaterials(*scene, o.materials, o.seed); !s) return s.error();
+  // Last, so that the materials above (placed by object index) are those of the layout as built.
+  if (objectOrder(o) == ObjectOrder::Spatial) orderObjectsSpatially(*scene);
+  return scene;
+}
+
+// A glTF or a pack, assembled by the engine (load_scene.h); --objects N > 1: N copies of the file's scene.
+Result<Scene> loadFile(const SceneOptions& o) {
+  if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+  if (o.materials > 0)
+    return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
+                                                 "foliage, foliage-opaque)");
+  LoadOptions lo = o.load;
+  lo.instances = std::max(o.objects, 1u);
+  lo.seed = o.seed;
+  lo.objectOrder = objectOrder(o);
+  Result<LoadedScene> loaded = visbuf::loadScene(o.scene, lo);
+  if (!loaded) return loaded.error();
+  printWarnings(loaded->warnings);
+  return std::move(loaded->scene);
 }
 
 }  // namespace
@@ -129,30 +158,8 @@ void noteSceneInputs(const SceneOptions& o) {
 }
 
 Result<Scene> loadScene(const SceneOptions& o) {
-  const ObjectOrder order = o.objectOrder == "spatial" ? ObjectOrder::Spatial : ObjectOrder::AsBuilt;
-  Result<Scene> scene = makeError(ErrorCode::InvalidArgument, "");
-  if (isLayoutName(o.scene)) {
-    scene = makeLayout(o);
-    if (!scene) return scene;
-    if (o.materials > 0)
-      if (Status s = applyGeneratedMaterials(*scene, o.materials, o.seed); !s) return s.error();
-    // Last, so that the materials above (placed by object index) are those of the layout as built.
-    if (order == ObjectOrder::Spatial) orderObjectsSpatially(*scene);
-  } else {
-    if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
-    if (o.materials > 0)
-      return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
-                                                   "foliage, foliage-opaque)");
-    // A glTF or a pack, assembled by the engine (load_scene.h); --objects N > 1: N copies of the file's scene.
-    LoadOptions lo = o.load;
-    lo.instances = std::max(o.objects, 1u);
-    lo.seed = o.seed;
-    lo.objectOrder = order;
-    Result<LoadedScene> loaded = visbuf::loadScene(o.scene, lo);
-    if (!loaded) return loaded.error();
-    printWarnings(loaded->warnings);
-    scene = std::move(loaded->scene);
-  }
+  Result<Scene> scene = isLayoutName(o.scene) ? makeLayout(o) : loadFile(o);
+  if (!scene) return scene;
   // Scattered lights are placed in the box of the objects' bounds, which does not depend on their order.
   scatterPointLights(*scene, o.lights, o.seed);
   if (o.noSun) scene->lightIntensity = 0.0f;
