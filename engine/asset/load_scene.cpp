@@ -1,6 +1,8 @@
 // loadScene (load_scene.h): a glTF or a pack to a finished Scene.
 #include "visbuf/asset/load_scene.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "visbuf/asset/pack_reader.h"
@@ -66,10 +68,22 @@ Result<Scene> finishScene(Scene scene, const LoadOptions& o) {
   if (Status s = checkInstances(o); !s) return s.error();
   if (o.instances > 1) {
     // Object indices are 32-bit everywhere downstream (Object references, IDs, draw commands).
-    if (uint64_t(scene.objects.size()) * o.instances > UINT32_MAX)
+    const uint64_t limit = std::min<uint64_t>(o.maxObjects, UINT32_MAX);
+    if (uint64_t(scene.objects.size()) * o.instances > limit)
       return makeError(ErrorCode::CapacityExceeded,
-                       fmt::format("{} copies of {} objects make more than {} objects", o.instances,
-                                   scene.objects.size(), UINT32_MAX));
+                       fmt::format("{} copies of {} objects make {} objects, over the {} allowed", o.instances,
+                                   scene.objects.size(), uint64_t(scene.objects.size()) * o.instances, limit));
+    // What the copies' records take (the meshes, materials and textures are shared), within the import's memory
+    // budget: a request for a billion copies fails here rather than in the allocator.
+    const uint64_t perCopy = scene.objects.size() * sizeof(Object) +
+                             scene.skinnedObjects.size() * sizeof(SkinnedObject) +
+                             scene.rigidObjects.size() * sizeof(RigidObject) +
+                             scene.pointLights.size() * sizeof(PointLight);
+    if (perCopy * o.instances > o.maxImportMemory)
+      return makeError(ErrorCode::CapacityExceeded,
+                       fmt::format("{} copies take {} bytes of object and light records ({} a copy), over the import "
+                                   "memory budget of {} bytes (maxImportMemory)",
+                                   o.instances, perCopy * o.instances, perCopy, o.maxImportMemory));
     AnimatedFieldParams p;
     p.instances = o.instances;
     p.seed = o.seed;

@@ -45,6 +45,9 @@ struct LoadOptions {
   // every copy (makeAnimatedField, generate.h). Its cameras are dropped (they framed the file's one copy).
   uint32_t instances = 1;
   uint64_t seed = 1;  // the copies' jitter, headings and phases
+  // Objects the copies may make (file objects x instances), refused with CapacityExceeded before any copy is
+  // made; at most 2^32 - 1 (object indices are 32-bit). A host sets what its device addresses.
+  uint64_t maxObjects = UINT32_MAX;
   ObjectOrder objectOrder = ObjectOrder::Spatial;
 
   // --- glTF import budgets and policy (GltfImportOptions; docs/security.md)
@@ -53,7 +56,8 @@ struct LoadOptions {
   // Mesh instances one import may create (nodes, EXT_mesh_gpu_instancing), before any is built.
   uint64_t maxInstances = kDefaultMaxInstances;
   // Bytes the import may hold (file, JSON, buffers, decoded accessors, output), checked before each allocation;
-  // for a pack, what its zstd sections may decode to (PackReadOptions::maxDecodedBytes).
+  // for a pack, what its zstd sections may decode to (PackReadOptions::maxDecodedBytes); for copies, their
+  // object, skinned, rigid and light records (checked before any copy is made).
   uint64_t maxImportMemory = kDefaultImportMemoryBytes;
   // Required extensions imported anyway ("*": any), each with a warning (gltf_extensions.h).
   std::vector<std::string> ignoreRequiredExtensions;
@@ -88,13 +92,13 @@ SceneFileKind sceneFileKind(const std::filesystem::path& path);
 // InvalidArgument (options out of range: instances 0, maxTextureSize not a power of two in [1, 16384],
 // maxImagePixels 0, a missing allowed root), FileNotFound, IoError, MalformedInput (a file that is not valid
 // glTF or pack, or whose contents are inconsistent), Unsupported (a required extension visbuf does not read, a
-// build without an image decoder for a textured glTF), CapacityExceeded (a budget above, or more than 2^32
-// objects once copied).
+// build without an image decoder for a textured glTF), CapacityExceeded (a budget above, maxObjects
+// included).
 Result<LoadedScene> loadScene(const std::filesystem::path& path, const LoadOptions& options = {});
 
 // The steps after the file is read, shared by both kinds and usable on any scene a host built itself: copies
 // (options.instances > 1) and the object order. InvalidArgument for 0 instances or a scene without objects to
-// copy; CapacityExceeded when the copies would pass 2^32 objects.
+// copy; CapacityExceeded when the copies would pass options.maxObjects or their records options.maxImportMemory.
 Result<Scene> finishScene(Scene scene, const LoadOptions& options);
 
 }  // namespace visbuf

@@ -114,6 +114,31 @@ TEST_F(LoadSceneTest, RefusesBadOptionsAndNamesBadFiles) {
   EXPECT_EQ(r.error().code, ErrorCode::InvalidArgument);
   EXPECT_NE(r.error().message.find("maxTextureSize 3"), std::string::npos) << r.error().message;
 
+  // Copies past maxObjects are refused before any is made (Fox: 1 object a copy).
+  LoadOptions many;
+  many.instances = 11;
+  many.maxObjects = 10;
+  r = loadScene(gltf, many);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::CapacityExceeded);
+  EXPECT_NE(r.error().message.find("11 copies of 1 objects make 11 objects, over the 10 allowed"), std::string::npos)
+      << r.error().message;
+  EXPECT_NE(r.error().message.find("Fox.glb"), std::string::npos) << r.error().message;
+  // 2^32 - 1 copies fit 32-bit object indices, not the import memory budget (4 GiB by default); 5 x 10^9 objects
+  // fit neither (the index bound holds whatever the budget).
+  many.instances = 4294967295u;
+  many.maxObjects = UINT64_MAX;
+  r = loadScene(gltf, many);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::CapacityExceeded);
+  EXPECT_NE(r.error().message.find("maxImportMemory"), std::string::npos) << r.error().message;
+  many.instances = 1000000000u;
+  many.maxImportMemory = uint64_t{1} << 60;
+  r = loadScene(test::assetPath("CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb"), many);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::CapacityExceeded);
+  EXPECT_NE(r.error().message.find("over the 4294967295 allowed"), std::string::npos) << r.error().message;
+
   r = loadScene(dir_ / "missing.glb");
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().code, ErrorCode::FileNotFound) << r.error().message;
