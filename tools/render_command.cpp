@@ -316,8 +316,10 @@ int runRender(const RenderCommand& c) {
   auto device = gpu::Device::create(*devOptions);
   if (!device) return fail(device.error());
   if (Status s = checkMemory(estimateRender(budget), device->get(), asked); !s) return fail(s.error());
+  // uploadScene's limit: the objects' records in two descriptor windows of maxStorageBufferRange. A file's copies
+  // (--objects N on a glTF or a pack) are checked against it once the file tells its objects, before any copy.
+  SceneOptions sceneOptions = c.scene;
   {
-    // uploadScene's limit: the objects' records in two descriptor windows of maxStorageBufferRange.
     const uint64_t range = (*device)->properties().limits.maxStorageBufferRange;
     const uint64_t maxObjects = 2 * (range / sizeof(gpu::ObjectData) / 4 * 4);
     if (budget.objects > maxObjects)
@@ -325,9 +327,10 @@ int runRender(const RenderCommand& c) {
                    fmt::format("{}: {} objects are over the {} this device can address ({} bytes each in two "
                                "windows of maxStorageBufferRange {})",
                                asked, budget.objects, maxObjects, sizeof(gpu::ObjectData), range)});
+    sceneOptions.load.maxObjects = maxObjects;
   }
 
-  auto scene = loadScene(c.scene);
+  auto scene = loadScene(sceneOptions);
   if (!scene) return fail(scene.error());
   if (Status s = checkOutputs(outputs); !s) return fail(s.error());
   if (Status s = checkMemory(estimateUpload(*scene, budget), device->get(), fmt::format("uploading this scene ({} "

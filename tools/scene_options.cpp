@@ -9,9 +9,6 @@
 
 #include "cli_checks.h"
 #include "visbuf/asset/gltf_import.h"
-#include "visbuf/asset/pack_reader.h"
-#include "visbuf/asset/scene_bake.h"
-#include "visbuf/asset/texture_bake.h"
 #include "visbuf/core/file_read.h"
 #include "visbuf/scene/generate.h"
 
@@ -22,8 +19,8 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
       ->check(nonEmptyPath())
       ->capture_default_str();
   app.add_option("--objects,--instances", o.objects,
-                 "number of objects (field: instances; city: approx. total; a pack, or a glTF with skins, morph or "
-                 "node animation: copies of its scene on a grid, each at its own animation phase)")
+                 "number of objects (field: instances; city: approx. total; a glTF or a pack: copies of its scene on a "
+                 "grid, with its materials, textures and lights, each animated at its own phase)")
       ->check(unsignedIn(1, UINT32_MAX));
   app.add_option("--seed", o.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)")
@@ -31,16 +28,16 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
   app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)")
       ->check(unsignedIn(0, UINT32_MAX));
   app.add_flag("--no-sun", o.noSun, "no directional light (ambient, emissive and point lights only)");
-  app.add_option("--allow-uri-root", o.allowUriRoots,
+  app.add_option("--allow-uri-root", o.load.allowedUriRoots,
                  "glTF scenes: also let buffer / image uris point into this folder (repeatable; by default only "
                  "files inside the glTF's own folder are read: docs/security.md)")
       ->check(nonEmptyPath() & CLI::ExistingDirectory);
-  app.add_option("--max-image-pixels", o.maxImagePixels,
+  app.add_option("--max-image-pixels", o.load.maxImagePixels,
                  "glTF scenes: refuse images whose header declares more pixels than this, before decoding")
       ->check(unsignedIn(1, uint64_t{1} << 40))
       ->capture_default_str();
-  addImportBudgetOptions(app, o.maxInstances, o.maxImportMemory);
-  addExtensionPolicyOptions(app, o.ignoreRequiredExtensions, o.strictImages);
+  addImportBudgetOptions(app, o.load.maxInstances, o.load.maxImportMemory);
+  addExtensionPolicyOptions(app, o.load.ignoreRequiredExtensions, o.load.strictImages);
   app.add_option("--materials", o.materials,
                  "field, city, foliage: replace the materials with N generated PBR materials (3 of 4 textured), "
                  "assigned to objects by hash (material classification's many-material scenes)")
@@ -76,31 +73,79 @@ void addExtensionPolicyOptions(CLI::App& app, std::vector<std::string>& ignoreRe
 }
 
 namespace {
-GltfImportOptions importOptions(const SceneOptions& o) {
-  GltfImportOptions options;
-  options.allowedUriRoots = o.allowUriRoots;
-  options.maxInstances = o.maxInstances;
-  options.maxMemoryBytes = o.maxImportMemory;
-  options.ignoreRequiredExtensions = o.ignoreRequiredExtensions;
-  return options;
+
+void printWarnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
 }
 
 Result<MeshSource> importMesh(const std::string& path, const SceneOptions& o) {
   // A pack holds built meshes with their LOD chains and materials, not a source mesh to instance: said plainly
   // rather than as the glTF parser's complaint about the pack's bytes.
-  if (isPackFile(path) || std::filesystem::path(path).extension() == ".vbp")
+  if (sceneFileKind(path) == SceneFileKind::Pack)
     return makeError(ErrorCode::InvalidArgument,
                      "--mesh '" + path + "': is a visbuf pack; --mesh takes a .gltf/.glb mesh (render a pack with "
                      "--scene '" + path + "', and --objects N for N copies of it)");
   GltfImportReport report;
-  Result<MeshSource> m = importGltfMesh(path, importOptions(o), &report);
-  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
+  Result<MeshSource> m = importGltfMesh(path, gltfImportOptions(o.load), &report);
+  printWarnings(report.warnings);
   return m;
 }
-}  // namespace
 
-namespace {
-Result<Scene> loadSceneWithoutLights(const SceneOptions& o);
+ObjectOrder objectOrder(const SceneOptions& o) {
+  return o.objectOrder == "spatial" ? ObjectOrder::Spatial : ObjectOrder::AsBuilt;
+}
+
+// A generated layout with --materials, in --object-order.
+Result<Scene> makeLayout(const SceneOptions& o) {
+  Result<Scene> scene = [&]() -> Result<Scene> {
+    if (o.scene == "field") {
+      FieldParams p;
+      if (o.objects) p.objects = o.objects;
+      p.seed = o.seed;
+      if (!o.mesh.empty()) {
+        Result<MeshSource> m = importMesh(o.mesh, o);
+        if (!m) return m.error();
+        p.mesh = std::move(m.value());
+      }
+      return makeFieldScene(p);
+    }
+    if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+    if (o.scene == "foliage" || o.scene == "foliage-opaque") {  // alpha-masked cards; the same cards opaque
+      FoliageParams p;
+      if (o.objects) p.cards = o.objects;
+      p.seed = o.seed;
+      p.masked = o.scene == "foliage";
+      return makeFoliageScene(p);
+    }
+    CityParams p;
+    if (o.objects) p.objects = o.objects;
+    p.seed = o.seed;
+    return makeCityScene(p);
+  }();
+  if (!scene) return scene;
+  if (o.materials > 0)
+    if (Status s = applyGeneratedMaterials(*scene, o.materials, o.seed); !s) return s.error();
+  // Last, so that the materials above (placed by object index) are those of the layout as built.
+  if (objectOrder(o) == ObjectOrder::Spatial) orderObjectsSpatially(*scene);
+  return scene;
+}
+
+// A glTF or a pack, assembled by the engine (load_scene.h); --objects N > 1: N copies of the file's scene.
+Result<Scene> loadFile(const SceneOptions& o) {
+  if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+  if (o.materials > 0)
+    return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
+                                                 "foliage, foliage-opaque)");
+  LoadOptions lo = o.load;
+  lo.instances = std::max(o.objects, 1u);
+  lo.seed = o.seed;
+  lo.objectOrder = objectOrder(o);
+  Result<LoadedScene> loaded = visbuf::loadScene(o.scene, lo);
+  if (!loaded) return loaded.error();
+  printWarnings(loaded->warnings);
+  return std::move(loaded->scene);
+}
+
 }  // namespace
 
 bool isLayoutName(const std::string& scene) {
@@ -113,109 +158,13 @@ void noteSceneInputs(const SceneOptions& o) {
 }
 
 Result<Scene> loadScene(const SceneOptions& o) {
-  Result<Scene> scene = loadSceneWithoutLights(o);
+  Result<Scene> scene = isLayoutName(o.scene) ? makeLayout(o) : loadFile(o);
   if (!scene) return scene;
-  if (o.materials > 0) {
-    if (o.scene != "field" && o.scene != "city" && o.scene != "foliage" && o.scene != "foliage-opaque")
-      return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
-                                                   "foliage, foliage-opaque)");
-    if (Status s = applyGeneratedMaterials(*scene, o.materials, o.seed); !s) return s.error();
-  }
+  // Scattered lights are placed in the box of the objects' bounds, which does not depend on their order.
   scatterPointLights(*scene, o.lights, o.seed);
   if (o.noSun) scene->lightIntensity = 0.0f;
-  // Last, so that the materials and lights above (placed by object index) are those of the scene as built.
-  if (o.objectOrder == "spatial") orderObjectsSpatially(*scene);
   return scene;
 }
-
-namespace {
-Result<Scene> loadSceneWithoutLights(const SceneOptions& o) {
-  if (o.scene == "field") {
-    FieldParams p;
-    if (o.objects) p.objects = o.objects;
-    p.seed = o.seed;
-    if (!o.mesh.empty()) {
-      Result<MeshSource> m = importMesh(o.mesh, o);
-      if (!m) return m.error();
-      p.mesh = std::move(m.value());
-    }
-    return makeFieldScene(p);
-  }
-  if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
-  if (o.scene == "foliage" || o.scene == "foliage-opaque") {  // alpha-masked cards; the same cards opaque
-    FoliageParams p;
-    if (o.objects) p.cards = o.objects;
-    p.seed = o.seed;
-    p.masked = o.scene == "foliage";
-    return makeFoliageScene(p);
-  }
-  if (o.scene == "city") {
-    CityParams p;
-    if (o.objects) p.objects = o.objects;
-    p.seed = o.seed;
-    return makeCityScene(p);
-  }
-  // A baked pack (told by its magic, or by the .vbp extension so that a damaged pack gets the pack reader's
-  // message rather than the glTF parser's).
-  // --objects N > 1: N copies of the pack's scene on a grid, its animated objects each copy at its own phase.
-  if (isPackFile(o.scene) || std::filesystem::path(o.scene).extension() == ".vbp") {
-    Result<Scene> pack = readPack(o.scene, PackReadOptions{o.maxImportMemory});  // budget: --max-import-memory
-    if (!pack || o.objects <= 1) return pack;
-    AnimatedFieldParams p;
-    p.instances = o.objects;
-    p.seed = o.seed;
-    return makeAnimatedField(*pack, p);
-  }
-  // A glTF file with --objects N > 1: with skinned meshes, animated morph targets or rigid node animation, N
-  // animated copies of its scene (each at its own phase); else its default scene flattened into one mesh,
-  // instanced N times in the field layout.
-  if (o.objects > 1) {
-    GltfImportReport report;
-    Result<ImportedScene> imported = importGltfScene(o.scene, importOptions(o), &report);
-    const bool animated = imported && (!imported->skins.empty() ||
-                                       std::any_of(imported->instances.begin(), imported->instances.end(),
-                                                   [](const ImportedInstance& i) { return i.rigid; }));
-    if (animated) {
-      for (const std::string& w : report.warnings)
-        std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
-      Result<Scene> asset = buildImportedScene(*imported);
-      if (!asset) return asset.error();
-      if (!asset->skinnedObjects.empty() || !asset->rigidObjects.empty()) {
-        AnimatedFieldParams p;
-        p.instances = o.objects;
-        p.seed = o.seed;
-        return makeAnimatedField(*asset, p);
-      }
-    }
-    Result<MeshSource> m = importMesh(o.scene, o);
-    if (!m) return m.error();
-    FieldParams p;
-    p.objects = o.objects;
-    p.seed = o.seed;
-    p.mesh = std::move(m.value());
-    return makeFieldScene(p);
-  }
-  // Otherwise its node hierarchy as instances of per-material meshes, baked in memory as `visbuf bake` does
-  // (default LOD options); the default camera frames the scene's bounds.
-  GltfImportReport report;
-  Result<ImportedScene> imported = importGltfScene(o.scene, importOptions(o), &report);
-  for (const std::string& w : report.warnings) std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
-  if (!imported) return imported.error();
-  Result<Scene> scene = buildImportedScene(*imported);
-  if (!scene) return scene.error();
-  // Its textures too, as `visbuf bake` does (default size cap), so the material is shaded as in a pack.
-  TextureBakeOptions textureOptions;
-  textureOptions.maxImagePixels = o.maxImagePixels;
-  textureOptions.dropUndecodableImages = !o.strictImages;
-  TextureBakeReport textureReport;
-  Status t = bakeTextures(*imported, textureOptions, &*scene, &textureReport);
-  for (const std::string& w : textureReport.warnings)
-    std::fprintf(stderr, "visbuf: warning: %s\n", printable(w).c_str());
-  if (!t) return t.error();
-  scene->name = o.scene;
-  return scene;
-}
-}  // namespace
 
 void addCameraOptions(CLI::App& app, CameraOptions& o) {
   app.add_option("--camera-pos", o.position, "camera position x y z (default: the scene's)")

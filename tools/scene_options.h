@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "visbuf/asset/gltf_import.h"
+#include "visbuf/asset/load_scene.h"
 #include "visbuf/core/result.h"
 #include "visbuf/scene/scene.h"
 
@@ -14,19 +15,16 @@ namespace visbuf::tools {
 
 struct SceneOptions {
   std::string scene = "field";  // field | city | path to .gltf/.glb | path to a pack (.vbp)
-  uint32_t objects = 0;         // 0: the layout's default
+  uint32_t objects = 0;         // 0: the layout's default (a file: 1 copy; LoadOptions::instances)
   uint64_t seed = 1;
   std::string mesh;             // field: instanced mesh file (.gltf/.glb); empty = procedural knot
   uint32_t lights = 0;          // point lights scattered over the scene (scatterPointLights)
   bool noSun = false;           // switch the directional light off
   uint32_t materials = 0;       // generated layouts: replace the materials with N generated ones (applyGeneratedMaterials)
-  std::vector<std::string> allowUriRoots;        // glTF: more folders its uris may point into (--allow-uri-root)
-  uint64_t maxImagePixels = uint64_t{64} << 20;  // glTF: per-image pixel budget (--max-image-pixels)
-  uint64_t maxInstances = kDefaultMaxInstances;  // glTF: mesh instances of one import (--max-instances)
-  uint64_t maxImportMemory = kDefaultImportMemoryBytes;  // glTF: the import's memory budget, bytes (--max-import-memory)
-  std::string objectOrder = "spatial";           // spatial (orderObjectsSpatially) | as-built (--object-order)
-  std::vector<std::string> ignoreRequiredExtensions;  // glTF: required extensions imported anyway (--ignore-required-extension)
-  bool strictImages = false;                     // glTF: an undecodable image fails the load (--strict-images)
+  std::string objectOrder = "spatial";  // spatial (orderObjectsSpatially) | as-built (--object-order)
+  // A file's budgets and policy (--allow-uri-root, --max-image-pixels, --max-instances, --max-import-memory,
+  // --ignore-required-extension, --strict-images); its instances, seed and order come from the fields above.
+  LoadOptions load;
 };
 
 void addSceneOptions(CLI::App& app, SceneOptions& options);
@@ -42,6 +40,8 @@ void addExtensionPolicyOptions(CLI::App& app, std::vector<std::string>& ignoreRe
 void noteSceneInputs(const SceneOptions& options);
 // True when --scene names a built-in layout rather than a file.
 bool isLayoutName(const std::string& scene);
+// The scene the options name: a generated layout, or a file through visbuf::loadScene (its warnings printed to
+// stderr), then --materials, --lights and --no-sun.
 Result<Scene> loadScene(const SceneOptions& options);
 
 struct CameraOptions {

@@ -8,8 +8,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "stress_scene.h"
-#include "visbuf/asset/gltf_import.h"
-#include "visbuf/asset/scene_bake.h"
+#include "visbuf/asset/load_scene.h"
 #include "visbuf/scene/generate.h"
 
 namespace visbuf::tools::stress {
@@ -114,19 +113,14 @@ StressCase badInput(const StressContext& ctx) {
   std::sort(files.begin(), files.end());
   for (const auto& f : files) {
     const std::string label = "glTF " + f.filename().string();
-    auto imported = importGltfScene(f.string());
-    if (!imported) {
-      c.rows.push_back({{{"case", label}, {"outcome", "rejected"}, {"message", imported.error().message},
-                         {"pass", imported.error().message.find(f.filename().string()) != std::string::npos ||
-                                      !imported.error().message.empty()}}});
+    // As `render --scene FILE` loads it (load_scene.h: import, mesh build, textures), at the default budgets.
+    auto loaded = visbuf::loadScene(f);
+    if (!loaded) {
+      c.rows.push_back({{{"case", label}, {"outcome", "rejected"}, {"message", loaded.error().message},
+                         {"pass", !loaded.error().message.empty()}}});
       continue;
     }
-    auto scene = buildImportedScene(*imported);
-    if (!scene) {
-      c.rows.push_back({{{"case", label}, {"outcome", "rejected at build"}, {"message", scene.error().message},
-                         {"pass", !scene.error().message.empty()}}});
-      continue;
-    }
+    const Scene* scene = &loaded->scene;
     auto r = renderOnce(ctx.device, *scene, scene->defaultCamera, 64, 64, false);
     const std::string outcome = r ? "rendered" : "rejected at upload";
     c.rows.push_back({{{"case", label}, {"outcome", outcome}, {"message", r ? "" : r.error().message},

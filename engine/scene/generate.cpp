@@ -188,6 +188,26 @@ Result<Scene> makeCityScene(const CityParams& params) {
   return scene;
 }
 
+namespace {
+// The asset's punctual lights for one copy placed by `place` (uniform scale `scale`): point and spot lights
+// moved with it, their range scaled and their intensity by scale^2 (the copy is lit as the asset at its own size);
+// directional lights (no position, no falloff) once, or N copies would be N times as bright.
+void copyLights(const std::vector<PointLight>& lights, const glm::dmat4& place, double scale, bool first,
+                std::vector<PointLight>& out) {
+  for (PointLight l : lights) {
+    if (l.type == LightType::Directional) {
+      if (first) out.push_back(l);  // the asset's sky, not turned with any copy's heading
+      continue;
+    }
+    l.position = glm::dvec3(place * glm::dvec4(l.position, 1.0));
+    l.direction = glm::vec3(glm::normalize(glm::dmat3(place) * glm::dvec3(l.direction)));
+    if (l.range > 0.0f) l.range = float(l.range * scale);
+    l.intensity = float(l.intensity * scale * scale);
+    out.push_back(l);
+  }
+}
+}  // namespace
+
 Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& params) {
   if (asset.objects.empty()) return makeError(ErrorCode::InvalidArgument, "animated field: the asset has no objects");
   if (params.instances == 0) return makeError(ErrorCode::InvalidArgument, "animated field: 0 instances");
@@ -201,6 +221,7 @@ Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& p
   s.skins = asset.skins;
   s.animations = asset.animations;
   s.lightDirection = asset.lightDirection;
+  s.lightIntensity = asset.lightIntensity;
   // The asset's rest-pose bounds (skinned objects: their node transforms place the bind pose).
   glm::dvec3 lo(INFINITY), hi(-INFINITY);
   for (const Object& o : asset.objects) {
@@ -223,6 +244,7 @@ Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& p
                              glm::scale(glm::dmat4(1.0), glm::dvec3(unit)) *
                              glm::translate(glm::dmat4(1.0), -centre);
     const double phase = rng.uniform();
+    copyLights(asset.pointLights, place, unit, k == 0, s.pointLights);
     for (size_t i = 0; i < asset.objects.size(); ++i) {
       const Object& o = asset.objects[i];
       s.objects.push_back({place * o.transform, o.mesh, o.material});

@@ -38,7 +38,9 @@ struct AnimatedFieldParams {
 // hierarchy are shared; every copy of a skinned object is a skinned instance of its own (its own vertex region
 // and pose), every copy of a rigid object a rigid object of its own (placement: the copy's placement times the
 // asset's; time offset: the asset's plus the copy's phase x the clip's duration; its object's transform
-// rigidObjectStartTransform()). Static objects are copied as they are. Fails when the asset has no objects.
+// rigidObjectStartTransform()). Static objects are copied as they are. The asset's point and spot lights go with
+// every copy (moved with it; range x the copy's scale, intensity x its square), its directional lights and sun once.
+// Fails when the asset has no objects.
 Result<Scene> makeAnimatedField(const Scene& asset, const AnimatedFieldParams& params);
 
 struct CityParams {
