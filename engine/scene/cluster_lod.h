@@ -86,7 +86,7 @@ Result<ClusterLod> buildClusterLod(const float* positions, size_t vertexCount, s
 // space and the projection scale multiplied by the instance's scale).
 struct ClusterLodView {
   glm::vec3 camera{0.0f};
-  // Pixels per object-space unit at distance 1: viewport height / (2 tan(fovY / 2)) for a perspective camera.
+  // Pixels per object-space unit at distance 1: viewport height / (2 tan(fovY / 2)) for a perspective camera; > 0.
   float projectionScale = 1.0f;
   float thresholdPixels = 1.0f;  // >= 0; 0 draws the input triangles (level 0) everywhere
   float minDistance = 1e-4f;     // distances below this (a camera inside a sphere) count as this; > 0

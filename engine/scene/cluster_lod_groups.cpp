@@ -91,14 +91,13 @@ std::vector<uint32_t> mortonOrder(std::span<const GroupInput> clusters) {
 }
 
 // METIS k-way on the clusters `members` (positions into the adjacency), parts of about groupSize; false when METIS
-// fails. part[i] is member i's part.
+// fails. part[i] is member i's part. `local` (one entry per cluster) is ~0u everywhere on entry and on return.
 bool partition(const Adjacency& g, std::span<const GroupInput> clusters, std::span<const uint32_t> members,
-               uint32_t groupSize, std::vector<idx_t>& part) {
+               uint32_t groupSize, std::vector<uint32_t>& local, std::vector<idx_t>& part) {
   idx_t n = idx_t(members.size());
   idx_t parts = idx_t((members.size() + groupSize - 1) / groupSize);
   part.assign(members.size(), 0);
   if (parts <= 1) return true;
-  std::vector<uint32_t> local(clusters.size(), ~0u);  // (chunks are at most kGroupChunkClusters: cheap to refill)
   for (uint32_t i = 0; i < members.size(); ++i) local[members[i]] = i;
   std::vector<idx_t> xadj{0}, adjncy, adjwgt, vwgt;
   for (uint32_t m : members) {
@@ -110,6 +109,7 @@ bool partition(const Adjacency& g, std::span<const GroupInput> clusters, std::sp
     xadj.push_back(idx_t(adjncy.size()));
     vwgt.push_back(idx_t(std::max<size_t>(clusters[m].weldedIndices.size() / 3, 1)));
   }
+  for (uint32_t m : members) local[m] = ~0u;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
   options[METIS_OPTION_SEED] = 1;
@@ -135,10 +135,11 @@ std::vector<std::vector<uint32_t>> groupClusters(std::span<const GroupInput> clu
   // Chunks of equal size (a small last chunk would make small groups).
   const size_t chunks = (order.size() + kGroupChunkClusters - 1) / kGroupChunkClusters;
   std::vector<idx_t> part;
+  std::vector<uint32_t> local(clusters.size(), ~0u);
   for (size_t k = 0; k < chunks; ++k) {
     const size_t first = order.size() * k / chunks, last = order.size() * (k + 1) / chunks;
     const std::span<const uint32_t> members(order.data() + first, last - first);
-    if (!partition(g, clusters, members, groupSize, part))
+    if (!partition(g, clusters, members, groupSize, local, part))
       for (size_t i = 0; i < members.size(); ++i) part[i] = idx_t(i / groupSize);  // runs along the curve
     const size_t base = groups.size();
     const idx_t parts = *std::max_element(part.begin(), part.end()) + 1;
