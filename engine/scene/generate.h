@@ -82,8 +82,9 @@ struct TerrainParams {
 // down to about four grid cells), normals from the sampled heights, TEXCOORD_0 tiling every 32 units. One open
 // mesh (its outer edge is its border). InvalidArgument for a size outside kTerrainMinSize..kTerrainMaxSize.
 Result<MeshSource> makeTerrainMesh(const TerrainParams& params);
-// The terrain as one object (buildMesh of makeTerrainMesh), one material, and a default camera low and grazing: 3
-// units above the ground near the +Z edge, looking across to the far edge, so that it is near and far at once.
+// The terrain as one object (buildMesh of makeTerrainMesh: a per-object chain of coarse levels up to 2^21 triangles,
+// level 0 only above), one material, and a default camera low and grazing: 3 units above the ground near the +Z
+// edge, looking across to the far edge, so that it is near and far at once.
 Result<Scene> makeTerrainScene(const TerrainParams& params);
 // That default camera (cheap: the mesh is not built). params.size must be valid.
 Camera terrainCamera(const TerrainParams& params);

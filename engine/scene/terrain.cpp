@@ -129,13 +129,15 @@ Camera terrainCamera(const TerrainParams& params) {
 Result<Scene> makeTerrainScene(const TerrainParams& params) {
   Result<MeshSource> source = makeTerrainMesh(params);
   if (!source) return source.error();
-  // The per-object LOD chain of a mesh this size: coarse levels only, each a quarter of the previous one (the
-  // default chain's dense sweep of fine levels simplifies the whole mesh dozens of times: 29 s at 513^2 vertices
-  // against 5.5 s this way, on the 2-core machine). A grazing view draws level 0 anyway; far views get these.
+  // The per-object LOD chain: coarse levels only, each a quarter of the previous one (the default chain's dense sweep
+  // of fine levels simplifies the whole mesh dozens of times: 29 s at 513^2 vertices against 5.5 s this way, on the
+  // 2-core machine), and none above 2^21 triangles, where each level simplifies and measures the whole mesh again
+  // (4097^2: 206 s without a chain, 29 minutes with 8 levels). The default grazing view draws level 0 anyway; the
+  // cluster LOD hierarchy (cluster_lod.h) is what makes such a mesh cheap from afar.
   MeshBuildOptions options;
   options.lodRatio = 0.25f;
   options.fineBelowTriangles = 0;
-  options.maxLods = 8;
+  options.maxLods = source->indices.size() / 3 > (size_t{1} << 21) ? 1 : 8;
   Result<Mesh> mesh = buildMesh(*source, options);
   if (!mesh) return mesh.error();
   Scene scene;
