@@ -101,10 +101,11 @@ class Builder {
     return made;
   }
 
-  // Level 0: the input triangles in meshlet order.
+  // Level 0: the input triangles in meshlet order (as given with options.inputInClusterOrder).
   std::vector<uint32_t> addInput(const uint32_t* indices, size_t indexCount) {
     std::vector<uint32_t> all(indices, indices + indexCount);
-    clusterOrder(all.data(), all.size(), positions_, vertexCount_, floatStride_ * sizeof(float));
+    if (!options_.inputInClusterOrder)
+      clusterOrder(all.data(), all.size(), positions_, vertexCount_, floatStride_ * sizeof(float));
     return addClusters(all, 0, {}, ~0u);
   }
 

@@ -71,6 +71,10 @@ struct ClusterLodOptions {
   uint32_t groupSize = 4;      // clusters per group METIS aims at (>= 2)
   float simplifyRatio = 0.5f;  // a group is simplified to this fraction of its triangles
   float minReduction = 0.85f;  // a simplification keeping more than this fraction of them makes no progress
+  // Level 0 is the input's runs of CLUSTER_TRIANGLES consecutive triangles as given (the last one shorter), not
+  // reordered: for a level already in meshlet order (buildMesh's lods[0]), level-0 cluster k is then the cull pass's
+  // cluster k, the same triangles at the same index positions (the IDs of a cut pinned to level 0 are --lod off's).
+  bool inputInClusterOrder = false;
 };
 
 // Builds the hierarchy of the mesh positions[0 .. vertexCount) (`stride` bytes apart, 3 floats each) and

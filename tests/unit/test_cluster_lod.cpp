@@ -14,6 +14,7 @@
 
 #include "triangle_sets.h"
 #include "visbuf/scene/cluster_lod.h"
+#include "visbuf/scene/clusters.h"
 #include "visbuf/scene/generate.h"
 
 using namespace visbuf;
@@ -163,6 +164,31 @@ TEST(ClusterLod, ThresholdZeroDrawsExactlyTheInputTriangles) {
       EXPECT_EQ(sortedTriangles(cut.data(), cut.size()), input) << m.name << " view " << i;
     }
   }
+}
+
+// buildMesh's level 0 is already in meshlet order: kept as given, level-0 cluster k is the cull pass's cluster k.
+TEST(ClusterLod, InputInClusterOrderKeepsTheLevelAsGiven) {
+  Result<Mesh> mesh = buildMesh(makeTorusKnot(120, 24));
+  ASSERT_TRUE(mesh.ok());
+  const Lod& l0 = mesh->lods[0];
+  Result<ClusterLod> lod = buildClusterLod(&mesh->vertices[0].px, mesh->vertices.size(), sizeof(gpu::Vertex),
+                                           mesh->indices.data() + l0.firstIndex, l0.indexCount,
+                                           {.inputInClusterOrder = true});
+  ASSERT_TRUE(lod.ok());
+  const std::vector<gpu::ClusterData> gpuClusters = lodClusters(*mesh, 0);
+  std::vector<uint32_t> level0;
+  for (uint32_t c = 0; c < lod->clusters.size(); ++c)
+    if (lod->clusters[c].level == 0) level0.push_back(c);
+  ASSERT_EQ(level0.size(), gpuClusters.size());
+  for (uint32_t k = 0; k < level0.size(); ++k) {
+    const ClusterLodCluster& c = lod->clusters[level0[k]];
+    ASSERT_EQ(c.triangleCount, std::min(CLUSTER_TRIANGLES, l0.indexCount / 3 - k * CLUSTER_TRIANGLES));
+    EXPECT_TRUE(std::equal(lod->indices.begin() + c.firstIndex, lod->indices.begin() + c.firstIndex + 3 * c.triangleCount,
+                           mesh->indices.begin() + l0.firstIndex + 3 * CLUSTER_TRIANGLES * k))
+        << "cluster " << k;
+    EXPECT_EQ(c.sphere, gpuClusters[k].sphere);
+  }
+  EXPECT_GT(lod->levels, 2u);
 }
 
 TEST(ClusterLod, EveryCutOfAClosedMeshIsWatertight) {
