@@ -183,6 +183,7 @@ uint64_t expectedObjects(const SceneOptions& o) {
   if (o.scene == "field") return FieldParams{}.objects;
   if (o.scene == "city") return CityParams{}.objects;
   if (o.scene == "foliage" || o.scene == "foliage-opaque") return FoliageParams{}.cards;
+  if (o.scene == "terrain") return 1;
   return 0;
 }
 // --judge: the frame rendered by both paths with IDs and the drawn LODs, judged pixel by pixel against the exact

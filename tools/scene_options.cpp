@@ -15,7 +15,7 @@
 namespace visbuf::tools {
 
 void addSceneOptions(CLI::App& app, SceneOptions& o) {
-  app.add_option("--scene", o.scene, "field | city | foliage | foliage-opaque | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
+  app.add_option("--scene", o.scene, "field | city | foliage | foliage-opaque | terrain | a .gltf/.glb file | a baked pack (.vbp, visbuf bake)")
       ->check(nonEmptyPath())
       ->capture_default_str();
   app.add_option("--objects,--instances", o.objects,
@@ -23,6 +23,10 @@ void addSceneOptions(CLI::App& app, SceneOptions& o) {
                  "grid, with its materials, textures and lights, each animated at its own phase)")
       ->check(unsignedIn(1, UINT32_MAX));
   app.add_option("--seed", o.seed, "scene generator seed")->check(unsignedIn(0, UINT64_MAX))->capture_default_str();
+  app.add_option("--terrain-size", o.terrainSize,
+                 fmt::format("terrain: vertices per side of the heightfield, {}..{} (2 (N-1)^2 triangles; default {})",
+                             kTerrainMinSize, kTerrainMaxSize, TerrainParams{}.size))
+      ->check(unsignedIn(kTerrainMinSize, kTerrainMaxSize));
   app.add_option("--mesh", o.mesh, "field: .gltf/.glb mesh to instance (default: procedural torus knot)")
       ->check(nonEmptyPath());
   app.add_option("--lights", o.lights, "scatter N point lights over the scene (tiled light culling)")
@@ -97,6 +101,8 @@ ObjectOrder objectOrder(const SceneOptions& o) {
 
 // A generated layout with --materials, in --object-order.
 Result<Scene> makeLayout(const SceneOptions& o) {
+  if (o.terrainSize != 0 && o.scene != "terrain")
+    return makeError(ErrorCode::InvalidArgument, "--terrain-size applies to --scene terrain only");
   Result<Scene> scene = [&]() -> Result<Scene> {
     if (o.scene == "field") {
       FieldParams p;
@@ -110,6 +116,15 @@ Result<Scene> makeLayout(const SceneOptions& o) {
       return makeFieldScene(p);
     }
     if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+    if (o.scene == "terrain") {  // one heightfield mesh
+      if (o.objects > 1)
+        return makeError(ErrorCode::InvalidArgument,
+                         "--objects: --scene terrain is one mesh (size it with --terrain-size)");
+      TerrainParams p;
+      if (o.terrainSize) p.size = o.terrainSize;
+      p.seed = o.seed;
+      return makeTerrainScene(p);
+    }
     if (o.scene == "foliage" || o.scene == "foliage-opaque") {  // alpha-masked cards; the same cards opaque
       FoliageParams p;
       if (o.objects) p.cards = o.objects;
@@ -133,9 +148,11 @@ Result<Scene> makeLayout(const SceneOptions& o) {
 // A glTF or a pack, assembled by the engine (load_scene.h); --objects N > 1: N copies of the file's scene.
 Result<Scene> loadFile(const SceneOptions& o) {
   if (!o.mesh.empty()) return makeError(ErrorCode::InvalidArgument, "--mesh applies to --scene field only");
+  if (o.terrainSize != 0)
+    return makeError(ErrorCode::InvalidArgument, "--terrain-size applies to --scene terrain only");
   if (o.materials > 0)
     return makeError(ErrorCode::InvalidArgument, "--materials applies to the generated layouts only (field, city, "
-                                                 "foliage, foliage-opaque)");
+                                                 "foliage, foliage-opaque, terrain)");
   LoadOptions lo = o.load;
   lo.instances = std::max(o.objects, 1u);
   lo.seed = o.seed;
@@ -149,7 +166,7 @@ Result<Scene> loadFile(const SceneOptions& o) {
 }  // namespace
 
 bool isLayoutName(const std::string& scene) {
-  return scene == "field" || scene == "city" || scene == "foliage" || scene == "foliage-opaque";
+  return scene == "field" || scene == "city" || scene == "foliage" || scene == "foliage-opaque" || scene == "terrain";
 }
 
 void noteSceneInputs(const SceneOptions& o) {

@@ -14,9 +14,10 @@
 namespace visbuf::tools {
 
 struct SceneOptions {
-  std::string scene = "field";  // field | city | path to .gltf/.glb | path to a pack (.vbp)
+  std::string scene = "field";  // field | city | foliage | foliage-opaque | terrain | .gltf/.glb | a pack (.vbp)
   uint32_t objects = 0;         // 0: the layout's default (a file: 1 copy; LoadOptions::instances)
   uint64_t seed = 1;
+  uint32_t terrainSize = 0;     // terrain: vertices per side (--terrain-size); 0 = TerrainParams' default
   std::string mesh;             // field: instanced mesh file (.gltf/.glb); empty = procedural knot
   uint32_t lights = 0;          // point lights scattered over the scene (scatterPointLights)
   bool noSun = false;           // switch the directional light off

@@ -89,24 +89,31 @@ void clusterOrder(uint32_t* indices, size_t indexCount, const float* positions, 
   if (ordered.size() == indexCount) std::copy(ordered.begin(), ordered.end(), indices);
 }
 
+gpu::ClusterData clusterBounds(const uint32_t* indices, size_t indexCount, const float* positions, size_t vertexCount,
+                               size_t stride) {
+  const meshopt_Bounds b = meshopt_computeClusterBounds(indices, indexCount, positions, vertexCount, stride);
+  const glm::dvec3 c(b.center[0], b.center[1], b.center[2]);
+  const size_t floatStride = stride / sizeof(float);
+  double r = 0.0;
+  for (size_t i = 0; i < indexCount; ++i) {
+    const float* p = positions + indices[i] * floatStride;
+    r = std::max(r, glm::length(glm::dvec3(p[0], p[1], p[2]) - c));
+  }
+  gpu::ClusterData d;
+  d.sphere = glm::vec4(glm::vec3(c), float(r * (1.0 + 1e-5) + 1e-6));
+  d.cone = glm::vec4(b.cone_axis[0], b.cone_axis[1], b.cone_axis[2], b.cone_cutoff);
+  d.apex = glm::vec4(b.cone_apex[0], b.cone_apex[1], b.cone_apex[2], 0.0f);
+  return d;
+}
+
 std::vector<gpu::ClusterData> lodClusters(const Mesh& mesh, size_t lod) {
   std::vector<gpu::ClusterData> out;
   const Lod& l = mesh.lods[lod];
   if (!lodHasClusters(l)) return out;
   const uint32_t* indices = mesh.indices.data() + l.firstIndex;
-  for (uint32_t first = 0; first < l.indexCount; first += 3 * CLUSTER_TRIANGLES) {
-    const uint32_t n = std::min(l.indexCount - first, 3 * CLUSTER_TRIANGLES);
-    const meshopt_Bounds b = meshopt_computeClusterBounds(indices + first, n, &mesh.vertices[0].px,
-                                                          mesh.vertices.size(), sizeof(gpu::Vertex));
-    const glm::dvec3 c(b.center[0], b.center[1], b.center[2]);
-    double r = 0.0;
-    for (uint32_t i = 0; i < n; ++i) r = std::max(r, glm::length(glm::dvec3(mesh.position(indices[first + i])) - c));
-    gpu::ClusterData d;
-    d.sphere = glm::vec4(glm::vec3(c), float(r * (1.0 + 1e-5) + 1e-6));
-    d.cone = glm::vec4(b.cone_axis[0], b.cone_axis[1], b.cone_axis[2], b.cone_cutoff);
-    d.apex = glm::vec4(b.cone_apex[0], b.cone_apex[1], b.cone_apex[2], 0.0f);
-    out.push_back(d);
-  }
+  for (uint32_t first = 0; first < l.indexCount; first += 3 * CLUSTER_TRIANGLES)
+    out.push_back(clusterBounds(indices + first, std::min(l.indexCount - first, 3 * CLUSTER_TRIANGLES),
+                                &mesh.vertices[0].px, mesh.vertices.size(), sizeof(gpu::Vertex)));
   return out;
 }
 

@@ -33,9 +33,13 @@ uint64_t spreadBits3(uint64_t x);
 inline bool lodHasClusters(const Lod& lod) { return lod.indexCount / 3 > CLUSTER_TRIANGLES; }
 inline uint32_t lodClusterCount(const Lod& lod) { return (lod.indexCount / 3 + CLUSTER_TRIANGLES - 1) / CLUSTER_TRIANGLES; }
 
-// The bounds of each cluster of mesh level `lod` (lodHasClusters), in order: a sphere that contains the cluster's
-// triangles (meshoptimizer's centre, the radius measured in double and padded so that the float sphere holds every
-// vertex after rounding) and meshoptimizer's back-face cone (apex, axis, cutoff; cutoff 1: never back-facing).
+// The bounds of the triangles indices[0, indexCount) (at most 512 triangles): a sphere that contains them
+// (meshoptimizer's centre, the radius measured in double and padded so that the float sphere holds every vertex after
+// rounding) and meshoptimizer's back-face cone (apex, axis, cutoff; cutoff 1: never back-facing).
+gpu::ClusterData clusterBounds(const uint32_t* indices, size_t indexCount, const float* positions, size_t vertexCount,
+                               size_t stride);
+
+// The bounds of each cluster of mesh level `lod` (lodHasClusters), in order (clusterBounds).
 std::vector<gpu::ClusterData> lodClusters(const Mesh& mesh, size_t lod);
 
 }  // namespace visbuf

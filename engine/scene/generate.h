@@ -69,6 +69,28 @@ struct FoliageParams {
 // across each card, so a MASK material with cutoff 0.5 keeps exactly half of every card.
 Result<Scene> makeFoliageScene(const FoliageParams& params);
 
+inline constexpr uint32_t kTerrainMinSize = 2;
+// 8193^2 vertices, 2 x 8192^2 = 134M triangles: the 32-bit index range holds its 402M indices. Building costs about
+// 400 bytes of memory per vertex at its peak (buildMesh: 6.5 GiB at 4097^2 without a LOD chain), so the largest
+// sizes need a large machine.
+inline constexpr uint32_t kTerrainMaxSize = 8193;
+
+struct TerrainParams {
+  uint32_t size = 4097;  // vertices per side, kTerrainMinSize..kTerrainMaxSize: 2 (size - 1)^2 triangles
+  uint64_t seed = 1;
+};
+// A heightfield of size x size vertices over a fixed 2048 x 2048-unit square in XZ (centred on the origin, facing
+// +Y, heights about +-90 units): fractal value noise from `seed` (the same landscape at every size, with detail
+// down to about four grid cells), normals from the sampled heights, TEXCOORD_0 tiling every 32 units. One open
+// mesh (its outer edge is its border). InvalidArgument for a size outside kTerrainMinSize..kTerrainMaxSize.
+Result<MeshSource> makeTerrainMesh(const TerrainParams& params);
+// The terrain as one object (buildMesh of makeTerrainMesh: a per-object chain of coarse levels up to 2^21 triangles,
+// level 0 only above), one material, and a default camera low and grazing: 3 units above the ground near the +Z
+// edge, looking across to the far edge, so that it is near and far at once.
+Result<Scene> makeTerrainScene(const TerrainParams& params);
+// That default camera (cheap: the mesh is not built). params.size must be valid.
+Camera terrainCamera(const TerrainParams& params);
+
 // Deterministic generator (splitmix64), identical on every platform.
 class Rng {
  public:

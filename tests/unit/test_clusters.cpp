@@ -9,25 +9,11 @@
 
 #include "visbuf/scene/clusters.h"
 #include "visbuf/scene/generate.h"
+#include "triangle_sets.h"
 
 using namespace visbuf;
 
-namespace {
-
-// A triangle as its three indices rotated so that the smallest comes first (the winding kept).
-std::array<uint32_t, 3> canonical(const uint32_t* t) {
-  const int k = t[0] <= t[1] && t[0] <= t[2] ? 0 : t[1] <= t[2] ? 1 : 2;
-  return {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
-}
-
-std::vector<std::array<uint32_t, 3>> sortedTriangles(const uint32_t* indices, size_t count) {
-  std::vector<std::array<uint32_t, 3>> out;
-  for (size_t i = 0; i < count; i += 3) out.push_back(canonical(indices + i));
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-}  // namespace
+using visbuf::test::sortedTriangles;
 
 TEST(Clusters, MeshletOrderKeepsEveryTriangleAndItsWinding) {
   Result<Mesh> mesh = buildMesh(makeTorusKnot());
